@@ -1,0 +1,117 @@
+# dfle - debris-flow and fluvial landscape evolution, scripted in Lua.
+#
+#   make            library, CLI (build/dfle) and Lua module (build/dfle.so)
+#   make test       every test: cmocka binaries, Lua tests, example smoke runs
+#   make check      the same tests built with AddressSanitizer + UBSan
+#   make memcheck   the cmocka tests under valgrind
+#   make bench      benchmark figures (see bench/)
+#   make install    PREFIX=/usr/local DESTDIR=
+#   make clean
+#
+# CC=clang works too.  Objects go to $(BUILD) with dependency files.
+
+VERSION   := 0.1.0
+CC        ?= cc
+PKG_CONFIG ?= pkg-config
+LUA_PKG   ?= lua5.4
+BUILD     ?= build
+PREFIX    ?= /usr/local
+DESTDIR   ?=
+
+LUA_CFLAGS  ?= $(shell $(PKG_CONFIG) --cflags $(LUA_PKG))
+LUA_LIBS    ?= $(shell $(PKG_CONFIG) --libs $(LUA_PKG))
+GSL_CFLAGS  ?= $(shell $(PKG_CONFIG) --cflags gsl)
+GSL_LIBS    ?= $(shell $(PKG_CONFIG) --libs gsl)
+CMOCKA_CFLAGS ?= $(shell $(PKG_CONFIG) --cflags cmocka)
+CMOCKA_LIBS ?= $(shell $(PKG_CONFIG) --libs cmocka)
+
+OPT       ?= -O2
+WARN      := -Wall -Wextra -Werror -Wshadow -Wstrict-prototypes -Wmissing-prototypes
+CFLAGS    ?= $(OPT) -g
+ALL_CFLAGS := -std=c11 -D_POSIX_C_SOURCE=200809L -fPIC $(WARN) $(CFLAGS) $(SANITIZE) \
+              -Iinclude -DDFLE_VERSION='"$(VERSION)"'
+ALL_LDFLAGS := $(LDFLAGS) $(SANITIZE)
+
+CORE_SRC  := $(wildcard src/*.c)
+CORE_SRC  := $(filter-out src/main.c src/progress.c,$(CORE_SRC))
+LUA_SRC   := $(wildcard src/lua/*.c)
+CLI_SRC   := src/main.c src/progress.c
+TEST_SRC  := $(wildcard tests/test_*.c)
+
+CORE_OBJ  := $(CORE_SRC:%.c=$(BUILD)/obj/%.o)
+LUA_OBJ   := $(LUA_SRC:%.c=$(BUILD)/obj/%.o)
+CLI_OBJ   := $(CLI_SRC:%.c=$(BUILD)/obj/%.o)
+TEST_BIN  := $(TEST_SRC:tests/%.c=$(BUILD)/tests/%)
+
+LIB_CORE  := $(BUILD)/libdfle.a
+LIB_LUA   := $(BUILD)/libdfle_lua.a
+CLI       := $(BUILD)/dfle
+MODULE    := $(BUILD)/dfle.so
+
+.PHONY: all test check memcheck bench install uninstall clean
+all: $(CLI) $(MODULE)
+
+$(BUILD)/obj/src/lua/%.o: src/lua/%.c
+	@mkdir -p $(dir $@)
+	$(CC) $(ALL_CFLAGS) $(LUA_CFLAGS) $(GSL_CFLAGS) -MMD -MP -c $< -o $@
+
+$(BUILD)/obj/src/%.o: src/%.c
+	@mkdir -p $(dir $@)
+	$(CC) $(ALL_CFLAGS) $(LUA_CFLAGS) $(GSL_CFLAGS) -MMD -MP -c $< -o $@
+
+$(BUILD)/obj/tests/%.o: tests/%.c
+	@mkdir -p $(dir $@)
+	$(CC) $(ALL_CFLAGS) -Isrc $(LUA_CFLAGS) $(GSL_CFLAGS) $(CMOCKA_CFLAGS) -MMD -MP -c $< -o $@
+
+$(LIB_CORE): $(CORE_OBJ)
+	@mkdir -p $(dir $@)
+	$(AR) rcs $@ $^
+
+$(LIB_LUA): $(LUA_OBJ)
+	@mkdir -p $(dir $@)
+	$(AR) rcs $@ $^
+
+$(CLI): $(CLI_OBJ) $(LIB_LUA) $(LIB_CORE)
+	$(CC) $(ALL_LDFLAGS) $^ $(LUA_LIBS) $(GSL_LIBS) -lm -o $@
+
+# The Lua module takes its Lua symbols from the host interpreter.
+$(MODULE): $(LUA_OBJ) $(CORE_OBJ)
+	$(CC) -shared $(ALL_LDFLAGS) $^ $(GSL_LIBS) -lm -o $@
+
+$(BUILD)/tests/%: $(BUILD)/obj/tests/%.o $(LIB_LUA) $(LIB_CORE)
+	@mkdir -p $(dir $@)
+	$(CC) $(ALL_LDFLAGS) $^ $(CMOCKA_LIBS) $(LUA_LIBS) $(GSL_LIBS) -lm -o $@
+
+test: all $(TEST_BIN)
+	@BUILD=$(BUILD) sh tests/run-tests.sh
+
+check:
+	$(MAKE) BUILD=build/san OPT=-O1 \
+	    SANITIZE="-fsanitize=address,undefined -fno-omit-frame-pointer -fno-sanitize-recover=all" test
+
+memcheck: all $(TEST_BIN)
+	@BUILD=$(BUILD) MEMCHECK=1 sh tests/run-tests.sh
+
+bench: all
+	@sh bench/run.sh $(CLI)
+
+install: all
+	install -d $(DESTDIR)$(PREFIX)/bin $(DESTDIR)$(PREFIX)/lib/lua/5.4 \
+	    $(DESTDIR)$(PREFIX)/include/dfle $(DESTDIR)$(PREFIX)/lib \
+	    $(DESTDIR)$(PREFIX)/share/doc/dfle/examples
+	install -m 755 $(CLI) $(DESTDIR)$(PREFIX)/bin/dfle
+	install -m 644 $(MODULE) $(DESTDIR)$(PREFIX)/lib/lua/5.4/dfle.so
+	install -m 644 $(LIB_CORE) $(DESTDIR)$(PREFIX)/lib/libdfle.a
+	install -m 644 include/dfle/*.h $(DESTDIR)$(PREFIX)/include/dfle/
+	install -m 644 README.md doc/*.md $(DESTDIR)$(PREFIX)/share/doc/dfle/
+	install -m 644 examples/*.lua $(DESTDIR)$(PREFIX)/share/doc/dfle/examples/
+
+uninstall:
+	rm -f $(DESTDIR)$(PREFIX)/bin/dfle $(DESTDIR)$(PREFIX)/lib/lua/5.4/dfle.so \
+	    $(DESTDIR)$(PREFIX)/lib/libdfle.a
+	rm -rf $(DESTDIR)$(PREFIX)/include/dfle $(DESTDIR)$(PREFIX)/share/doc/dfle
+
+clean:
+	rm -rf build
+
+-include $(shell find $(BUILD)/obj -name '*.d' 2>/dev/null)

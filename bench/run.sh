@@ -1,0 +1,7 @@
+#!/bin/sh
+# make bench: prints benchmark figures (never asserts on time).
+# usage: bench/run.sh path/to/dfle
+DFLE=${1:-build/dfle}
+here=$(dirname "$0")
+echo "dfle benchmarks on $(uname -m), $(nproc) cores, $(date -u +%Y-%m-%d)"
+"$DFLE" -q "$here/steady_state.lua"

@@ -1,0 +1,43 @@
+/*
+ * flow.h - bulk properties of one routed debris flow, per channel node.
+ *
+ * A router fills this record; an erosion law reads it.  It is the only
+ * thing the two share, which is what lets any law run with any router.
+ * Arrays hold n values (one per node).  The flow reaches nodes
+ * [0, runout_end); beyond that every array is zero and E_df = 0.
+ */
+#ifndef DFLE_FLOW_H
+#define DFLE_FLOW_H
+
+#include <stddef.h>
+#include "dfle/error.h"
+
+#ifdef __cplusplus
+extern "C" {
+#endif
+
+typedef struct dfle_flow {
+    size_t n;          /* number of nodes                                 */
+    size_t runout_end; /* first node the flow does not reach (n = all)    */
+    double *M;         /* volume passing the node [m^3]                   */
+    double *Q;         /* peak discharge [m^3/s]                          */
+    double *h;         /* representative flow depth [m]                   */
+    double *v;         /* representative velocity [m/s]                   */
+    double *t_p;       /* passage time [s]                                */
+    double *tau;       /* basal shear stress [Pa]                         */
+    double *Theta;     /* threshold factor 1 - tau_y/tau [-]              */
+} dfle_flow;
+
+/* Allocate zeroed arrays for n nodes; runout_end starts at 0. */
+int dfle_flow_init(dfle_flow *flow, size_t n, dfle_error *err);
+
+/* Release the arrays (flow may be zeroed or NULL); idempotent. */
+void dfle_flow_release(dfle_flow *flow);
+
+/* Zero every array and set runout_end = 0. */
+void dfle_flow_clear(dfle_flow *flow);
+
+#ifdef __cplusplus
+}
+#endif
+#endif

@@ -1,0 +1,69 @@
+/*
+ * law.h - the debris-flow erosion-law interface.
+ *
+ * A law turns a routed flow (flow.h) and the channel slope into an
+ * erosion rate E_df [m/yr] per node.  It is split in two so that the
+ * expensive, flow-dependent part is evaluated only when the flow is
+ * routed and the cheap slope-dependent part at every landscape step
+ * (the caching of the paper's Eq. 11):
+ *
+ *   F_i    = flow_factor(flow, node i)       after each routing
+ *   E_df,i = rate(S_i, F_i, node i)          every landscape step
+ *
+ * For the power family of Eq. (6), F = t_p h^beta Theta and
+ * E_df = k_df S^alpha F.  Laws are `static const dfle_law_ops` tables
+ * with a private state, exactly like routers; a law written in Lua is
+ * one more table.  Ops return 0 or a negative dfle_status with `err` set.
+ */
+#ifndef DFLE_LAW_H
+#define DFLE_LAW_H
+
+#include <stddef.h>
+#include "dfle/error.h"
+#include "dfle/flow.h"
+
+#ifdef __cplusplus
+extern "C" {
+#endif
+
+/* What a law sees.  Arrays have at least n values. */
+typedef struct dfle_law_ctx {
+    size_t n;              /* active nodes: those the flow reaches [0, n) */
+    const double *S;       /* channel slope [-], > 0 where active          */
+    const double *A;       /* drainage area [m^2]                          */
+    const double *w;       /* channel width [m]                            */
+    const dfle_flow *flow; /* the routed flow                              */
+} dfle_law_ctx;
+
+typedef struct dfle_law_ops {
+    const char *name;
+    /* Required.  Fill F[0..n) with the flow-dependent factor. */
+    int (*flow_factor)(void *state, const dfle_law_ctx *ctx, double *F,
+                       dfle_error *err);
+    /* Required.  Fill E[0..n) [m/yr] from ctx->S and the cached F. */
+    int (*rate)(void *state, const dfle_law_ctx *ctx, const double *F,
+                double *E, dfle_error *err);
+    /* Optional.  Release the state. */
+    void (*destroy)(void *state);
+} dfle_law_ops;
+
+typedef struct dfle_law dfle_law;
+
+/* Wrap `state` (owned from here on, destroyed even if this fails). */
+int dfle_law_new(const dfle_law_ops *ops, void *state, dfle_law **out,
+                 dfle_error *err);
+void dfle_law_free(dfle_law *law);
+
+int dfle_law_flow_factor(dfle_law *law, const dfle_law_ctx *ctx, double *F,
+                         dfle_error *err);
+int dfle_law_rate(dfle_law *law, const dfle_law_ctx *ctx, const double *F,
+                  double *E, dfle_error *err);
+
+const char *dfle_law_name(const dfle_law *law);
+const dfle_law_ops *dfle_law_get_ops(const dfle_law *law);
+void *dfle_law_state(const dfle_law *law);
+
+#ifdef __cplusplus
+}
+#endif
+#endif

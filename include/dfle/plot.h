@@ -1,0 +1,58 @@
+/*
+ * plot.h - figures through gnuplot.
+ *
+ * Each function writes a complete gnuplot script (data inline) to a
+ * gnuplot process and checks that the image was written.  The terminal
+ * follows the file extension: .png (pngcairo) or .svg.  The program is
+ * `gnuplot` on PATH unless the environment variable DFLE_GNUPLOT names
+ * another.  Failures (no gnuplot, bad extension, unwritable path) are
+ * DFLE_EEXTERNAL / DFLE_EINVAL / DFLE_EIO with a message.
+ */
+#ifndef DFLE_PLOT_H
+#define DFLE_PLOT_H
+
+#include <stddef.h>
+#include "dfle/analysis.h"
+#include "dfle/error.h"
+
+#ifdef __cplusplus
+extern "C" {
+#endif
+
+/* One named curve: n points (x, y), drawn as points or lines. */
+typedef struct dfle_plot_series {
+    const char *label; /* legend text; NULL = no legend entry */
+    size_t n;
+    const double *x, *y;
+    int lines;         /* 1: lines, 0: points                 */
+} dfle_plot_series;
+
+typedef struct dfle_plot_opts {
+    const char *title;   /* may be NULL */
+    const char *xlabel;  /* may be NULL */
+    const char *ylabel;  /* may be NULL */
+    int logx, logy;      /* logarithmic axes                    */
+    int width, height;   /* pixels; 0 = 900 x 600               */
+} dfle_plot_opts;
+
+/* Generic x-y plot of several series. */
+int dfle_plot_xy(const char *path, const dfle_plot_opts *opts,
+                 const dfle_plot_series *series, size_t nseries,
+                 dfle_error *err);
+
+/* Log-log slope-area plot: raw points (grey), bin means (black), the
+ * fitted Eq. (2) (red) with A_df marked.  bins and fit may be NULL. */
+int dfle_plot_slope_area(const char *path, const char *title, size_t n,
+                         const double *A, const double *S,
+                         const dfle_bins *bins, const dfle_eq2_fit *fit,
+                         dfle_error *err);
+
+/* Long profile z(x) [m], with a second panel of slope S(x). */
+int dfle_plot_profile(const char *path, const char *title, size_t n,
+                      const double *x, const double *z, const double *S,
+                      dfle_error *err);
+
+#ifdef __cplusplus
+}
+#endif
+#endif

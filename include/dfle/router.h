@@ -1,0 +1,61 @@
+/*
+ * router.h - the debris-flow router interface.
+ *
+ * A router turns the current channel profile into the bulk properties of
+ * one debris flow at every node (flow.h).  Each kind of router is a
+ * `static const dfle_router_ops` table plus a private state; the model
+ * only ever calls through the table, so the empirical router, the
+ * process-based router and routers written in Lua are interchangeable.
+ *
+ * Ops return 0 on success and a negative dfle_status on failure, with a
+ * message in `err`.
+ */
+#ifndef DFLE_ROUTER_H
+#define DFLE_ROUTER_H
+
+#include <stddef.h>
+#include "dfle/channel.h"
+#include "dfle/error.h"
+#include "dfle/flow.h"
+
+#ifdef __cplusplus
+extern "C" {
+#endif
+
+typedef struct dfle_router_ops {
+    const char *name;
+    /* Route one flow over the profile.  S holds n slopes [-] (S[n-1], at
+     * the outlet, repeats S[n-2]).  Fill every array of `flow` and its
+     * runout_end.  Required. */
+    int (*route)(void *state, const dfle_channel *ch, const double *S,
+                 dfle_flow *flow, dfle_error *err);
+    /* Optional.  Nonzero when the slopes S have moved far enough from the
+     * last routing that the flow must be routed again.  NULL means the
+     * router is cheap and local and is routed at every landscape step. */
+    int (*needs_reroute)(void *state, size_t n, const double *S);
+    /* Optional.  Release the state. */
+    void (*destroy)(void *state);
+} dfle_router_ops;
+
+typedef struct dfle_router dfle_router;
+
+/* Wrap `state` (owned from here on, destroyed even if this fails). */
+int dfle_router_new(const dfle_router_ops *ops, void *state,
+                    dfle_router **out, dfle_error *err);
+void dfle_router_free(dfle_router *rt);
+
+int dfle_router_route(dfle_router *rt, const dfle_channel *ch,
+                      const double *S, dfle_flow *flow, dfle_error *err);
+/* 1 if the router must be re-routed for slopes S (always 1 without the op). */
+int dfle_router_needs_reroute(dfle_router *rt, size_t n, const double *S);
+/* 1 if the router is routed at every step (no needs_reroute op). */
+int dfle_router_is_local(const dfle_router *rt);
+
+const char *dfle_router_name(const dfle_router *rt);
+const dfle_router_ops *dfle_router_get_ops(const dfle_router *rt);
+void *dfle_router_state(const dfle_router *rt);
+
+#ifdef __cplusplus
+}
+#endif
+#endif

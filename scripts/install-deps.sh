@@ -1,0 +1,29 @@
+#!/bin/sh
+# Installs the Debian packages dfle needs to build, test and plot.
+# Used by the README's set-up command and by .ci/run, so the two never drift.
+#   build:  gcc/clang, make, pkg-config, Lua 5.4 headers, GSL
+#   test:   cmocka, valgrind (make memcheck)
+#   plots:  gnuplot (no X11 needed: the png and svg terminals)
+set -eu
+
+packages="build-essential pkg-config liblua5.4-dev libgsl-dev libcmocka-dev gnuplot-nox valgrind"
+
+if [ "$(id -u)" -ne 0 ]; then
+    sudo=sudo
+else
+    sudo=
+fi
+
+missing=
+for p in $packages; do
+    dpkg-query -W -f='${Status}' "$p" 2>/dev/null | grep -q "install ok installed" \
+        || missing="$missing $p"
+done
+
+if [ -n "$missing" ]; then
+    echo "install-deps: installing:$missing"
+    $sudo apt-get update -qq
+    DEBIAN_FRONTEND=noninteractive $sudo apt-get install -y -qq --no-install-recommends $missing
+else
+    echo "install-deps: all packages present"
+fi

@@ -1,0 +1,64 @@
+/*
+ * law.c - the generic erosion-law handle: an ops table plus its state.
+ *
+ * Built-in laws and laws written in Lua both arrive here as a
+ * dfle_law_ops table; the model calls nothing else, so it cannot tell
+ * them apart (law.h explains the flow_factor / rate split).
+ */
+#include "dfle/law.h"
+
+#include <stdlib.h>
+
+struct dfle_law {
+    const dfle_law_ops *ops;
+    void *state;
+};
+
+int dfle_law_new(const dfle_law_ops *ops, void *state, dfle_law **out,
+                 dfle_error *err)
+{
+    dfle_law *law;
+
+    *out = NULL;
+    if (ops == NULL || ops->flow_factor == NULL || ops->rate == NULL) {
+        if (ops != NULL && ops->destroy != NULL)
+            ops->destroy(state);
+        return dfle_error_set(err, DFLE_EINVAL,
+                              "law: ops table needs flow_factor() and rate()");
+    }
+    law = malloc(sizeof *law);
+    if (law == NULL) {
+        if (ops->destroy != NULL)
+            ops->destroy(state);
+        return dfle_error_set(err, DFLE_ENOMEM, "law: out of memory");
+    }
+    law->ops = ops;
+    law->state = state;
+    *out = law;
+    return DFLE_OK;
+}
+
+void dfle_law_free(dfle_law *law)
+{
+    if (law == NULL)
+        return;
+    if (law->ops->destroy != NULL)
+        law->ops->destroy(law->state);
+    free(law);
+}
+
+int dfle_law_flow_factor(dfle_law *law, const dfle_law_ctx *ctx, double *F,
+                         dfle_error *err)
+{
+    return law->ops->flow_factor(law->state, ctx, F, err);
+}
+
+int dfle_law_rate(dfle_law *law, const dfle_law_ctx *ctx, const double *F,
+                  double *E, dfle_error *err)
+{
+    return law->ops->rate(law->state, ctx, F, E, err);
+}
+
+const char *dfle_law_name(const dfle_law *law) { return law->ops->name; }
+const dfle_law_ops *dfle_law_get_ops(const dfle_law *law) { return law->ops; }
+void *dfle_law_state(const dfle_law *law) { return law->state; }

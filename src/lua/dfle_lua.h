@@ -1,0 +1,109 @@
+/*
+ * dfle_lua.h - internals shared by the Lua binding files (not installed).
+ *
+ * Conventions, after Lua's own liolib.c:
+ *  - every C object is a full userdata holding one pointer, created in a
+ *    valid empty state (pointer NULL) before anything can fail, with a
+ *    named metatable ("dfle.channel", ...) whose __gc is idempotent;
+ *  - constructors take one table of named parameters; unknown keys,
+ *    wrong types and NaN are errors naming the parameter, and the C
+ *    constructor's own range checks supply the rest of the message;
+ *  - misuse raises (with the caller's file:line); expected failures,
+ *    such as a fit that does not converge, return nil, message;
+ *  - no malloc'd memory is held across a call that can raise: scratch
+ *    arrays are userdata, collected if an error unwinds the stack.
+ */
+#ifndef DFLE_LUA_INTERNAL_H
+#define DFLE_LUA_INTERNAL_H
+
+#include <stddef.h>
+
+#include <lauxlib.h>
+#include <lua.h>
+
+#include "dfle/channel.h"
+#include "dfle/error.h"
+#include "dfle/fluvial.h"
+#include "dfle/law.h"
+#include "dfle/model.h"
+#include "dfle/router.h"
+
+#define DFLE_LUA_CHANNEL "dfle.channel"
+#define DFLE_LUA_FLUVIAL "dfle.fluvial"
+#define DFLE_LUA_ROUTER "dfle.router"
+#define DFLE_LUA_LAW "dfle.law"
+#define DFLE_LUA_MODEL "dfle.model"
+
+/* Userdata payloads. */
+typedef struct { dfle_channel *ch; } dfle_lua_channel;
+typedef struct { dfle_fluvial *fl; } dfle_lua_fluvial;
+typedef struct { dfle_router *rt; } dfle_lua_router;
+typedef struct { dfle_law *law; } dfle_lua_law;
+typedef struct { dfle_model *m; } dfle_lua_model;
+
+/* A numeric parameter read from an options table into *dst. */
+typedef struct dfle_lua_param {
+    const char *name;
+    double *dst;
+} dfle_lua_param;
+
+/* Check that idx is a table (or absent: then nothing is read) whose keys
+ * are all among `params` or `other_keys` (NULL-terminated, may be NULL),
+ * and read each numeric parameter present: it must be a finite number.
+ * Raises "dfle.<fn>: ..." naming the parameter otherwise. */
+void dfle_lua_read_params(lua_State *L, int idx, const char *fn,
+                          const dfle_lua_param *params, size_t nparams,
+                          const char *const *other_keys);
+
+/* Raise err's message as "dfle.<message>" at the caller's file:line. */
+int dfle_lua_raise(lua_State *L, const dfle_error *err);
+
+/* New userdata of `size` bytes, zeroed, with metatable `tname` and
+ * `nuv` user values. */
+void *dfle_lua_newobject(lua_State *L, size_t size, const char *tname, int nuv);
+
+/* Create the metatable `tname`: metamethods `meta`, and an __index that
+ * finds `methods` first, then calls `property(obj, key)` (may be NULL)
+ * for read-only fields such as m.time. */
+void dfle_lua_register_type(lua_State *L, const char *tname,
+                            const luaL_Reg *methods, const luaL_Reg *meta,
+                            lua_CFunction property);
+
+/* Checked accessors: raise a type error if arg is not of the type or was
+ * already closed. */
+dfle_channel *dfle_lua_check_channel(lua_State *L, int arg);
+dfle_fluvial *dfle_lua_check_fluvial(lua_State *L, int arg);
+dfle_router *dfle_lua_check_router(lua_State *L, int arg);
+dfle_law *dfle_lua_check_law(lua_State *L, int arg);
+dfle_model *dfle_lua_check_model(lua_State *L, int arg);
+
+/* Push a Lua array (1-based) of n doubles. */
+void dfle_lua_push_array(lua_State *L, const double *v, size_t n);
+
+/* Read a Lua array of numbers at idx into a scratch userdata left on the
+ * stack; *n receives its length.  `what` names it in errors. */
+double *dfle_lua_check_array(lua_State *L, int idx, const char *what, size_t *n);
+
+/* Progress reporting, installed by the CLI (library users get none). */
+typedef struct dfle_lua_progress {
+    dfle_progress_fn update;
+    void (*finish)(void *ud);
+    void *ud;
+} dfle_lua_progress;
+void dfle_lua_set_progress(lua_State *L, const dfle_lua_progress *p);
+const dfle_lua_progress *dfle_lua_get_progress(lua_State *L);
+
+/* Push the dfle module table (kept in the registry by luaopen_dfle, so
+ * it is found even if a script replaced the global or package.loaded). */
+void dfle_lua_push_module(lua_State *L);
+
+/* Each binding file adds its functions to the module table on the stack. */
+void dfle_lua_open_channel(lua_State *L);
+void dfle_lua_open_fluvial(lua_State *L);
+void dfle_lua_open_router(lua_State *L);
+void dfle_lua_open_law(lua_State *L);
+void dfle_lua_open_model(lua_State *L);
+void dfle_lua_open_analysis(lua_State *L);
+void dfle_lua_open_plot(lua_State *L);
+
+#endif

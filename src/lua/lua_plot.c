@@ -1,0 +1,212 @@
+/*
+ * lua_plot.c - dfle.plot.*: figures through gnuplot (see plot.h).
+ *
+ *   dfle.plot.slope_area(m, "slope_area.png" [, fit [, {title =, nbins =}]])
+ *   dfle.plot.profile(m, "profile.png" [, {title =}])
+ *   dfle.plot.xy{ path =, series = {{x =, y =, label =, lines =}, ...},
+ *                 title =, xlabel =, ylabel =, logx =, logy = }
+ */
+#include "dfle_lua.h"
+
+#include <string.h>
+
+#include "dfle/analysis.h"
+#include "dfle/plot.h"
+
+#define DEFAULT_NBINS 100
+
+static const char *opt_string(lua_State *L, int idx, const char *key, const char *fn)
+{
+    const char *s = NULL;
+    if (lua_istable(L, idx)) {
+        int t = lua_getfield(L, idx, key);
+        if (t != LUA_TNIL && t != LUA_TSTRING)
+            luaL_error(L, "dfle.%s: parameter '%s' must be a string, got %s", fn, key,
+                       luaL_typename(L, -1));
+        s = lua_tostring(L, -1); /* stays valid: the table holds it */
+        lua_pop(L, 1);
+    }
+    return s;
+}
+
+static int opt_bool(lua_State *L, int idx, const char *key, const char *fn)
+{
+    int v = 0;
+    if (lua_istable(L, idx)) {
+        int t = lua_getfield(L, idx, key);
+        if (t != LUA_TNIL && t != LUA_TBOOLEAN)
+            luaL_error(L, "dfle.%s: parameter '%s' must be a boolean, got %s", fn, key,
+                       luaL_typename(L, -1));
+        v = lua_toboolean(L, -1);
+        lua_pop(L, 1);
+    }
+    return v;
+}
+
+/* Slope-area pairs of a model (nodes above the outlet) or a table. */
+static size_t plot_pairs(lua_State *L, int arg, const double **A, const double **S)
+{
+    if (luaL_testudata(L, arg, DFLE_LUA_MODEL) != NULL) {
+        dfle_model *m = dfle_lua_check_model(L, arg);
+        dfle_error err;
+        if ((*A = dfle_model_field(m, DFLE_FIELD_A, &err)) == NULL ||
+            (*S = dfle_model_field(m, DFLE_FIELD_S, &err)) == NULL)
+            dfle_lua_raise(L, &err);
+        return dfle_model_size(m) - 1;
+    }
+    if (lua_istable(L, arg)) {
+        size_t n, nS;
+        lua_getfield(L, arg, "A");
+        *A = dfle_lua_check_array(L, -1, "A", &n);
+        lua_getfield(L, arg, "S");
+        *S = dfle_lua_check_array(L, -1, "S", &nS);
+        if (n != nS)
+            luaL_error(L, "dfle.plot: A has %d values but S has %d", (int)n, (int)nS);
+        return n;
+    }
+    return (size_t)luaL_error(L, "dfle.plot: expected a dfle.model or {A = , S = }, got %s",
+                              luaL_typename(L, arg));
+}
+
+static double fit_field(lua_State *L, int idx, const char *key)
+{
+    double v;
+    if (lua_getfield(L, idx, key) != LUA_TNUMBER)
+        luaL_error(L, "dfle.plot.slope_area: fit table lacks number '%s'", key);
+    v = lua_tonumber(L, -1);
+    lua_pop(L, 1);
+    return v;
+}
+
+static int l_plot_slope_area(lua_State *L)
+{
+    const double *A = NULL, *S = NULL;
+    size_t n = plot_pairs(L, 1, &A, &S);
+    const char *path = luaL_checkstring(L, 2);
+    const char *title = opt_string(L, 4, "title", "plot.slope_area");
+    double nbins = DEFAULT_NBINS;
+    dfle_eq2_fit fit, *fitp = NULL;
+    dfle_bins bins;
+    dfle_error err;
+    int st;
+
+    if (lua_istable(L, 4)) {
+        const dfle_lua_param params[] = {{"nbins", &nbins}};
+        static const char *const other[] = {"title", NULL};
+        dfle_lua_read_params(L, 4, "plot.slope_area", params, 1, other);
+        if (!(nbins >= 1 && nbins <= 1e6))
+            luaL_error(L, "dfle.plot.slope_area: nbins must be >= 1 (got %f)", nbins);
+    }
+    memset(&fit, 0, sizeof fit);
+    if (lua_istable(L, 3)) {
+        fit.S_df = fit_field(L, 3, "S_df");
+        fit.A_df = fit_field(L, 3, "A_df");
+        fit.a2 = fit_field(L, 3, "a2");
+        fit.r2 = fit_field(L, 3, "r2");
+        fitp = &fit;
+    } else if (!lua_isnoneornil(L, 3) && !(lua_isboolean(L, 3) && !lua_toboolean(L, 3))) {
+        luaL_argerror(L, 3, "expected a fit table from dfle.fit_slope_area, nil or false");
+    }
+    memset(&bins, 0, sizeof bins);
+    st = dfle_bins_compute(n, A, S, (size_t)nbins, &bins, &err);
+    if (st != DFLE_OK)
+        return dfle_lua_raise(L, &err);
+    /* No fit given: fit now; a fit that fails just leaves the curve out. */
+    if (fitp == NULL && lua_isnoneornil(L, 3)) {
+        dfle_error fit_err;
+        if (dfle_slope_area_fit(n, A, S, (size_t)nbins, NULL, &fit, &fit_err) == DFLE_OK)
+            fitp = &fit;
+    }
+    st = dfle_plot_slope_area(path, title, n, A, S, &bins, fitp, &err);
+    dfle_bins_release(&bins);
+    if (st != DFLE_OK)
+        return dfle_lua_raise(L, &err);
+    return 0;
+}
+
+static int l_plot_profile(lua_State *L)
+{
+    dfle_model *m = dfle_lua_check_model(L, 1);
+    const char *path = luaL_checkstring(L, 2);
+    const char *title = opt_string(L, 3, "title", "plot.profile");
+    const double *x, *z, *S;
+    dfle_error err;
+
+    if ((x = dfle_model_field(m, DFLE_FIELD_X, &err)) == NULL ||
+        (z = dfle_model_field(m, DFLE_FIELD_Z, &err)) == NULL ||
+        (S = dfle_model_field(m, DFLE_FIELD_S, &err)) == NULL)
+        return dfle_lua_raise(L, &err);
+    if (dfle_plot_profile(path, title, dfle_model_size(m), x, z, S, &err) != DFLE_OK)
+        return dfle_lua_raise(L, &err);
+    return 0;
+}
+
+/* dfle.plot.xy{path =, series = {...}, ...}: any curves, e.g. several
+ * models' slope-area data on one figure. */
+static int l_plot_xy(lua_State *L)
+{
+    static const char *const keys[] = {"path", "series", "title", "xlabel", "ylabel",
+                                       "logx", "logy", NULL};
+    static const char *const series_keys[] = {"x", "y", "label", "lines", NULL};
+    dfle_plot_opts o;
+    dfle_plot_series *series;
+    const char *path;
+    size_t ns;
+    int list;
+    dfle_error err;
+
+    luaL_checktype(L, 1, LUA_TTABLE);
+    dfle_lua_read_params(L, 1, "plot.xy", NULL, 0, keys);
+    path = opt_string(L, 1, "path", "plot.xy");
+    if (path == NULL)
+        luaL_error(L, "dfle.plot.xy: parameter 'path' is required");
+    memset(&o, 0, sizeof o);
+    o.title = opt_string(L, 1, "title", "plot.xy");
+    o.xlabel = opt_string(L, 1, "xlabel", "plot.xy");
+    o.ylabel = opt_string(L, 1, "ylabel", "plot.xy");
+    o.logx = opt_bool(L, 1, "logx", "plot.xy");
+    o.logy = opt_bool(L, 1, "logy", "plot.xy");
+    if (lua_getfield(L, 1, "series") != LUA_TTABLE)
+        luaL_error(L, "dfle.plot.xy: parameter 'series' must be an array of {x =, y =}");
+    list = lua_gettop(L);
+    ns = lua_rawlen(L, -1);
+    if (ns == 0)
+        luaL_error(L, "dfle.plot.xy: 'series' is empty");
+    series = lua_newuserdatauv(L, ns * sizeof *series, 0);
+    for (size_t k = 0; k < ns; k++) {
+        int s_idx;
+        size_t ny;
+        luaL_checkstack(L, 4, "too many plot series");
+        lua_rawgeti(L, list, (lua_Integer)k + 1);
+        s_idx = lua_gettop(L);
+        if (!lua_istable(L, s_idx))
+            luaL_error(L, "dfle.plot.xy: series[%d] must be a table", (int)k + 1);
+        dfle_lua_read_params(L, s_idx, "plot.xy series", NULL, 0, series_keys);
+        series[k].label = opt_string(L, s_idx, "label", "plot.xy");
+        series[k].lines = opt_bool(L, s_idx, "lines", "plot.xy");
+        lua_getfield(L, s_idx, "x");
+        series[k].x = dfle_lua_check_array(L, -1, "series.x", &series[k].n);
+        lua_getfield(L, s_idx, "y");
+        series[k].y = dfle_lua_check_array(L, -1, "series.y", &ny);
+        if (ny != series[k].n)
+            luaL_error(L, "dfle.plot.xy: series[%d] has %d x but %d y values", (int)k + 1,
+                       (int)series[k].n, (int)ny);
+        /* The series table and its two scratch arrays stay on the stack,
+         * which keeps them alive until the plot is written. */
+    }
+    if (dfle_plot_xy(path, &o, series, ns, &err) != DFLE_OK)
+        return dfle_lua_raise(L, &err);
+    return 0;
+}
+
+void dfle_lua_open_plot(lua_State *L)
+{
+    static const luaL_Reg funcs[] = {
+        {"slope_area", l_plot_slope_area},
+        {"profile", l_plot_profile},
+        {"xy", l_plot_xy},
+        {NULL, NULL}};
+    lua_newtable(L);
+    luaL_setfuncs(L, funcs, 0);
+    lua_setfield(L, -2, "plot");
+}

@@ -1,0 +1,639 @@
+/*
+ * plot.c - publication figures (x-y, slope-area, long profile) via gnuplot.
+ *
+ * dfle does not draw: it writes one complete gnuplot script, data inline
+ * as datablocks, to a gnuplot process and then checks that the image
+ * exists.  Everything that can be checked before gnuplot starts (path,
+ * format, data) is, so a bad call never starts gnuplot or touches a file.
+ *
+ * Safety of the script: every string from the caller (labels, the output
+ * path) is written in gnuplot single quotes, the only quoting in which
+ * gnuplot performs no backquote (shell) substitution, no macro expansion
+ * and no backslash processing.  A relative output path gets a "./" prefix
+ * so that gnuplot cannot read a leading '|' as "pipe to a command" or a
+ * leading '~' as the home directory.  The program named by DFLE_GNUPLOT
+ * is single-quoted for /bin/sh.  gnuplot's stdout and stderr go to a
+ * temporary file whose first lines end up in the error message, so the
+ * library never writes to the user's terminal.
+ *
+ * Labels and titles are gnuplot "enhanced text": m^2 and S_{df} render as
+ * super- and subscripts, which is what the figures need.
+ */
+#ifndef _POSIX_C_SOURCE /* popen, mkstemp, sigset_t: POSIX, not C11 */
+#define _POSIX_C_SOURCE 200809L
+#endif
+#include "dfle/plot.h"
+
+#include <errno.h>
+#include <fcntl.h>
+#include <math.h>
+#include <signal.h>
+#include <stdio.h>
+#include <stdlib.h>
+#include <string.h>
+#include <strings.h>
+#include <sys/stat.h>
+#include <sys/wait.h>
+#include <time.h>
+#include <unistd.h>
+
+enum { FMT_PNG, FMT_SVG, FIT_SAMPLES = 200 };
+
+/* Okabe-Ito colours: distinguishable with colour-blindness and in print. */
+static const char *const palette[] = {"#0072B2", "#D55E00", "#009E73",
+                                      "#CC79A7", "#E69F00", "#56B4E9",
+                                      "#000000"};
+
+/* The image format named by the path's extension, or a negative status.
+ * Control characters are refused: they cannot be written in a
+ * single-quoted gnuplot string and no sane file name needs them. */
+static int out_format(const char *path, dfle_error *err)
+{
+    if (path == NULL || path[0] == '\0')
+        return dfle_error_set(err, DFLE_EINVAL,
+                              "plot: output path is NULL or empty");
+    for (const char *p = path; *p != '\0'; p++)
+        if ((unsigned char)*p < 0x20 || *p == 0x7f)
+            return dfle_error_set(err, DFLE_EINVAL, "plot: output path '%s' "
+                                  "contains a control character", path);
+    const char *dot = strrchr(path, '.'), *slash = strrchr(path, '/');
+    if (dot != NULL && (slash == NULL || dot > slash)) {
+        if (strcasecmp(dot, ".png") == 0) return FMT_PNG;
+        if (strcasecmp(dot, ".svg") == 0) return FMT_SVG;
+    }
+    return dfle_error_set(err, DFLE_EINVAL, "plot: unsupported image format "
+                          "for '%s': the name must end in .png or .svg", path);
+}
+
+/* s as a gnuplot single-quoted string (see the file comment).  A line
+ * break is spliced in as a concatenated "\n" so multi-line titles work
+ * without ending the command. */
+static void gp_str(FILE *f, const char *s)
+{
+    fputc('\'', f);
+    for (; *s != '\0'; s++) {
+        unsigned char c = (unsigned char)*s;
+        if (c == '\'') fputs("''", f);
+        else if (c == '\n') fputs("'.\"\\n\".'", f);
+        else fputc(c < 0x20 || c == 0x7f ? ' ' : c, f);
+    }
+    fputc('\'', f);
+}
+
+/* Append s, single-quoted for /bin/sh (' becomes '\''), to dst. */
+static void sh_quote(char *dst, const char *s)
+{
+    dst += strlen(dst);
+    *dst++ = '\'';
+    for (; *s != '\0'; s++) {
+        if (*s == '\'') { memcpy(dst, "'\\''", 4); dst += 4; }
+        else *dst++ = *s;
+    }
+    strcpy(dst, "'");
+}
+
+static sigset_t pipe_set(void)
+{
+    sigset_t s;
+    sigemptyset(&s);
+    sigaddset(&s, SIGPIPE);
+    return s;
+}
+
+/* One gnuplot run.  SIGPIPE is blocked for this thread while we write, so
+ * a gnuplot that is missing or dies early gives EPIPE, not a dead caller. */
+typedef struct gp_run {
+    FILE *f;
+    const char *prog, *out;
+    int errfd;
+    char errpath[512];
+    sigset_t oldmask;
+    int pipe_pending; /* SIGPIPE was pending before us: not ours to eat */
+} gp_run;
+
+static int gp_begin(gp_run *r, const char *path, int fmt, int w, int h,
+                    dfle_error *err)
+{
+    const char *tmp = getenv("TMPDIR");
+    memset(r, 0, sizeof *r);
+    r->out = path;
+    r->prog = getenv("DFLE_GNUPLOT");
+    if (r->prog == NULL || r->prog[0] == '\0') r->prog = "gnuplot";
+    if (tmp == NULL || tmp[0] == '\0' || strlen(tmp) > sizeof r->errpath - 32)
+        tmp = "/tmp";
+    snprintf(r->errpath, sizeof r->errpath, "%s/dfle-gnuplot-XXXXXX", tmp);
+    if ((r->errfd = mkstemp(r->errpath)) < 0)
+        return dfle_error_set(err, DFLE_EIO, "plot: cannot create a temporary "
+                              "file in %s: %s", tmp, strerror(errno));
+    /* Open (and truncate) the output ourselves: an unwritable path is
+     * then a clear DFLE_EIO, and afterwards a non-empty file proves that
+     * gnuplot wrote it. */
+    int rc = DFLE_OK, fd = open(path, O_WRONLY | O_CREAT | O_TRUNC, 0666);
+    int oerr = errno;
+    char *cmd = malloc(4 * (strlen(r->prog) + strlen(r->errpath)) + 32);
+    if (fd < 0) {
+        rc = dfle_error_set(err, DFLE_EIO, "plot: cannot write '%s': %s",
+                            path, strerror(oerr));
+    } else if (cmd == NULL) {
+        rc = dfle_error_set(err, DFLE_ENOMEM, "plot: out of memory");
+    } else {
+        sigset_t ps = pipe_set(), pend;
+        cmd[0] = '\0';
+        sh_quote(cmd, r->prog);
+        strcat(cmd, " 2>");
+        sh_quote(cmd, r->errpath);
+        strcat(cmd, " 1>&2");
+        pthread_sigmask(SIG_BLOCK, &ps, &r->oldmask);
+        r->pipe_pending = sigpending(&pend) == 0 && sigismember(&pend, SIGPIPE);
+        if ((r->f = popen(cmd, "w")) == NULL) {
+            rc = dfle_error_set(err, DFLE_EEXTERNAL, "plot: gnuplot could not "
+                                "be run ('%s'): %s", r->prog, strerror(errno));
+            pthread_sigmask(SIG_SETMASK, &r->oldmask, NULL);
+        }
+    }
+    free(cmd);
+    if (fd >= 0) close(fd);
+    if (rc < 0) {
+        if (fd >= 0) unlink(path);
+        close(r->errfd);
+        unlink(r->errpath);
+        return rc;
+    }
+    fprintf(r->f, "set terminal %s size %d,%d enhanced font 'sans,12' "
+            "linewidth 1.2 background '#ffffff'\nset encoding utf8\n"
+            "set output %s", fmt == FMT_PNG ? "pngcairo" : "svg", w, h,
+            path[0] == '/' ? "" : "'./'.");
+    gp_str(r->f, path);
+    /* Light grid behind the data, thin black frame, small bar caps. */
+    fputs("\nset style line 81 lt 1 lc rgb '#d0d0d0' lw 0.6\n"
+          "set style line 82 lt 1 lc rgb '#ececec' lw 0.4\n"
+          "set border lw 1.0\nset tics scale 1.2,0.6\nset bars small\n", r->f);
+    return DFLE_OK;
+}
+
+/* Up to two meaningful lines of what gnuplot (or sh) said, on one line:
+ * echoed commands and caret lines only repeat the script. */
+static void err_text(int fd, char *out, size_t cap)
+{
+    char buf[1024];
+    ssize_t k = lseek(fd, 0, SEEK_SET) == 0 ? read(fd, buf, sizeof buf - 1) : 0;
+    buf[k > 0 ? k : 0] = '\0';
+    out[0] = '\0';
+    int lines = 0;
+    for (char *ln = strtok(buf, "\n"); ln != NULL && lines < 2;
+         ln = strtok(NULL, "\n")) {
+        while (*ln == ' ' || *ln == '\t') ln++;
+        if (*ln == '\0' || *ln == '^' || strncmp(ln, "gnuplot>", 8) == 0)
+            continue;
+        size_t used = strlen(out);
+        snprintf(out + used, cap - used, "%s%s", lines++ ? "; " : "", ln);
+    }
+    if (lines == 0) snprintf(out, cap, "no message");
+}
+
+static int gp_end(gp_run *r, dfle_error *err)
+{
+    char msg[300];
+    struct stat sb;
+    int rc = DFLE_OK;
+    fputs("unset output\n", r->f);
+    int werr = fflush(r->f) != 0 || ferror(r->f);
+    int st = pclose(r->f), perr = errno;
+    sigset_t ps = pipe_set(), pend;
+    if (!r->pipe_pending && sigpending(&pend) == 0 &&
+        sigismember(&pend, SIGPIPE)) { /* eat the SIGPIPE we caused */
+        const struct timespec zero = {0, 0};
+        while (sigtimedwait(&ps, NULL, &zero) < 0 && errno == EINTR) {}
+    }
+    pthread_sigmask(SIG_SETMASK, &r->oldmask, NULL);
+    err_text(r->errfd, msg, sizeof msg);
+    close(r->errfd);
+    unlink(r->errpath);
+
+    if (st == -1)
+        rc = dfle_error_set(err, DFLE_EEXTERNAL, "plot: could not wait for "
+                            "gnuplot ('%s'): %s", r->prog, strerror(perr));
+    else if (WIFEXITED(st) && WEXITSTATUS(st) >= 126) /* sh: cannot run */
+        rc = dfle_error_set(err, DFLE_EEXTERNAL, "plot: gnuplot could not be "
+                            "run (%s); install it (apt-get install "
+                            "gnuplot-nox) or set DFLE_GNUPLOT to the gnuplot "
+                            "program", msg);
+    else if (WIFSIGNALED(st))
+        rc = dfle_error_set(err, DFLE_EEXTERNAL, "plot: gnuplot ('%s') was "
+                            "killed by signal %d", r->prog, WTERMSIG(st));
+    else if (WEXITSTATUS(st) != 0)
+        rc = dfle_error_set(err, DFLE_EEXTERNAL, "plot: gnuplot ('%s') failed "
+                            "making '%s': %s", r->prog, r->out, msg);
+    else if (werr)
+        rc = dfle_error_set(err, DFLE_EEXTERNAL, "plot: could not send the "
+                            "script to gnuplot ('%s')", r->prog);
+    else if (stat(r->out, &sb) != 0)
+        rc = dfle_error_set(err, DFLE_EIO, "plot: gnuplot finished but '%s' "
+                            "is gone: %s", r->out, strerror(errno));
+    else if (S_ISREG(sb.st_mode) && sb.st_size == 0)
+        rc = dfle_error_set(err, DFLE_EEXTERNAL, "plot: gnuplot finished but "
+                            "wrote nothing to '%s'", r->out);
+    /* No truncated or empty image is left behind on failure. */
+    if (rc != DFLE_OK && stat(r->out, &sb) == 0 && S_ISREG(sb.st_mode))
+        unlink(r->out);
+    return rc;
+}
+
+static int usable(double x, double y, int logx, int logy)
+{
+    return isfinite(x) && isfinite(y) && (!logx || x > 0) && (!logy || y > 0);
+}
+
+/* One thing drawn from n rows (x, y), optionally with error-bar ends
+ * lo/hi.  Unusable rows (non-finite, or <= 0 on a log axis) are left
+ * out; in a line they leave a gap rather than a false join. */
+typedef struct layer {
+    size_t n;
+    const double *x, *y, *lo, *hi;
+    const char *with, *color; /* gnuplot "with" clause, "#rrggbb" */
+    const char *title;        /* legend text; NULL: none */
+    size_t used;       /* usable rows, set by ext_scan */
+} layer;
+
+/* Extent of the layers in axis units (log10 on log axes) and how many
+ * points fall in each corner box (top right, top left, bottom left,
+ * bottom right) of the size the key will take: the key goes in the
+ * emptiest one, so it does not hide data. */
+typedef struct extent {
+    double x0, x1, y0, y1;
+    int logx, logy;
+    size_t n, corner[4];
+} extent;
+
+static double ax(double v, int lg) { return lg ? log10(v) : v; }
+
+/* Widen [lo, hi] (log10 units) to 1, 2 or 5 times a power of ten:
+ * tighter than gnuplot's whole decades, still ending on round numbers. */
+static void nice_log(double *lo, double *hi)
+{
+    const double l2 = log10(2.0), l5 = log10(5.0), eps = 1e-9;
+    double d = floor(*lo + eps), m = *lo - d;
+    *lo = d + (m >= l5 - eps ? l5 : m >= l2 - eps ? l2 : 0);
+    d = floor(*hi - eps);
+    m = *hi - d;
+    *hi = d + (m <= l2 + eps ? l2 : m <= l5 + eps ? l5 : 1);
+    if (*hi < *lo + 0.1) { *lo -= l2; *hi += l2; } /* one value: 0.5x..2x */
+}
+
+static void ext_scan(extent *e, layer *L, size_t nl, int logx, int logy,
+                     double keyw)
+{
+    size_t ntitles = 0;
+    memset(e, 0, sizeof *e);
+    e->x0 = e->y0 = HUGE_VAL;
+    e->x1 = e->y1 = -HUGE_VAL;
+    e->logx = logx;
+    e->logy = logy;
+    for (size_t k = 0; k < nl; k++) {
+        ntitles += L[k].title != NULL;
+        L[k].used = 0;
+        for (size_t i = 0; i < L[k].n; i++) {
+            if (!usable(L[k].x[i], L[k].y[i], logx, logy)) continue;
+            double u = ax(L[k].x[i], logx), v = ax(L[k].y[i], logy);
+            e->x0 = fmin(e->x0, u); e->x1 = fmax(e->x1, u);
+            e->y0 = fmin(e->y0, v); e->y1 = fmax(e->y1, v);
+            L[k].used++;
+        }
+        e->n += L[k].used;
+    }
+    if (e->n == 0) return;
+    if (logx) nice_log(&e->x0, &e->x1);
+    if (logy) nice_log(&e->y0, &e->y1);
+    double fh = fmin(0.5, 0.075 * (double)(ntitles + 1));
+    for (size_t k = 0; k < nl; k++)
+        for (size_t i = 0; i < L[k].n; i++) {
+            if (!usable(L[k].x[i], L[k].y[i], logx, logy)) continue;
+            double u = ax(L[k].x[i], logx), v = ax(L[k].y[i], logy);
+            u = e->x1 > e->x0 ? (u - e->x0) / (e->x1 - e->x0) : 0.5;
+            v = e->y1 > e->y0 ? (v - e->y0) / (e->y1 - e->y0) : 0.5;
+            int r = u >= 1 - keyw, l = u <= keyw, t = v >= 1 - fh, b = v <= fh;
+            e->corner[0] += (size_t)(t && r);
+            e->corner[1] += (size_t)(t && l);
+            e->corner[2] += (size_t)(b && l);
+            e->corner[3] += (size_t)(b && r);
+        }
+}
+
+/* Datablocks $<name>0, $<name>1, ... holding the usable rows. */
+static void put_blocks(FILE *f, const char *name, const layer *L, size_t nl,
+                       const extent *e)
+{
+    for (size_t k = 0; k < nl; k++) {
+        int gap = 0;
+        fprintf(f, "$%s%zu << EOD\n", name, k);
+        for (size_t i = 0; i < L[k].n; i++) {
+            double x = L[k].x[i], y = L[k].y[i];
+            if (!usable(x, y, e->logx, e->logy)) {
+                if (gap) fputs("\n", f); /* a blank line breaks a line */
+                gap = 0;
+                continue;
+            }
+            gap = 1;
+            fprintf(f, "%.17g %.17g", x, y);
+            if (L[k].lo != NULL) { /* a bad quartile draws no bar */
+                double lo = L[k].lo[i], hi = L[k].hi[i];
+                fprintf(f, " %.17g %.17g", usable(x, lo, 0, e->logy) ? lo : y,
+                        usable(x, hi, 0, e->logy) ? hi : y);
+            }
+            fputs("\n", f);
+        }
+        fputs("EOD\n", f);
+    }
+}
+
+/* Log axes get the range the corner count assumed, labels 10^n when they
+ * span two decades or more, and otherwise tics at 1, 2, 5 (and 3, 7
+ * below one decade) times 10^n: gnuplot would label only the decades,
+ * leaving a narrow axis with one number or none. */
+static void put_axes(FILE *f, const extent *e)
+{
+    static const double mant[5] = {1, 2, 3, 5, 7};
+    const int lg[2] = {e->logx, e->logy};
+    const double lo[2] = {e->x0, e->y0}, hi[2] = {e->x1, e->y1};
+    for (int a = 0; a < 2; a++) {
+        char c = a == 0 ? 'x' : 'y';
+        double span = hi[a] - lo[a];
+        if (!lg[a]) continue;
+        fprintf(f, "set logscale %c 10\nset m%ctics 10\nset %crange [%.17g:"
+                "%.17g]\nset format %c '%s'\n", c, c, c, pow(10, lo[a]),
+                pow(10, hi[a]), c, span >= 2 ? "10^{%L}" : "%g");
+        if (span >= 2) continue;
+        const char *sep = "(";
+        fprintf(f, "set %ctics ", c);
+        for (double d = floor(lo[a]); d <= ceil(hi[a]); d++)
+            for (int m = 0; m < 5; m++) {
+                double v = log10(mant[m]) + d;
+                if ((span >= 1 && (m == 2 || m == 4)) || v < lo[a] - 1e-9 ||
+                    v > hi[a] + 1e-9) continue;
+                fprintf(f, "%s%.17g", sep, mant[m] * pow(10, d));
+                sep = ", ";
+            }
+        fputs(*sep == '(' ? "autofreq\n" : ")\n", f);
+    }
+    fprintf(f, "set grid xtics ytics%s%s back ls 81, ls 82\n",
+            e->logx ? " mxtics" : "", e->logy ? " mytics" : "");
+}
+
+static void put_label(FILE *f, const char *what, const char *text)
+{
+    if (text == NULL) return;
+    fprintf(f, "set %s ", what);
+    gp_str(f, text);
+    fputs("\n", f);
+}
+
+/* The key, in the emptiest corner, then the plot command. */
+static void put_plot(FILE *f, const char *name, const layer *L, size_t nl,
+                     const extent *e)
+{
+    static const char *const where[4] = {"top right", "top left",
+                                         "bottom left", "bottom right"};
+    int best = 0, titled = 0, first = 1;
+    for (int i = 1; i < 4; i++)
+        if (e->corner[i] < e->corner[best]) best = i;
+    for (size_t k = 0; k < nl; k++) titled |= L[k].title != NULL;
+    if (titled)
+        fprintf(f, "set key inside %s Left reverse opaque box lt 1 lc rgb "
+                "'#b0b0b0' lw 0.8 samplen 2.5 spacing 1.15 width 1 height "
+                "0.5\n", where[best]);
+    else
+        fputs("unset key\n", f);
+    fputs("plot", f);
+    for (size_t k = 0; k < nl; k++) {
+        if (L[k].used == 0) continue; /* gnuplot refuses an empty block */
+        fprintf(f, "%s $%s%zu using 1:2%s with %s lc rgb '%s'", first ? "" :
+                ",", name, k, L[k].lo ? ":3:4" : "", L[k].with, L[k].color);
+        if (L[k].title != NULL) { fputs(" title ", f); gp_str(f, L[k].title); }
+        else fputs(" notitle", f);
+        first = 0;
+    }
+    fputs("\n", f);
+}
+
+/* A whole single-panel figure; `extra` goes in just before "plot". */
+static int figure(const char *path, int fmt, int w, int h, const char *title,
+                  const char *xl, const char *yl, const extent *e,
+                  const layer *L, size_t nl, const char *extra,
+                  dfle_error *err)
+{
+    gp_run r;
+    int rc = gp_begin(&r, path, fmt, w, h, err);
+    if (rc < 0) return rc;
+    put_blocks(r.f, "d", L, nl, e);
+    put_label(r.f, "title", title);
+    put_label(r.f, "xlabel", xl);
+    put_label(r.f, "ylabel", yl);
+    put_axes(r.f, e);
+    if (extra != NULL) fputs(extra, r.f);
+    put_plot(r.f, "d", L, nl, e);
+    return gp_end(&r, err);
+}
+
+int dfle_plot_xy(const char *path, const dfle_plot_opts *opts,
+                 const dfle_plot_series *series, size_t nseries,
+                 dfle_error *err)
+{
+    static const dfle_plot_opts none = {0};
+    enum { NPAL = sizeof palette / sizeof palette[0] };
+    const dfle_plot_opts *o = opts != NULL ? opts : &none;
+    int fmt = out_format(path, err);
+    if (fmt < 0) return fmt;
+    int w = o->width > 0 ? o->width : 900, h = o->height > 0 ? o->height : 600;
+    if (w < 64 || h < 64 || w > 10000 || h > 10000)
+        return dfle_error_set(err, DFLE_EINVAL, "plot: image size %dx%d "
+                              "outside 64..10000 pixels", w, h);
+    if (series == NULL || nseries == 0)
+        return dfle_error_set(err, DFLE_EINVAL, "plot: no series to plot");
+    for (size_t k = 0; k < nseries; k++)
+        if (series[k].n > 0 && (series[k].x == NULL || series[k].y == NULL))
+            return dfle_error_set(err, DFLE_EINVAL, "plot: series %zu has "
+                                  "NULL x or y", k);
+    layer *L = malloc(nseries * sizeof *L);
+    if (L == NULL)
+        return dfle_error_set(err, DFLE_ENOMEM, "plot: out of memory");
+    for (size_t k = 0; k < nseries; k++) {
+        const dfle_plot_series *s = &series[k];
+        L[k] = (layer){s->n, s->x, s->y, NULL, NULL, s->lines ? "lines lw 2" :
+                       "points pt 7 ps 0.6", palette[k % NPAL], s->label, 0};
+    }
+    extent e;
+    int rc;
+    ext_scan(&e, L, nseries, o->logx != 0, o->logy != 0, 0.4);
+    if (e.n == 0)
+        rc = dfle_error_set(err, DFLE_EINVAL, "plot: no finite points%s to "
+                            "plot in '%s'", e.logx || e.logy ?
+                            " (positive on log axes)" : "", path);
+    else
+        rc = figure(path, fmt, w, h, o->title, o->xlabel, o->ylabel, &e, L,
+                    nseries, NULL, err);
+    free(L);
+    return rc;
+}
+
+/* Eq. (2), S = S_df / (1 + (A/A_df)^a2), here rather than from
+ * analysis.c so that plotting does not depend on the fitting code. */
+static double eq2(const dfle_eq2_fit *fit, double A)
+{
+    return fit->S_df / (1.0 + pow(A / fit->A_df, fit->a2));
+}
+
+/* v for a legend: 3 significant digits; large or small values as
+ * "1.2×10^{4}" (enhanced text). */
+static void fmt_num(char *buf, size_t cap, double v)
+{
+    double a = fabs(v);
+    if (a == 0 || (a >= 1e-3 && a < 1e4)) {
+        snprintf(buf, cap, "%.3g", v);
+        return;
+    }
+    char m[32];
+    snprintf(m, sizeof m, "%.2e", v); /* rounds the mantissa for us */
+    char *ep = strchr(m, 'e');
+    long ex = strtol(ep + 1, NULL, 10);
+    *ep = '\0';
+    while (ep > m && (ep[-1] == '0' || ep[-1] == '.')) *--ep = '\0';
+    snprintf(buf, cap, "%s×10^{%ld}", m, ex);
+}
+
+int dfle_plot_slope_area(const char *path, const char *title, size_t n,
+                         const double *A, const double *S,
+                         const dfle_bins *bins, const dfle_eq2_fit *fit,
+                         dfle_error *err)
+{
+    int fmt = out_format(path, err);
+    if (fmt < 0) return fmt;
+    if (n == 0 || A == NULL || S == NULL)
+        return dfle_error_set(err, DFLE_EINVAL, "plot: slope-area data "
+                              "missing (n = %zu, A or S NULL)", n);
+    if (bins != NULL && bins->n > 0 && (bins->A == NULL || !bins->S_mean))
+        return dfle_error_set(err, DFLE_EINVAL, "plot: bins have NULL A or "
+                              "S_mean");
+    if (fit != NULL && !(isfinite(fit->S_df) && fit->S_df > 0 &&
+                         isfinite(fit->A_df) && fit->A_df > 0 &&
+                         isfinite(fit->a2)))
+        return dfle_error_set(err, DFLE_EINVAL, "plot: fit cannot be drawn "
+                              "(S_df = %g, A_df = %g, a2 = %g)", fit->S_df,
+                              fit->A_df, fit->a2);
+    double amin = HUGE_VAL, amax = -HUGE_VAL;
+    for (size_t i = 0; i < n; i++)
+        if (usable(A[i], S[i], 1, 1)) {
+            amin = fmin(amin, A[i]);
+            amax = fmax(amax, A[i]);
+        }
+    if (amin > amax)
+        return dfle_error_set(err, DFLE_EINVAL, "plot: no slope-area pair "
+                              "with finite A > 0 and S > 0 for '%s'", path);
+
+    layer L[4];
+    size_t nl = 0;
+    L[nl++] = (layer){n, A, S, NULL, NULL, "points pt 7 ps 0.35", "#a8a8a8",
+                      "Data", 0};
+    if (bins != NULL && bins->n > 0) {
+        int bars = bins->S_q25 != NULL && bins->S_q75 != NULL;
+        L[nl++] = (layer){bins->n, bins->A, bins->S_mean,
+                          bars ? bins->S_q25 : NULL, bars ? bins->S_q75 : NULL,
+                          bars ? "yerrorbars pt 7 ps 1 lw 1" : "points pt 7 ps 1",
+                          "#000000", bars ? "Binned mean (quartiles)"
+                          : "Binned mean", 0};
+    }
+    /* The curve spans the data's areas; A_df is marked only inside it. */
+    double fa[FIT_SAMPLES], fs[FIT_SAMPLES], mark_a = 0, mark_s = 0;
+    char ftitle[256] = "", mtitle[96] = "", extra[200] = "";
+    if (fit != NULL) {
+        char sdf[32], adf[32], a2[32], r2[32] = "";
+        for (int i = 0; i < FIT_SAMPLES; i++) {
+            fa[i] = amin * pow(amax / amin, i / (FIT_SAMPLES - 1.0));
+            fs[i] = eq2(fit, fa[i]);
+        }
+        fmt_num(sdf, sizeof sdf, fit->S_df);
+        fmt_num(adf, sizeof adf, fit->A_df);
+        fmt_num(a2, sizeof a2, fit->a2);
+        if (isfinite(fit->r2))
+            snprintf(r2, sizeof r2, ", {/:Italic R}^2 = %.3f", fit->r2);
+        int mark = fit->A_df >= amin && fit->A_df <= amax;
+        snprintf(ftitle, sizeof ftitle, "Eq. (2): {/:Italic S}_{df} = %s, "
+                 "{/:Italic a}_2 = %s%s%s%s%s", sdf, a2, r2,
+                 mark ? "" : ", {/:Italic A}_{df} = ", mark ? "" : adf,
+                 mark ? "" : " m^2");
+        L[nl++] = (layer){FIT_SAMPLES, fa, fs, NULL, NULL, "lines lw 2.5",
+                          "#d01c1c", ftitle, 0};
+        if (mark) { /* as in the paper's Fig. 1: open circle at (A_df,
+                     * S_df/2) on the curve and a dashed line at A_df */
+            mark_a = fit->A_df;
+            mark_s = eq2(fit, fit->A_df);
+            snprintf(mtitle, sizeof mtitle, "{/:Italic A}_{df} = %s m^2", adf);
+            L[nl++] = (layer){1, &mark_a, &mark_s, NULL, NULL,
+                              "points pt 6 ps 2.2 lw 2", "#d01c1c", mtitle, 0};
+            snprintf(extra, sizeof extra, "set arrow from %.17g, graph 0 to "
+                     "%.17g, graph 1 nohead dt 2 lw 1 lc rgb '#d01c1c' back\n",
+                     mark_a, mark_a);
+        }
+    }
+    extent e;
+    ext_scan(&e, L, nl, 1, 1, 0.55);
+    return figure(path, fmt, 900, 650, title,
+                  "Drainage area, {/:Italic A} (m^2)", "Slope, {/:Italic S}",
+                  &e, L, nl, extra, err);
+}
+
+int dfle_plot_profile(const char *path, const char *title, size_t n,
+                      const double *x, const double *z, const double *S,
+                      dfle_error *err)
+{
+    int fmt = out_format(path, err);
+    if (fmt < 0) return fmt;
+    if (n == 0 || x == NULL || z == NULL)
+        return dfle_error_set(err, DFLE_EINVAL, "plot: profile data missing "
+                              "(n = %zu, x or z NULL)", n);
+    layer top = {n, x, z, NULL, NULL, "lines lw 2", "#1f3b73", NULL, 0};
+    layer bot = {n, x, S, NULL, NULL, "lines lw 1.6", "#D55E00", NULL, 0};
+    extent et, eb;
+    ext_scan(&et, &top, 1, 0, 0, 0);
+    if (et.n == 0)
+        return dfle_error_set(err, DFLE_EINVAL, "plot: no profile point with "
+                              "finite x and z for '%s'", path);
+    const char *xl = "Distance from channel head, {/:Italic x} (m)";
+    if (S == NULL)
+        return figure(path, fmt, 900, 500, title, xl,
+                      "Elevation, {/:Italic z} (m)", &et, &top, 1, NULL, err);
+    int logS = 1; /* log slope axis unless some finite slope is <= 0 */
+    for (size_t i = 0; i < n; i++)
+        if (isfinite(x[i]) && isfinite(S[i]) && S[i] <= 0) logS = 0;
+    ext_scan(&eb, &bot, 1, 0, logS, 0);
+    if (eb.n == 0)
+        return dfle_error_set(err, DFLE_EINVAL, "plot: no profile point "
+                              "with finite x and S for '%s'", path);
+    /* Both panels share one fixed x range, so their frames line up. */
+    double x0 = fmin(et.x0, eb.x0), x1 = fmax(et.x1, eb.x1);
+    gp_run r;
+    int rc = gp_begin(&r, path, fmt, 900, 750, err);
+    if (rc < 0) return rc;
+    put_blocks(r.f, "z", &top, 1, &et);
+    put_blocks(r.f, "s", &bot, 1, &eb);
+    if (x1 > x0) fprintf(r.f, "set xrange [%.17g:%.17g]\n", x0, x1);
+    put_label(r.f, "title", title);
+    put_axes(r.f, &et);
+    /* Fixed margins line the frames up; the y labels are placed on the
+     * screen, not beside the tic labels, so they line up too. */
+    double ttop = title ? 0.92 : 0.96;
+    fprintf(r.f, "set multiplot\nset lmargin at screen 0.11\n"
+            "set rmargin at screen 0.96\nset tmargin at screen %g\n"
+            "set bmargin at screen 0.555\nset format x ''\n"
+            "set label 1 'Elevation, {/:Italic z} (m)' at screen 0.025, "
+            "screen %g center rotate by 90\n", ttop, (ttop + 0.555) / 2);
+    put_plot(r.f, "z", &top, 1, &et);
+    fputs("unset title\nunset label 1\nset format x '% h'\n"
+          "set tmargin at screen 0.50\nset bmargin at screen 0.09\n"
+          "set label 2 'Slope, {/:Italic S}' at screen 0.025, screen 0.295 "
+          "center rotate by 90\n", r.f);
+    put_label(r.f, "xlabel", xl);
+    put_axes(r.f, &eb);
+    put_plot(r.f, "s", &bot, 1, &eb);
+    fputs("unset multiplot\n", r.f);
+    return gp_end(&r, err);
+}

@@ -1,0 +1,68 @@
+/*
+ * router.c - the generic router handle: an ops table plus its state.
+ *
+ * Keeping the handle opaque means the model cannot reach into any one
+ * router's state; everything goes through dfle_router_ops (router.h).
+ */
+#include "dfle/router.h"
+
+#include <stdlib.h>
+
+struct dfle_router {
+    const dfle_router_ops *ops;
+    void *state;
+};
+
+int dfle_router_new(const dfle_router_ops *ops, void *state,
+                    dfle_router **out, dfle_error *err)
+{
+    dfle_router *rt;
+
+    *out = NULL;
+    if (ops == NULL || ops->route == NULL) {
+        if (ops != NULL && ops->destroy != NULL)
+            ops->destroy(state);
+        return dfle_error_set(err, DFLE_EINVAL, "router: ops table lacks route()");
+    }
+    rt = malloc(sizeof *rt);
+    if (rt == NULL) {
+        if (ops->destroy != NULL)
+            ops->destroy(state);
+        return dfle_error_set(err, DFLE_ENOMEM, "router: out of memory");
+    }
+    rt->ops = ops;
+    rt->state = state;
+    *out = rt;
+    return DFLE_OK;
+}
+
+void dfle_router_free(dfle_router *rt)
+{
+    if (rt == NULL)
+        return;
+    if (rt->ops->destroy != NULL)
+        rt->ops->destroy(rt->state);
+    free(rt);
+}
+
+int dfle_router_route(dfle_router *rt, const dfle_channel *ch,
+                      const double *S, dfle_flow *flow, dfle_error *err)
+{
+    return rt->ops->route(rt->state, ch, S, flow, err);
+}
+
+int dfle_router_needs_reroute(dfle_router *rt, size_t n, const double *S)
+{
+    if (rt->ops->needs_reroute == NULL)
+        return 1;
+    return rt->ops->needs_reroute(rt->state, n, S) != 0;
+}
+
+int dfle_router_is_local(const dfle_router *rt)
+{
+    return rt->ops->needs_reroute == NULL;
+}
+
+const char *dfle_router_name(const dfle_router *rt) { return rt->ops->name; }
+const dfle_router_ops *dfle_router_get_ops(const dfle_router *rt) { return rt->ops; }
+void *dfle_router_state(const dfle_router *rt) { return rt->state; }

@@ -1,0 +1,170 @@
+/*
+ * router_empirical.c - the empirical debris-flow router (Sect. 2.3).
+ *
+ * Flow properties come from Rickenmann's (1999) relations and the
+ * volume-area scaling of Santi and Morandi (2013); runout ends at the
+ * first node where the basal shear stress falls below the yield
+ * strength (a Bingham-like stopping rule, Whipple and Dunne 1992).
+ *
+ * Everything that depends on drainage area alone (M, Q, t_p and the
+ * constant part of h^3) is computed once per channel and cached, because
+ * the model routes this flow at every landscape step: only the slope
+ * changes between calls.
+ */
+#include "dfle/router_empirical.h"
+
+#include <math.h>
+#include <stdlib.h>
+#include <string.h>
+
+typedef struct empirical {
+    dfle_empirical_opts opts;
+    /* Cache of the area-only terms, valid for `cached_for`. */
+    unsigned long long cached_for; /* channel id, 0 = none */
+    size_t n;
+    double *M, *Q, *t_p;
+    double *h3_coef; /* 3 mu Q / (rho_b g w): h^3 = h3_coef / S  [m^3] */
+} empirical;
+
+void dfle_empirical_opts_default(dfle_empirical_opts *o)
+{
+    o->M0 = 3000.0;
+    o->gamma = 0.5;
+    o->mu = 500.0;
+    o->tau_y = 300.0;
+    o->c1 = 0.135;
+    o->c2 = 0.78;
+    o->rho_b = 1800.0;
+    o->g = 9.81;
+}
+
+static void empirical_drop_cache(empirical *e)
+{
+    free(e->M); /* one block: M, Q, t_p, h3_coef */
+    e->M = e->Q = e->t_p = e->h3_coef = NULL;
+    e->cached_for = 0;
+    e->n = 0;
+}
+
+static int empirical_fill_cache(empirical *e, const dfle_channel *ch,
+                                dfle_error *err)
+{
+    size_t n = dfle_channel_size(ch);
+    const double *A = dfle_channel_A(ch), *w = dfle_channel_w(ch);
+    const dfle_empirical_opts *o = &e->opts;
+    double *block;
+
+    empirical_drop_cache(e);
+    block = malloc(4 * n * sizeof *block);
+    if (block == NULL)
+        return dfle_error_set(err, DFLE_ENOMEM, "router.empirical: out of memory");
+    e->M = block;
+    e->Q = block + n;
+    e->t_p = block + 2 * n;
+    e->h3_coef = block + 3 * n;
+    for (size_t i = 0; i < n; i++) {
+        e->M[i] = o->M0 * pow(1e-6 * A[i], o->gamma);
+        e->Q[i] = o->c1 * pow(e->M[i], o->c2);
+        e->t_p[i] = e->M[i] / e->Q[i];
+        e->h3_coef[i] = 3.0 * o->mu * e->Q[i] / (o->rho_b * o->g * w[i]);
+    }
+    e->cached_for = dfle_channel_id(ch);
+    e->n = n;
+    return DFLE_OK;
+}
+
+static int empirical_route(void *state, const dfle_channel *ch,
+                           const double *S, dfle_flow *flow, dfle_error *err)
+{
+    empirical *e = state;
+    const double *w = dfle_channel_w(ch);
+    const double rho_g = e->opts.rho_b * e->opts.g, tau_y = e->opts.tau_y;
+    size_t n = dfle_channel_size(ch), i;
+
+    if (flow->n != n)
+        return dfle_error_set(err, DFLE_EINVAL,
+                              "router.empirical: flow has %zu nodes, channel %zu", flow->n, n);
+    /* Channels are immutable, so the id identifies the cached terms. */
+    if (e->cached_for != dfle_channel_id(ch)) {
+        int st = empirical_fill_cache(e, ch, err);
+        if (st != DFLE_OK)
+            return st;
+    }
+    for (i = 0; i < n; i++) {
+        double s = S[i], h, tau, Rh, sin_theta;
+        if (!(s > 0))
+            break; /* no flow on a flat or reverse slope */
+        h = cbrt(e->h3_coef[i] / s);
+        Rh = w[i] * h / (w[i] + 2.0 * h);
+        sin_theta = s / sqrt(1.0 + s * s);
+        tau = rho_g * Rh * sin_theta;
+        if (tau < tau_y)
+            break;
+        flow->M[i] = e->M[i];
+        flow->Q[i] = e->Q[i];
+        flow->t_p[i] = e->t_p[i];
+        flow->h[i] = h;
+        flow->v[i] = e->Q[i] / (w[i] * h);
+        flow->tau[i] = tau;
+        flow->Theta[i] = 1.0 - tau_y / tau;
+    }
+    flow->runout_end = i;
+    /* Beyond the runout nothing flows; zero so every field reads honestly. */
+    for (; i < n; i++)
+        flow->M[i] = flow->Q[i] = flow->t_p[i] = flow->h[i] = flow->v[i] =
+            flow->tau[i] = flow->Theta[i] = 0.0;
+    return DFLE_OK;
+}
+
+static void empirical_destroy(void *state)
+{
+    empirical *e = state;
+    if (e == NULL)
+        return;
+    empirical_drop_cache(e);
+    free(e);
+}
+
+static const dfle_router_ops empirical_ops = {
+    .name = "empirical",
+    .route = empirical_route,
+    .needs_reroute = NULL, /* cheap and local: route every step */
+    .destroy = empirical_destroy,
+};
+
+#define POSITIVE(field)                                                       \
+    do {                                                                      \
+        if (!(isfinite(o->field) && o->field > 0))                            \
+            return dfle_error_set(err, DFLE_EINVAL,                           \
+                                  "router.empirical: " #field                 \
+                                  " must be > 0 (got %g)", o->field);         \
+    } while (0)
+#define NONNEGATIVE(field)                                                    \
+    do {                                                                      \
+        if (!(isfinite(o->field) && o->field >= 0))                           \
+            return dfle_error_set(err, DFLE_EINVAL,                           \
+                                  "router.empirical: " #field                 \
+                                  " must be >= 0 (got %g)", o->field);        \
+    } while (0)
+
+int dfle_router_new_empirical(const dfle_empirical_opts *o,
+                              dfle_router **out, dfle_error *err)
+{
+    empirical *e;
+
+    *out = NULL;
+    POSITIVE(M0); NONNEGATIVE(gamma); POSITIVE(mu); NONNEGATIVE(tau_y);
+    POSITIVE(c1); POSITIVE(c2); POSITIVE(rho_b); POSITIVE(g);
+    e = calloc(1, sizeof *e);
+    if (e == NULL)
+        return dfle_error_set(err, DFLE_ENOMEM, "router.empirical: out of memory");
+    e->opts = *o;
+    return dfle_router_new(&empirical_ops, e, out, err);
+}
+
+const dfle_empirical_opts *dfle_router_empirical_opts(const dfle_router *rt)
+{
+    if (rt == NULL || dfle_router_get_ops(rt) != &empirical_ops)
+        return NULL;
+    return &((const empirical *)dfle_router_state(rt))->opts;
+}

@@ -1,0 +1,57 @@
+/*
+ * dfle_test.h - shared helpers for the cmocka tests.
+ *
+ * cmocka 1.1.5 has no double assert (assert_float_equal casts to float),
+ * so tests compare doubles with an explicit relative/absolute tolerance
+ * and print both values when they differ.
+ */
+#ifndef DFLE_TEST_H
+#define DFLE_TEST_H
+
+#include <math.h>
+#include <setjmp.h>
+#include <stdarg.h>
+#include <stddef.h>
+#include <stdint.h>
+#include <stdio.h>
+#include <cmocka.h>
+
+/* Passes when |a - b| <= abs_tol + rel_tol * |b|.  NaN never passes. */
+#define assert_close(a, b, rel_tol, abs_tol)                                  \
+    dfle_assert_close_impl((a), (b), (rel_tol), (abs_tol), #a, #b,            \
+                           __FILE__, __LINE__)
+
+static inline void dfle_assert_close_impl(double a, double b, double rel,
+                                          double abs_tol, const char *sa,
+                                          const char *sb, const char *file,
+                                          int line)
+{
+    double d = fabs(a - b);
+    if (!(d <= abs_tol + rel * fabs(b))) {
+        print_error("%s = %.17g and %s = %.17g differ by %.3g "
+                    "(allowed %.3g)\n",
+                    sa, a, sb, b, d, abs_tol + rel * fabs(b));
+        _fail(file, line);
+    }
+}
+
+/* The status must be DFLE_OK; otherwise print the error message. */
+#define assert_ok(status, errp)                                               \
+    do {                                                                      \
+        int st_ = (status);                                                   \
+        if (st_ != 0) {                                                       \
+            print_error("status %d: %s\n", st_, (errp)->msg);                 \
+            _fail(__FILE__, __LINE__);                                        \
+        }                                                                     \
+    } while (0)
+
+/* The message must contain `needle`. */
+#define assert_msg_contains(msg, needle)                                      \
+    do {                                                                      \
+        if (strstr((msg), (needle)) == NULL) {                                \
+            print_error("message \"%s\" lacks \"%s\"\n", (msg), (needle));    \
+            _fail(__FILE__, __LINE__);                                        \
+        }                                                                     \
+    } while (0)
+
+#endif

@@ -1,0 +1,43 @@
+#!/bin/sh
+# Runs every test: the cmocka binaries, the Lua-level tests and smoke runs
+# of the examples.  Exit status is non-zero if anything failed.
+# BUILD=dir selects the build; MEMCHECK=1 runs the cmocka tests under valgrind.
+BUILD=${BUILD:-build}
+DFLE="$BUILD/dfle"
+failed=0
+failures=
+
+run() { # name, command...
+    name=$1; shift
+    if "$@"; then :; else
+        failed=$((failed + 1)); failures="$failures $name"
+    fi
+}
+
+vg=
+if [ "${MEMCHECK:-0}" = 1 ]; then
+    vg="valgrind -q --error-exitcode=99 --leak-check=full --errors-for-leak-kinds=definite"
+fi
+
+for t in "$BUILD"/tests/test_*; do
+    [ -x "$t" ] || continue
+    run "$(basename "$t")" $vg "$t"
+done
+
+# Lua-level tests of the scripting API (ends with "N passed, N failed").
+run lua-tests $vg "$DFLE" -q tests/lua/run.lua "$DFLE"
+
+# Every example in its quick mode, in a scratch directory.
+tmp=$(mktemp -d)
+for ex in examples/*.lua; do
+    [ -f "$ex" ] || continue
+    echo "== example $ex (quick)"
+    run "$ex" sh -c "cd '$tmp' && '$PWD/$DFLE' -q '$PWD/$ex' --quick > '$tmp/out.txt' 2>&1 || { cat '$tmp/out.txt'; exit 1; }"
+done
+rm -rf "$tmp"
+
+if [ "$failed" -ne 0 ]; then
+    echo "FAILED:$failures"
+    exit 1
+fi
+echo "all test programs passed"

@@ -1,0 +1,435 @@
+/* test_model.c - Eq. (3) stepping: analytical steady states, the ops
+ * contract (mock routers and laws), stopping rules, NaN detection. */
+#include <math.h>
+#include <stdlib.h>
+#include <string.h>
+
+#include "dfle_test.h"
+#include "dfle/analytical.h"
+#include "dfle/law_power.h"
+#include "dfle/model.h"
+#include "dfle/router_empirical.h"
+
+static dfle_channel *default_channel(void)
+{
+    dfle_channel_opts o;
+    dfle_channel *ch;
+    dfle_channel_opts_default(&o);
+    assert_int_equal(dfle_channel_new(&o, &ch, NULL), DFLE_OK);
+    return ch;
+}
+
+static void fluvial_only_converges_to_eq26(void **state)
+{
+    dfle_channel *ch = default_channel();
+    dfle_stochastic_threshold_opts so;
+    dfle_fluvial *fl;
+    dfle_model_opts mo;
+    dfle_model *m;
+    dfle_run_opts ro;
+    dfle_run_result res;
+    dfle_error err;
+    (void)state;
+
+    dfle_stochastic_threshold_opts_default(&so);
+    assert_int_equal(dfle_fluvial_new_stochastic_threshold(&so, &fl, NULL), DFLE_OK);
+    dfle_model_opts_default(&mo);
+    mo.channel = ch;
+    mo.fluvial = fl;
+    mo.U = 1.5e-3; /* start from the steady state of three times the uplift */
+    assert_ok(dfle_model_new(&mo, &m, &err), &err);
+    assert_ok(dfle_model_set_U(m, 5e-4, &err), &err);
+    dfle_run_opts_default(&ro);
+    assert_ok(dfle_model_run(m, &ro, &res, &err), &err);
+    assert_true(res.converged);
+    assert_int_equal(res.reason, DFLE_STOP_STEADY);
+    assert_true(res.rate_ratio <= 1e-3);
+
+    const double *S = dfle_model_field(m, DFLE_FIELD_S, &err);
+    const double *A = dfle_model_field(m, DFLE_FIELD_A, &err);
+    for (size_t i = 0; i + 1 < dfle_model_size(m); i++)
+        assert_close(S[i], dfle_fluvial_steady_slope(fl, 5e-4, A[i]), 5e-3, 0);
+    dfle_model_free(m);
+    dfle_fluvial_free(fl);
+    dfle_channel_free(ch);
+}
+
+static void debris_flow_only_matches_eq19(void **state)
+{
+    dfle_channel *ch = default_channel();
+    dfle_empirical_opts eo;
+    dfle_power_law_opts po;
+    dfle_router *rt;
+    dfle_law *law;
+    dfle_model_opts mo;
+    dfle_model *m;
+    dfle_run_opts ro;
+    dfle_run_result res;
+    dfle_error err;
+    (void)state;
+
+    dfle_empirical_opts_default(&eo);
+    eo.tau_y = 0; /* Theta = 1 and runout to the outlet, as Eq. (19) assumes */
+    dfle_power_law_opts_default(&po);
+    assert_int_equal(dfle_router_new_empirical(&eo, &rt, NULL), DFLE_OK);
+    assert_int_equal(dfle_law_new_power(&po, &law, NULL), DFLE_OK);
+    dfle_model_opts_default(&mo);
+    mo.channel = ch;
+    mo.router = rt;
+    mo.law = law;
+    assert_ok(dfle_model_new(&mo, &m, &err), &err);
+    dfle_run_opts_default(&ro);
+    assert_ok(dfle_model_run(m, &ro, &res, &err), &err);
+    assert_true(res.converged);
+    assert_int_equal(res.routings, res.steps + 1); /* local router: every step */
+
+    dfle_analytical_params p = {
+        .U = 5e-4, .k_df = 1e-4, .alpha = 6, .beta = 1, .M0 = 3000, .gamma = 0.5,
+        .mu = 500, .c1 = 0.135, .c2 = 0.78, .rho_b = 1800, .g = 9.81, .k_w = 0.05, .b = 0.3,
+    };
+    const double *S = dfle_model_field(m, DFLE_FIELD_S, &err);
+    const double *A = dfle_model_field(m, DFLE_FIELD_A, &err);
+    for (size_t i = 0; i + 1 < dfle_model_size(m); i++)
+        assert_close(S[i], dfle_analytical_slope(&p, A[i]), 5e-3, 0);
+    dfle_model_free(m);
+    dfle_law_free(law);
+    dfle_router_free(rt);
+    dfle_channel_free(ch);
+}
+
+static void steady_state_balances_uplift(void **state)
+{
+    dfle_channel *ch = default_channel();
+    dfle_stochastic_threshold_opts so;
+    dfle_empirical_opts eo;
+    dfle_power_law_opts po;
+    dfle_fluvial *fl;
+    dfle_router *rt;
+    dfle_law *law;
+    dfle_model_opts mo;
+    dfle_model *m;
+    dfle_run_opts ro;
+    dfle_run_result res;
+    dfle_error err;
+    (void)state;
+
+    dfle_stochastic_threshold_opts_default(&so);
+    dfle_empirical_opts_default(&eo);
+    dfle_power_law_opts_default(&po);
+    assert_int_equal(dfle_fluvial_new_stochastic_threshold(&so, &fl, NULL), DFLE_OK);
+    assert_int_equal(dfle_router_new_empirical(&eo, &rt, NULL), DFLE_OK);
+    assert_int_equal(dfle_law_new_power(&po, &law, NULL), DFLE_OK);
+    dfle_model_opts_default(&mo);
+    mo.channel = ch;
+    mo.fluvial = fl;
+    mo.router = rt;
+    mo.law = law;
+    assert_ok(dfle_model_new(&mo, &m, &err), &err);
+    dfle_run_opts_default(&ro);
+    ro.tol = 1e-4;
+    assert_ok(dfle_model_run(m, &ro, &res, &err), &err);
+    assert_true(res.converged);
+    const double *Ef = dfle_model_field(m, DFLE_FIELD_E_F, &err);
+    const double *Edf = dfle_model_field(m, DFLE_FIELD_E_DF, &err);
+    const double *S = dfle_model_field(m, DFLE_FIELD_S, &err);
+    int df_seen = 0, fl_seen = 0;
+    for (size_t i = 0; i + 1 < dfle_model_size(m); i++) {
+        assert_close(Ef[i] + Edf[i], 5e-4, 1e-4, 0);
+        assert_true(S[i] > 0);
+        df_seen |= Edf[i] > 0.9 * 5e-4;
+        fl_seen |= Ef[i] > 0.9 * 5e-4;
+    }
+    /* Both processes dominate somewhere: debris flows at the head,
+     * rivers at the outlet. */
+    assert_true(df_seen && fl_seen);
+    assert_true(Edf[0] > Ef[0]);
+    dfle_model_free(m);
+    dfle_law_free(law);
+    dfle_router_free(rt);
+    dfle_fluvial_free(fl);
+    dfle_channel_free(ch);
+}
+
+static void uplift_alone_raises_every_node_by_U_t(void **state)
+{
+    dfle_channel *ch = default_channel();
+    dfle_model_opts mo;
+    dfle_model *m;
+    dfle_run_opts ro;
+    dfle_run_result res;
+    dfle_error err;
+    (void)state;
+    dfle_model_opts_default(&mo);
+    mo.channel = ch;
+    mo.dt_max = 300;
+    assert_ok(dfle_model_new(&mo, &m, &err), &err);
+    double z0 = dfle_model_field(m, DFLE_FIELD_Z, &err)[10];
+    dfle_run_opts_default(&ro);
+    ro.max_time = 1000;
+    ro.tol = 0;
+    assert_ok(dfle_model_run(m, &ro, &res, &err), &err);
+    assert_int_equal(res.reason, DFLE_STOP_TIME);
+    assert_false(res.converged);
+    assert_int_equal(res.steps, 4); /* 300 + 300 + 300 + 100 */
+    assert_close(res.time, 1000, 1e-12, 0);
+    const double *z = dfle_model_field(m, DFLE_FIELD_Z, &err);
+    assert_close(z[10], z0 + 5e-4 * 1000, 1e-12, 0);
+    assert_close(z[dfle_model_size(m) - 1], 0.0, 0, 0); /* base level fixed */
+    assert_close(dfle_model_time(m), 1000, 1e-12, 0);
+    dfle_model_free(m);
+    dfle_channel_free(ch);
+}
+
+/* --- mocks through the ops tables -------------------------------------- */
+
+typedef struct mock {
+    int routes, factors, rates;
+    int poison_after; /* rate() writes NaN at node 6 after this many calls */
+} mock;
+
+static int mock_route(void *s, const dfle_channel *ch, const double *S, dfle_flow *flow,
+                      dfle_error *err)
+{
+    mock *mk = s;
+    (void)S, (void)err;
+    mk->routes++;
+    for (size_t i = 0; i < dfle_channel_size(ch); i++) {
+        flow->h[i] = 1.0;
+        flow->t_p[i] = 1.0;
+        flow->Theta[i] = 1.0;
+    }
+    flow->runout_end = dfle_channel_size(ch);
+    return 0;
+}
+
+static int mock_never_again(void *s, size_t n, const double *S)
+{
+    (void)s, (void)n, (void)S;
+    return 0;
+}
+
+static int mock_factor(void *s, const dfle_law_ctx *ctx, double *F, dfle_error *err)
+{
+    mock *mk = s;
+    (void)err;
+    mk->factors++;
+    for (size_t i = 0; i < ctx->n; i++)
+        F[i] = ctx->flow->h[i];
+    return 0;
+}
+
+/* E = 1e-3 S^2 F: a debris-flow-like law with a known steady slope. */
+static int mock_rate(void *s, const dfle_law_ctx *ctx, const double *F, double *E,
+                     dfle_error *err)
+{
+    mock *mk = s;
+    (void)err;
+    mk->rates++;
+    for (size_t i = 0; i < ctx->n; i++)
+        E[i] = 1e-3 * ctx->S[i] * ctx->S[i] * F[i];
+    if (mk->poison_after > 0 && mk->rates > mk->poison_after)
+        E[6] = NAN;
+    return 0;
+}
+
+static const dfle_router_ops cached_router_ops = {
+    .name = "mock-cached", .route = mock_route, .needs_reroute = mock_never_again};
+static const dfle_law_ops mock_law_ops = {
+    .name = "mock", .flow_factor = mock_factor, .rate = mock_rate};
+
+static void non_local_router_is_routed_once_and_law_cached(void **state)
+{
+    dfle_channel *ch = default_channel();
+    mock rk = {0}, lk = {0};
+    dfle_router *rt;
+    dfle_law *law;
+    dfle_model_opts mo;
+    dfle_model *m;
+    dfle_run_opts ro;
+    dfle_run_result res;
+    dfle_error err;
+    (void)state;
+    assert_int_equal(dfle_router_new(&cached_router_ops, &rk, &rt, NULL), DFLE_OK);
+    assert_int_equal(dfle_law_new(&mock_law_ops, &lk, &law, NULL), DFLE_OK);
+    dfle_model_opts_default(&mo);
+    mo.channel = ch;
+    mo.router = rt;
+    mo.law = law;
+    assert_ok(dfle_model_new(&mo, &m, &err), &err);
+    dfle_run_opts_default(&ro);
+    assert_ok(dfle_model_run(m, &ro, &res, &err), &err);
+    assert_true(res.converged);
+    assert_true(res.steps > 10);
+    assert_int_equal(rk.routes, 1);
+    assert_int_equal(res.routings, 1);
+    assert_int_equal(lk.factors, 1);
+    assert_true(lk.rates > (int)res.steps); /* every step, plus dE/dS */
+    /* Steady state of U = 1e-3 S^2: S = sqrt(U / 1e-3) everywhere. */
+    const double *S = dfle_model_field(m, DFLE_FIELD_S, &err);
+    for (size_t i = 0; i + 1 < dfle_model_size(m); i++)
+        assert_close(S[i], sqrt(0.5), 1e-3, 0);
+    dfle_model_free(m);
+    dfle_law_free(law);
+    dfle_router_free(rt);
+    dfle_channel_free(ch);
+}
+
+static void nan_is_reported_with_node_and_time(void **state)
+{
+    dfle_channel *ch = default_channel();
+    mock rk = {0}, lk = {.poison_after = 20};
+    dfle_router *rt;
+    dfle_law *law;
+    dfle_model_opts mo;
+    dfle_model *m;
+    dfle_run_opts ro;
+    dfle_run_result res;
+    dfle_error err;
+    (void)state;
+    assert_int_equal(dfle_router_new(&cached_router_ops, &rk, &rt, NULL), DFLE_OK);
+    assert_int_equal(dfle_law_new(&mock_law_ops, &lk, &law, NULL), DFLE_OK);
+    dfle_model_opts_default(&mo);
+    mo.channel = ch;
+    mo.router = rt;
+    mo.law = law;
+    assert_ok(dfle_model_new(&mo, &m, &err), &err);
+    dfle_run_opts_default(&ro);
+    assert_int_equal(dfle_model_run(m, &ro, &res, &err), DFLE_ENUMERIC);
+    assert_msg_contains(err.msg, "E_df is not finite at node 7");
+    assert_msg_contains(err.msg, "t = ");
+    dfle_model_free(m);
+    dfle_law_free(law);
+    dfle_router_free(rt);
+    dfle_channel_free(ch);
+}
+
+static int cancel_at_once(void *ud, const dfle_run_status *st)
+{
+    int *calls = ud;
+    (*calls)++;
+    assert_true(st->fraction >= 0 && st->fraction <= 1);
+    assert_true(st->steps > 0);
+    return 1;
+}
+
+static void limits_and_cancellation(void **state)
+{
+    dfle_channel *ch = default_channel();
+    dfle_stochastic_threshold_opts so;
+    dfle_fluvial *fl;
+    dfle_model_opts mo;
+    dfle_model *m;
+    dfle_run_opts ro;
+    dfle_run_result res;
+    dfle_error err;
+    int calls = 0;
+    (void)state;
+    dfle_stochastic_threshold_opts_default(&so);
+    assert_int_equal(dfle_fluvial_new_stochastic_threshold(&so, &fl, NULL), DFLE_OK);
+    dfle_model_opts_default(&mo);
+    mo.channel = ch;
+    mo.fluvial = fl;
+    mo.U = 2e-3;
+    assert_ok(dfle_model_new(&mo, &m, &err), &err);
+    assert_ok(dfle_model_set_U(m, 5e-4, &err), &err);
+    dfle_run_opts_default(&ro);
+    ro.max_steps = 7;
+    assert_ok(dfle_model_run(m, &ro, &res, &err), &err);
+    assert_int_equal(res.reason, DFLE_STOP_STEPS);
+    assert_int_equal(res.steps, 7);
+    assert_string_equal(dfle_stop_reason_name(res.reason), "steps");
+
+    dfle_run_opts_default(&ro);
+    ro.progress = cancel_at_once;
+    ro.progress_ud = &calls;
+    assert_int_equal(dfle_model_run(m, &ro, &res, &err), DFLE_ECANCELED);
+    assert_int_equal(calls, 1);
+
+    ro.progress = NULL;
+    ro.max_time = -1;
+    assert_int_equal(dfle_model_run(m, &ro, &res, &err), DFLE_EINVAL);
+    assert_msg_contains(err.msg, "max_time");
+    dfle_model_free(m);
+    dfle_fluvial_free(fl);
+    dfle_channel_free(ch);
+}
+
+static void bad_options_are_named(void **state)
+{
+    dfle_channel *ch = default_channel();
+    dfle_model_opts mo;
+    dfle_model *m = NULL;
+    dfle_error err;
+    double z[3] = {1, 2, 3};
+    (void)state;
+    dfle_model_opts_default(&mo);
+    assert_int_equal(dfle_model_new(&mo, &m, &err), DFLE_EINVAL);
+    assert_msg_contains(err.msg, "channel is required");
+    mo.channel = ch;
+    mo.U = 0;
+    assert_int_equal(dfle_model_new(&mo, &m, &err), DFLE_EINVAL);
+    assert_msg_contains(err.msg, "U must be > 0");
+    mo.U = 5e-4;
+    mo.cfl = 1.5;
+    assert_int_equal(dfle_model_new(&mo, &m, &err), DFLE_EINVAL);
+    assert_msg_contains(err.msg, "cfl");
+    mo.cfl = 0.5;
+    assert_ok(dfle_model_new(&mo, &m, &err), &err);
+    assert_int_equal(dfle_model_set_z(m, z, 3, &err), DFLE_EINVAL);
+    assert_msg_contains(err.msg, "z has 3 values");
+    assert_int_equal(dfle_model_set_U(m, NAN, &err), DFLE_EINVAL);
+    assert_null(dfle_model_field(m, 99, &err));
+    dfle_model_free(m);
+    dfle_channel_free(ch);
+}
+
+static void fields_and_csv(void **state)
+{
+    dfle_channel *ch = default_channel();
+    dfle_model_opts mo;
+    dfle_model *m;
+    dfle_error err;
+    char path[] = "/tmp/dfle_test_csv_XXXXXX", line[512];
+    int fd, lines = 0;
+    FILE *f;
+    (void)state;
+    assert_int_equal(dfle_field_lookup("E_df"), DFLE_FIELD_E_DF);
+    assert_int_equal(dfle_field_lookup("nope"), -1);
+    assert_string_equal(dfle_field_unit(DFLE_FIELD_TAU), "Pa");
+    dfle_model_opts_default(&mo);
+    mo.channel = ch;
+    assert_ok(dfle_model_new(&mo, &m, &err), &err);
+    fd = mkstemp(path);
+    assert_true(fd >= 0);
+    assert_ok(dfle_model_write_csv(m, path, &err), &err);
+    f = fopen(path, "r");
+    assert_non_null(f);
+    assert_non_null(fgets(line, sizeof line, f));
+    assert_msg_contains(line, "x (m),A (m^2),w (m),z (m),S (-)");
+    assert_msg_contains(line, "tau (Pa)");
+    while (fgets(line, sizeof line, f) != NULL)
+        lines++;
+    fclose(f);
+    assert_int_equal(lines, 403);
+    remove(path);
+    assert_int_equal(dfle_model_write_csv(m, "/nonexistent/dir/x.csv", &err), DFLE_EIO);
+    assert_msg_contains(err.msg, "/nonexistent/dir/x.csv");
+    dfle_model_free(m);
+    dfle_channel_free(ch);
+}
+
+int main(void)
+{
+    const struct CMUnitTest tests[] = {
+        cmocka_unit_test(fluvial_only_converges_to_eq26),
+        cmocka_unit_test(debris_flow_only_matches_eq19),
+        cmocka_unit_test(steady_state_balances_uplift),
+        cmocka_unit_test(uplift_alone_raises_every_node_by_U_t),
+        cmocka_unit_test(non_local_router_is_routed_once_and_law_cached),
+        cmocka_unit_test(nan_is_reported_with_node_and_time),
+        cmocka_unit_test(limits_and_cancellation),
+        cmocka_unit_test(bad_options_are_named),
+        cmocka_unit_test(fields_and_csv),
+    };
+    return cmocka_run_group_tests(tests, NULL, NULL);
+}

@@ -1,0 +1,189 @@
+/* test_router_empirical.c - Sect. 2.3: flow properties and runout. */
+#include <math.h>
+#include <string.h>
+
+#include "dfle_test.h"
+#include "dfle/router_empirical.h"
+
+typedef struct fixture {
+    dfle_channel *ch;
+    dfle_router *rt;
+    dfle_flow flow;
+    dfle_empirical_opts o;
+} fixture;
+
+static int setup(void **state)
+{
+    static fixture f;
+    dfle_channel_opts co;
+    memset(&f, 0, sizeof f);
+    dfle_channel_opts_default(&co);
+    dfle_empirical_opts_default(&f.o);
+    if (dfle_channel_new(&co, &f.ch, NULL) != DFLE_OK ||
+        dfle_router_new_empirical(&f.o, &f.rt, NULL) != DFLE_OK ||
+        dfle_flow_init(&f.flow, dfle_channel_size(f.ch), NULL) != DFLE_OK)
+        return -1;
+    *state = &f;
+    return 0;
+}
+
+static int teardown(void **state)
+{
+    fixture *f = *state;
+    dfle_flow_release(&f->flow);
+    dfle_router_free(f->rt);
+    dfle_channel_free(f->ch);
+    return 0;
+}
+
+/* tau written out from the definitions, independently of the router. */
+static double tau_of(const dfle_empirical_opts *o, double A, double w, double S)
+{
+    double M = o->M0 * pow(1e-6 * A, o->gamma);
+    double h = pow(3 * o->mu * o->c1 * pow(M, o->c2) / (o->rho_b * o->g * S * w), 1.0 / 3.0);
+    double Rh = w * h / (w + 2 * h);
+    return o->rho_b * o->g * Rh * sin(atan(S));
+}
+
+static void properties_follow_eqs_12_to_17(void **state)
+{
+    fixture *f = *state;
+    size_t n = dfle_channel_size(f->ch);
+    const double *A = dfle_channel_A(f->ch), *w = dfle_channel_w(f->ch);
+    double S[403];
+    dfle_error err;
+
+    assert_int_equal(n, 403);
+    for (size_t i = 0; i < n; i++)
+        S[i] = 0.8;
+    assert_ok(dfle_router_route(f->rt, f->ch, S, &f->flow, &err), &err);
+    for (size_t i = 0; i < f->flow.runout_end; i += 13) {
+        double M = 3000 * pow(1e-6 * A[i], 0.5);
+        double Q = 0.135 * pow(M, 0.78);
+        /* Eq. (15), with A and w written out. */
+        double h = pow(3 * 500 * 0.135 * pow(3000 * pow(1e-6 * A[i], 0.5), 0.78) /
+                           (1800 * 9.81 * 0.8 * 0.05 * pow(A[i], 0.3)), 1.0 / 3.0);
+        assert_close(f->flow.M[i], M, 1e-12, 0);
+        assert_close(f->flow.Q[i], Q, 1e-12, 0);
+        assert_close(f->flow.h[i], h, 1e-12, 0);
+        assert_close(f->flow.t_p[i], M / Q, 1e-12, 0); /* Eq. (16) */
+        /* Eq. (13): v = rho_b g h^2 S / (3 mu), and Q = v w h. */
+        assert_close(f->flow.v[i], 1800 * 9.81 * h * h * 0.8 / (3 * 500), 1e-10, 0);
+        assert_close(f->flow.tau[i], tau_of(&f->o, A[i], w[i], 0.8), 1e-12, 0);
+        assert_close(f->flow.Theta[i], 1 - 300 / f->flow.tau[i], 1e-12, 0);
+    }
+}
+
+static void runout_stops_where_tau_first_drops_below_tau_y(void **state)
+{
+    fixture *f = *state;
+    size_t n = dfle_channel_size(f->ch), expected = n;
+    const double *A = dfle_channel_A(f->ch), *w = dfle_channel_w(f->ch);
+    double S[403];
+    dfle_error err;
+
+    /* A concave profile: tau falls downstream; then a steep reach below
+     * the stop point that the flow must still not reach. */
+    for (size_t i = 0; i < n; i++)
+        S[i] = 0.9 * pow(A[i] / 1000.0, -0.8);
+    for (size_t i = 300; i < n; i++)
+        S[i] = 1.0;
+    for (size_t i = 0; i < n; i++)
+        if (tau_of(&f->o, A[i], w[i], S[i]) < 300.0) {
+            expected = i;
+            break;
+        }
+    assert_true(expected > 5 && expected < 300);
+    assert_ok(dfle_router_route(f->rt, f->ch, S, &f->flow, &err), &err);
+    assert_int_equal(f->flow.runout_end, expected);
+    assert_true(f->flow.tau[expected - 1] >= 300.0);
+    assert_true(f->flow.Theta[expected - 1] >= 0.0);
+    for (size_t i = expected; i < n; i++) {
+        assert_close(f->flow.h[i], 0, 0, 0);
+        assert_close(f->flow.Theta[i], 0, 0, 0);
+    }
+}
+
+static void reverse_slope_stops_the_flow(void **state)
+{
+    fixture *f = *state;
+    double S[403];
+    (void)state;
+    for (size_t i = 0; i < 403; i++)
+        S[i] = 1.0;
+    S[40] = -0.01;
+    assert_int_equal(dfle_router_route(f->rt, f->ch, S, &f->flow, NULL), DFLE_OK);
+    assert_int_equal(f->flow.runout_end, 40);
+}
+
+static void zero_yield_strength_reaches_everywhere(void **state)
+{
+    fixture *f = *state;
+    dfle_empirical_opts o = f->o;
+    dfle_router *rt;
+    double S[403];
+    o.tau_y = 0;
+    assert_int_equal(dfle_router_new_empirical(&o, &rt, NULL), DFLE_OK);
+    for (size_t i = 0; i < 403; i++)
+        S[i] = 0.02;
+    assert_int_equal(dfle_router_route(rt, f->ch, S, &f->flow, NULL), DFLE_OK);
+    assert_int_equal(f->flow.runout_end, 403);
+    assert_close(f->flow.Theta[402], 1.0, 0, 0);
+    dfle_router_free(rt);
+}
+
+static void cache_follows_the_channel(void **state)
+{
+    fixture *f = *state;
+    double A[5] = {1e4, 2e4, 3e4, 4e4, 5e4}, w[5] = {1, 1, 1, 1, 1}, S[5];
+    double A2[5] = {1e5, 2e5, 3e5, 4e5, 5e5};
+    dfle_channel *c1, *c2;
+    dfle_flow fl;
+    (void)state;
+    for (int i = 0; i < 5; i++)
+        S[i] = 0.5;
+    assert_int_equal(dfle_flow_init(&fl, 5, NULL), DFLE_OK);
+    assert_int_equal(dfle_channel_new_from_arrays(5, 5, A, w, &c1, NULL), DFLE_OK);
+    assert_int_equal(dfle_router_route(f->rt, c1, S, &fl, NULL), DFLE_OK);
+    assert_close(fl.M[0], 3000 * pow(1e-2, 0.5), 1e-12, 0);
+    dfle_channel_free(c1);
+    /* Same size, maybe the same address: the router must not reuse c1's terms. */
+    assert_int_equal(dfle_channel_new_from_arrays(5, 5, A2, w, &c2, NULL), DFLE_OK);
+    assert_int_equal(dfle_router_route(f->rt, c2, S, &fl, NULL), DFLE_OK);
+    assert_close(fl.M[0], 3000 * pow(1e-1, 0.5), 1e-12, 0);
+    dfle_channel_free(c2);
+    dfle_flow_release(&fl);
+}
+
+static void bad_parameters_are_named(void **state)
+{
+    dfle_empirical_opts o;
+    dfle_router *rt = NULL;
+    dfle_error err;
+    (void)state;
+    const struct { const char *name; double *field; double bad; } cases[] = {
+        {"M0 must be > 0", &o.M0, 0}, {"gamma must be >= 0", &o.gamma, -0.1},
+        {"mu must be > 0", &o.mu, -5}, {"tau_y must be >= 0", &o.tau_y, NAN},
+        {"c2 must be > 0", &o.c2, INFINITY},
+    };
+    for (size_t k = 0; k < sizeof cases / sizeof cases[0]; k++) {
+        dfle_empirical_opts_default(&o);
+        *cases[k].field = cases[k].bad;
+        assert_int_equal(dfle_router_new_empirical(&o, &rt, &err), DFLE_EINVAL);
+        assert_null(rt);
+        assert_msg_contains(err.msg, cases[k].name);
+    }
+}
+
+int main(void)
+{
+    const struct CMUnitTest tests[] = {
+        cmocka_unit_test(properties_follow_eqs_12_to_17),
+        cmocka_unit_test(runout_stops_where_tau_first_drops_below_tau_y),
+        cmocka_unit_test(reverse_slope_stops_the_flow),
+        cmocka_unit_test(zero_yield_strength_reaches_everywhere),
+        cmocka_unit_test(cache_follows_the_channel),
+        cmocka_unit_test(bad_parameters_are_named),
+    };
+    return cmocka_run_group_tests(tests, setup, teardown);
+}
