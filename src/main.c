@@ -50,6 +50,7 @@ static void usage(FILE *out)
 
 typedef struct cli {
     int quiet;
+    int load_error; /* the script failed to load (no traceback wanted) */
     int script; /* index of the script in argv */
     int argc;
     char **argv;
@@ -58,9 +59,13 @@ typedef struct cli {
 } cli;
 
 /* Message handler: append a traceback, as lua.c does. */
+static cli *current_cli;
+
 static int msghandler(lua_State *L)
 {
     const char *msg = lua_tostring(L, 1);
+    if (current_cli != NULL && current_cli->load_error && msg != NULL)
+        return 1;
     if (msg == NULL) {
         if (luaL_callmeta(L, 1, "__tostring") && lua_type(L, -1) == LUA_TSTRING)
             return 1;
@@ -98,8 +103,12 @@ static int pmain(lua_State *L)
     }
     lua_setglobal(L, "arg");
 
-    if (luaL_loadfile(L, strcmp(script, "-") == 0 ? NULL : script) != LUA_OK)
+    if (luaL_loadfile(L, strcmp(script, "-") == 0 ? NULL : script) != LUA_OK) {
+        /* A missing file or a syntax error: the message says it all; a
+         * traceback would only point into this program. */
+        c->load_error = 1;
         return lua_error(L);
+    }
     luaL_checkstack(L, nargs, "too many arguments to script");
     for (int i = c->script + 1; i < c->argc; i++)
         lua_pushstring(L, c->argv[i]);
@@ -146,6 +155,7 @@ int main(int argc, char **argv)
     c.script = i;
     c.argc = argc;
     c.argv = argv;
+    current_cli = &c;
 
     /* GSL aborts on its errors by default; dfle checks every status instead,
      * so an out-of-memory inside GSL becomes an error message, not a crash. */

@@ -77,6 +77,12 @@ dfle_router *dfle_lua_check_router(lua_State *L, int arg);
 dfle_law *dfle_lua_check_law(lua_State *L, int arg);
 dfle_model *dfle_lua_check_model(lua_State *L, int arg);
 
+/* The type of the value at idx as a user would name it: the __name of
+ * its metatable ("dfle.law") if it has one, else the Lua type. */
+const char *dfle_lua_typename(lua_State *L, int idx);
+/* Push and return v as text: "NaN", "inf", or the number. */
+const char *dfle_lua_number_text(lua_State *L, double v);
+
 /* Push a Lua array (1-based) of n doubles. */
 void dfle_lua_push_array(lua_State *L, const double *v, size_t n);
 

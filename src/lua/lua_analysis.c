@@ -157,10 +157,10 @@ static void analytical_params(lua_State *L, dfle_analytical_params *p, double *A
     p->g = ro->g;
     if (dfle_analytical_check(p, &err) != DFLE_OK)
         dfle_lua_raise(L, &err);
-    *A = 0;
-    if (A != NULL && lua_getfield(L, 3, "A") == LUA_TNUMBER)
-        *A = lua_tonumber(L, -1);
-    lua_pop(L, 1);
+    if (A != NULL) {
+        *A = lua_getfield(L, 3, "A") == LUA_TNUMBER ? lua_tonumber(L, -1) : 0.0;
+        lua_pop(L, 1);
+    }
 }
 
 /* dfle.analytical_slope(rt, law, {U =, A = number | array}) -> S */

@@ -21,10 +21,10 @@ enum { UV_CHANNEL = 1, UV_FLUVIAL, UV_ROUTER, UV_LAW, UV_COUNT = UV_LAW };
 /* Push component `key` of the options table, or a default built by
  * calling dfle.<ctor_path>{}; push nil when the user said `false`. */
 static void push_component(lua_State *L, int opts, const char *key, const char *tname,
-                           lua_CFunction fallback_ctor)
+                           lua_CFunction fallback_ctor, int can_be_off)
 {
     int t = lua_istable(L, opts) ? lua_getfield(L, opts, key) : (lua_pushnil(L), LUA_TNIL);
-    if (t == LUA_TBOOLEAN && !lua_toboolean(L, -1)) {
+    if (can_be_off && t == LUA_TBOOLEAN && !lua_toboolean(L, -1)) {
         lua_pop(L, 1);
         lua_pushnil(L);
         return;
@@ -37,7 +37,7 @@ static void push_component(lua_State *L, int opts, const char *key, const char *
     }
     if (luaL_testudata(L, -1, tname) == NULL)
         luaL_error(L, "dfle.model: parameter '%s' must be a %s%s, got %s", key, tname,
-                   fallback_ctor != NULL ? " or false" : "", luaL_typename(L, -1));
+                   can_be_off ? " or false" : "", dfle_lua_typename(L, -1));
 }
 
 /* Default constructors, called with no arguments. */
@@ -84,18 +84,16 @@ static int l_model_new(lua_State *L)
     dfle_lua_read_params(L, 1, "model", params, 3, component_keys);
 
     base = lua_gettop(L);
-    push_component(L, 1, "channel", DFLE_LUA_CHANNEL, default_channel);
-    if (lua_isnil(L, base + 1))
-        luaL_error(L, "dfle.model: parameter 'channel' cannot be false");
-    push_component(L, 1, "fluvial", DFLE_LUA_FLUVIAL, default_fluvial);
-    push_component(L, 1, "router", DFLE_LUA_ROUTER, default_router);
+    push_component(L, 1, "channel", DFLE_LUA_CHANNEL, default_channel, 0);
+    push_component(L, 1, "fluvial", DFLE_LUA_FLUVIAL, default_fluvial, 1);
+    push_component(L, 1, "router", DFLE_LUA_ROUTER, default_router, 1);
     if (lua_isnil(L, base + 3)) {
         if (lua_getfield(L, 1, "law") != LUA_TNIL)
             luaL_error(L, "dfle.model: 'law' given but router = false (no debris flows)");
         lua_pop(L, 1);
         lua_pushnil(L);
     } else {
-        push_component(L, 1, "law", DFLE_LUA_LAW, default_law);
+        push_component(L, 1, "law", DFLE_LUA_LAW, default_law, 0);
     }
 
     o.channel = udata_ptr(L, base + 1);

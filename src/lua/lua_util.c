@@ -73,11 +73,11 @@ void dfle_lua_read_params(lua_State *L, int idx, const char *fn,
             double v;
             if (t != LUA_TNUMBER)
                 luaL_error(L, "dfle.%s: parameter '%s' must be a number, got %s", fn,
-                           params[i].name, luaL_typename(L, -1));
+                           params[i].name, dfle_lua_typename(L, -1));
             v = lua_tonumber(L, -1);
             if (!isfinite(v))
-                luaL_error(L, "dfle.%s: parameter '%s' must be a finite number, got %f", fn,
-                           params[i].name, v);
+                luaL_error(L, "dfle.%s: parameter '%s' must be a finite number, got %s", fn,
+                           params[i].name, dfle_lua_number_text(L, v));
             *params[i].dst = v;
         }
         lua_pop(L, 1);
@@ -203,4 +203,20 @@ const dfle_lua_progress *dfle_lua_get_progress(lua_State *L)
     p = lua_touserdata(L, -1);
     lua_pop(L, 1);
     return p;
+}
+
+const char *dfle_lua_typename(lua_State *L, int idx)
+{
+    if (luaL_getmetafield(L, idx, "__name") == LUA_TSTRING)
+        return lua_tostring(L, -1); /* left on the stack, so it stays valid */
+    return luaL_typename(L, idx);
+}
+
+const char *dfle_lua_number_text(lua_State *L, double v)
+{
+    if (isnan(v))
+        return lua_pushliteral(L, "NaN");
+    if (isinf(v))
+        return lua_pushstring(L, v > 0 ? "inf" : "-inf");
+    return lua_pushfstring(L, "%f", v);
 }
