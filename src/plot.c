@@ -92,14 +92,6 @@ static void sh_quote(char *dst, const char *s)
     strcpy(dst, "'");
 }
 
-static sigset_t pipe_set(void)
-{
-    sigset_t s;
-    sigemptyset(&s);
-    sigaddset(&s, SIGPIPE);
-    return s;
-}
-
 /* One gnuplot run.  SIGPIPE is blocked for this thread while we write, so
  * a gnuplot that is missing or dies early gives EPIPE, not a dead caller. */
 typedef struct gp_run {
@@ -107,7 +99,7 @@ typedef struct gp_run {
     const char *prog, *out;
     int errfd;
     char errpath[512];
-    sigset_t oldmask;
+    sigset_t pipeset, oldmask;
     int pipe_pending; /* SIGPIPE was pending before us: not ours to eat */
 } gp_run;
 
@@ -137,18 +129,21 @@ static int gp_begin(gp_run *r, const char *path, int fmt, int w, int h,
     } else if (cmd == NULL) {
         rc = dfle_error_set(err, DFLE_ENOMEM, "plot: out of memory");
     } else {
-        sigset_t ps = pipe_set(), pend;
+        sigset_t pend;
         cmd[0] = '\0';
         sh_quote(cmd, r->prog);
         strcat(cmd, " 2>");
         sh_quote(cmd, r->errpath);
         strcat(cmd, " 1>&2");
-        pthread_sigmask(SIG_BLOCK, &ps, &r->oldmask);
-        r->pipe_pending = sigpending(&pend) == 0 && sigismember(&pend, SIGPIPE);
         if ((r->f = popen(cmd, "w")) == NULL) {
             rc = dfle_error_set(err, DFLE_EEXTERNAL, "plot: gnuplot could not "
                                 "be run ('%s'): %s", r->prog, strerror(errno));
-            pthread_sigmask(SIG_SETMASK, &r->oldmask, NULL);
+        } else { /* after popen, so gnuplot keeps the caller's mask */
+            sigemptyset(&r->pipeset);
+            sigaddset(&r->pipeset, SIGPIPE);
+            pthread_sigmask(SIG_BLOCK, &r->pipeset, &r->oldmask);
+            r->pipe_pending = sigpending(&pend) == 0 &&
+                              sigismember(&pend, SIGPIPE);
         }
     }
     free(cmd);
@@ -180,8 +175,9 @@ static void err_text(int fd, char *out, size_t cap)
     buf[k > 0 ? k : 0] = '\0';
     out[0] = '\0';
     int lines = 0;
-    for (char *ln = strtok(buf, "\n"); ln != NULL && lines < 2;
-         ln = strtok(NULL, "\n")) {
+    char *save = NULL;
+    for (char *ln = strtok_r(buf, "\n", &save); ln != NULL && lines < 2;
+         ln = strtok_r(NULL, "\n", &save)) {
         while (*ln == ' ' || *ln == '\t') ln++;
         if (*ln == '\0' || *ln == '^' || strncmp(ln, "gnuplot>", 8) == 0)
             continue;
@@ -199,11 +195,11 @@ static int gp_end(gp_run *r, dfle_error *err)
     fputs("unset output\n", r->f);
     int werr = fflush(r->f) != 0 || ferror(r->f);
     int st = pclose(r->f), perr = errno;
-    sigset_t ps = pipe_set(), pend;
+    sigset_t pend;
     if (!r->pipe_pending && sigpending(&pend) == 0 &&
         sigismember(&pend, SIGPIPE)) { /* eat the SIGPIPE we caused */
         const struct timespec zero = {0, 0};
-        while (sigtimedwait(&ps, NULL, &zero) < 0 && errno == EINTR) {}
+        while (sigtimedwait(&r->pipeset, NULL, &zero) < 0 && errno == EINTR) {}
     }
     pthread_sigmask(SIG_SETMASK, &r->oldmask, NULL);
     err_text(r->errfd, msg, sizeof msg);
@@ -252,7 +248,7 @@ typedef struct layer {
     const double *x, *y, *lo, *hi;
     const char *with, *color; /* gnuplot "with" clause, "#rrggbb" */
     const char *title;        /* legend text; NULL: none */
-    size_t used;       /* usable rows, set by ext_scan */
+    size_t used;              /* usable rows, set by ext_scan */
 } layer;
 
 /* Extent of the layers in axis units (log10 on log axes) and how many
@@ -262,16 +258,21 @@ typedef struct layer {
 typedef struct extent {
     double x0, x1, y0, y1;
     int logx, logy;
-    size_t n, corner[4];
+    double kw, kh;       /* key size, fraction of the frame */
+    size_t n, corner[4]; /* corners counted by put_blocks */
 } extent;
 
 static double ax(double v, int lg) { return lg ? log10(v) : v; }
 
 /* Widen [lo, hi] (log10 units) to 1, 2 or 5 times a power of ten:
- * tighter than gnuplot's whole decades, still ending on round numbers. */
+ * tighter than gnuplot's whole decades, still ending on round numbers.
+ * Data on a round value (A0 = 1000 m^2 is common) would sit on the
+ * frame and vanish behind it, so pad by 0.005 decades (1 %) first. */
 static void nice_log(double *lo, double *hi)
 {
     const double l2 = log10(2.0), l5 = log10(5.0), eps = 1e-9;
+    *lo -= 0.005;
+    *hi += 0.005;
     double d = floor(*lo + eps), m = *lo - d;
     *lo = d + (m >= l5 - eps ? l5 : m >= l2 - eps ? l2 : 0);
     d = floor(*hi - eps);
@@ -304,24 +305,19 @@ static void ext_scan(extent *e, layer *L, size_t nl, int logx, int logy,
     if (e->n == 0) return;
     if (logx) nice_log(&e->x0, &e->x1);
     if (logy) nice_log(&e->y0, &e->y1);
-    double fh = fmin(0.5, 0.075 * (double)(ntitles + 1));
-    for (size_t k = 0; k < nl; k++)
-        for (size_t i = 0; i < L[k].n; i++) {
-            if (!usable(L[k].x[i], L[k].y[i], logx, logy)) continue;
-            double u = ax(L[k].x[i], logx), v = ax(L[k].y[i], logy);
-            u = e->x1 > e->x0 ? (u - e->x0) / (e->x1 - e->x0) : 0.5;
-            v = e->y1 > e->y0 ? (v - e->y0) / (e->y1 - e->y0) : 0.5;
-            int r = u >= 1 - keyw, l = u <= keyw, t = v >= 1 - fh, b = v <= fh;
-            e->corner[0] += (size_t)(t && r);
-            e->corner[1] += (size_t)(t && l);
-            e->corner[2] += (size_t)(b && l);
-            e->corner[3] += (size_t)(b && r);
-        }
+    e->kw = keyw;
+    e->kh = fmin(0.5, 0.075 * (double)(ntitles + 1));
 }
 
-/* Datablocks $<name>0, $<name>1, ... holding the usable rows. */
+static double frac(double v, double lo, double hi)
+{
+    return hi > lo ? (v - lo) / (hi - lo) : 0.5;
+}
+
+/* Datablocks $<name>0, $<name>1, ... holding the usable rows; each row
+ * is counted against the corner boxes on the way. */
 static void put_blocks(FILE *f, const char *name, const layer *L, size_t nl,
-                       const extent *e)
+                       extent *e)
 {
     for (size_t k = 0; k < nl; k++) {
         int gap = 0;
@@ -334,6 +330,14 @@ static void put_blocks(FILE *f, const char *name, const layer *L, size_t nl,
                 continue;
             }
             gap = 1;
+            double u = frac(ax(x, e->logx), e->x0, e->x1);
+            double v = frac(ax(y, e->logy), e->y0, e->y1);
+            int r = u >= 1 - e->kw, l = u <= e->kw;
+            int t = v >= 1 - e->kh, b = v <= e->kh;
+            e->corner[0] += (size_t)(t && r);
+            e->corner[1] += (size_t)(t && l);
+            e->corner[2] += (size_t)(b && l);
+            e->corner[3] += (size_t)(b && r);
             fprintf(f, "%.17g %.17g", x, y);
             if (L[k].lo != NULL) { /* a bad quartile draws no bar */
                 double lo = L[k].lo[i], hi = L[k].hi[i];
@@ -417,7 +421,7 @@ static void put_plot(FILE *f, const char *name, const layer *L, size_t nl,
 
 /* A whole single-panel figure; `extra` goes in just before "plot". */
 static int figure(const char *path, int fmt, int w, int h, const char *title,
-                  const char *xl, const char *yl, const extent *e,
+                  const char *xl, const char *yl, extent *e,
                   const layer *L, size_t nl, const char *extra,
                   dfle_error *err)
 {
@@ -491,13 +495,13 @@ static void fmt_num(char *buf, size_t cap, double v)
         snprintf(buf, cap, "%.3g", v);
         return;
     }
-    char m[32];
+    char m[16];
     snprintf(m, sizeof m, "%.2e", v); /* rounds the mantissa for us */
     char *ep = strchr(m, 'e');
-    long ex = strtol(ep + 1, NULL, 10);
+    int ex = (int)strtol(ep + 1, NULL, 10);
     *ep = '\0';
     while (ep > m && (ep[-1] == '0' || ep[-1] == '.')) *--ep = '\0';
-    snprintf(buf, cap, "%s×10^{%ld}", m, ex);
+    snprintf(buf, cap, "%s×10^{%d}", m, ex);
 }
 
 int dfle_plot_slope_area(const char *path, const char *title, size_t n,
@@ -543,9 +547,9 @@ int dfle_plot_slope_area(const char *path, const char *title, size_t n,
     }
     /* The curve spans the data's areas; A_df is marked only inside it. */
     double fa[FIT_SAMPLES], fs[FIT_SAMPLES], mark_a = 0, mark_s = 0;
-    char ftitle[256] = "", mtitle[96] = "", extra[200] = "";
+    char ftitle[320] = "", mtitle[96] = "", extra[200] = "";
     if (fit != NULL) {
-        char sdf[32], adf[32], a2[32], r2[32] = "";
+        char sdf[40], adf[40], a2[40], r2[32] = "";
         for (int i = 0; i < FIT_SAMPLES; i++) {
             fa[i] = amin * pow(amax / amin, i / (FIT_SAMPLES - 1.0));
             fs[i] = eq2(fit, fa[i]);
