@@ -10,76 +10,103 @@
 #include "dfle/model.h"
 #include "dfle/router_empirical.h"
 
-static dfle_channel *default_channel(void)
-{
-    dfle_channel_opts o;
+/* A model on the default channel with whichever parts a test asks for. */
+typedef struct rig {
     dfle_channel *ch;
-    dfle_channel_opts_default(&o);
-    assert_int_equal(dfle_channel_new(&o, &ch, NULL), DFLE_OK);
-    return ch;
+    dfle_fluvial *fl;
+    dfle_router *rt;
+    dfle_law *law;
+    dfle_model *m;
+} rig;
+
+static void rig_fluvial(rig *r)
+{
+    dfle_stochastic_threshold_opts so;
+    dfle_stochastic_threshold_opts_default(&so);
+    assert_int_equal(dfle_fluvial_new_stochastic_threshold(&so, &r->fl, NULL), DFLE_OK);
+}
+
+/* Empirical router (Fig. 9 defaults, given tau_y) and the power law. */
+static void rig_debris_flows(rig *r, double tau_y)
+{
+    dfle_empirical_opts eo;
+    dfle_power_law_opts po;
+    dfle_empirical_opts_default(&eo);
+    eo.tau_y = tau_y;
+    dfle_power_law_opts_default(&po);
+    assert_int_equal(dfle_router_new_empirical(&eo, &r->rt, NULL), DFLE_OK);
+    assert_int_equal(dfle_law_new_power(&po, &r->law, NULL), DFLE_OK);
+}
+
+static void rig_build(rig *r, double U, double dt_max)
+{
+    dfle_channel_opts co;
+    dfle_model_opts mo;
+    dfle_error err;
+    dfle_channel_opts_default(&co);
+    assert_int_equal(dfle_channel_new(&co, &r->ch, NULL), DFLE_OK);
+    dfle_model_opts_default(&mo);
+    mo.channel = r->ch;
+    mo.fluvial = r->fl;
+    mo.router = r->rt;
+    mo.law = r->law;
+    mo.U = U;
+    if (dt_max > 0)
+        mo.dt_max = dt_max;
+    assert_ok(dfle_model_new(&mo, &r->m, &err), &err);
+}
+
+static void rig_free(rig *r)
+{
+    dfle_model_free(r->m);
+    dfle_law_free(r->law);
+    dfle_router_free(r->rt);
+    dfle_fluvial_free(r->fl);
+    dfle_channel_free(r->ch);
+    memset(r, 0, sizeof *r);
+}
+
+/* Run with the default options changed by tol (< 0: keep) and max_time. */
+static int rig_run(rig *r, double tol, double max_time, dfle_run_result *res, dfle_error *err)
+{
+    dfle_run_opts ro;
+    dfle_run_opts_default(&ro);
+    if (tol >= 0)
+        ro.tol = tol;
+    if (max_time > 0)
+        ro.max_time = max_time;
+    return dfle_model_run(r->m, &ro, res, err);
 }
 
 static void fluvial_only_converges_to_eq26(void **state)
 {
-    dfle_channel *ch = default_channel();
-    dfle_stochastic_threshold_opts so;
-    dfle_fluvial *fl;
-    dfle_model_opts mo;
-    dfle_model *m;
-    dfle_run_opts ro;
+    rig r = {0};
     dfle_run_result res;
     dfle_error err;
     (void)state;
-
-    dfle_stochastic_threshold_opts_default(&so);
-    assert_int_equal(dfle_fluvial_new_stochastic_threshold(&so, &fl, NULL), DFLE_OK);
-    dfle_model_opts_default(&mo);
-    mo.channel = ch;
-    mo.fluvial = fl;
-    mo.U = 1.5e-3; /* start from the steady state of three times the uplift */
-    assert_ok(dfle_model_new(&mo, &m, &err), &err);
-    assert_ok(dfle_model_set_U(m, 5e-4, &err), &err);
-    dfle_run_opts_default(&ro);
-    assert_ok(dfle_model_run(m, &ro, &res, &err), &err);
+    rig_fluvial(&r);
+    rig_build(&r, 1.5e-3, 0); /* start from the steady state of three times the uplift */
+    assert_ok(dfle_model_set_U(r.m, 5e-4, &err), &err);
+    assert_ok(rig_run(&r, -1, 0, &res, &err), &err);
     assert_true(res.converged);
     assert_int_equal(res.reason, DFLE_STOP_STEADY);
     assert_true(res.rate_ratio <= 1e-3);
-
-    const double *S = dfle_model_field(m, DFLE_FIELD_S, &err);
-    const double *A = dfle_model_field(m, DFLE_FIELD_A, &err);
-    for (size_t i = 0; i + 1 < dfle_model_size(m); i++)
-        assert_close(S[i], dfle_fluvial_steady_slope(fl, 5e-4, A[i]), 5e-3, 0);
-    dfle_model_free(m);
-    dfle_fluvial_free(fl);
-    dfle_channel_free(ch);
+    const double *S = dfle_model_field(r.m, DFLE_FIELD_S, &err);
+    const double *A = dfle_model_field(r.m, DFLE_FIELD_A, &err);
+    for (size_t i = 0; i + 1 < dfle_model_size(r.m); i++)
+        assert_close(S[i], dfle_fluvial_steady_slope(r.fl, 5e-4, A[i]), 5e-3, 0);
+    rig_free(&r);
 }
 
 static void debris_flow_only_matches_eq19(void **state)
 {
-    dfle_channel *ch = default_channel();
-    dfle_empirical_opts eo;
-    dfle_power_law_opts po;
-    dfle_router *rt;
-    dfle_law *law;
-    dfle_model_opts mo;
-    dfle_model *m;
-    dfle_run_opts ro;
+    rig r = {0};
     dfle_run_result res;
     dfle_error err;
     (void)state;
-
-    dfle_empirical_opts_default(&eo);
-    eo.tau_y = 0; /* Theta = 1 and runout to the outlet, as Eq. (19) assumes */
-    dfle_power_law_opts_default(&po);
-    assert_int_equal(dfle_router_new_empirical(&eo, &rt, NULL), DFLE_OK);
-    assert_int_equal(dfle_law_new_power(&po, &law, NULL), DFLE_OK);
-    dfle_model_opts_default(&mo);
-    mo.channel = ch;
-    mo.router = rt;
-    mo.law = law;
-    assert_ok(dfle_model_new(&mo, &m, &err), &err);
-    dfle_run_opts_default(&ro);
-    assert_ok(dfle_model_run(m, &ro, &res, &err), &err);
+    rig_debris_flows(&r, 0.0); /* Theta = 1, runout to the outlet: Eq. (19)'s assumptions */
+    rig_build(&r, 5e-4, 0);
+    assert_ok(rig_run(&r, -1, 0, &res, &err), &err);
     assert_true(res.converged);
     assert_int_equal(res.routings, res.steps + 1); /* local router: every step */
 
@@ -87,53 +114,29 @@ static void debris_flow_only_matches_eq19(void **state)
         .U = 5e-4, .k_df = 1e-4, .alpha = 6, .beta = 1, .M0 = 3000, .gamma = 0.5,
         .mu = 500, .c1 = 0.135, .c2 = 0.78, .rho_b = 1800, .g = 9.81, .k_w = 0.05, .b = 0.3,
     };
-    const double *S = dfle_model_field(m, DFLE_FIELD_S, &err);
-    const double *A = dfle_model_field(m, DFLE_FIELD_A, &err);
-    for (size_t i = 0; i + 1 < dfle_model_size(m); i++)
+    const double *S = dfle_model_field(r.m, DFLE_FIELD_S, &err);
+    const double *A = dfle_model_field(r.m, DFLE_FIELD_A, &err);
+    for (size_t i = 0; i + 1 < dfle_model_size(r.m); i++)
         assert_close(S[i], dfle_analytical_slope(&p, A[i]), 5e-3, 0);
-    dfle_model_free(m);
-    dfle_law_free(law);
-    dfle_router_free(rt);
-    dfle_channel_free(ch);
+    rig_free(&r);
 }
 
 static void steady_state_balances_uplift(void **state)
 {
-    dfle_channel *ch = default_channel();
-    dfle_stochastic_threshold_opts so;
-    dfle_empirical_opts eo;
-    dfle_power_law_opts po;
-    dfle_fluvial *fl;
-    dfle_router *rt;
-    dfle_law *law;
-    dfle_model_opts mo;
-    dfle_model *m;
-    dfle_run_opts ro;
+    rig r = {0};
     dfle_run_result res;
     dfle_error err;
-    (void)state;
-
-    dfle_stochastic_threshold_opts_default(&so);
-    dfle_empirical_opts_default(&eo);
-    dfle_power_law_opts_default(&po);
-    assert_int_equal(dfle_fluvial_new_stochastic_threshold(&so, &fl, NULL), DFLE_OK);
-    assert_int_equal(dfle_router_new_empirical(&eo, &rt, NULL), DFLE_OK);
-    assert_int_equal(dfle_law_new_power(&po, &law, NULL), DFLE_OK);
-    dfle_model_opts_default(&mo);
-    mo.channel = ch;
-    mo.fluvial = fl;
-    mo.router = rt;
-    mo.law = law;
-    assert_ok(dfle_model_new(&mo, &m, &err), &err);
-    dfle_run_opts_default(&ro);
-    ro.tol = 1e-4;
-    assert_ok(dfle_model_run(m, &ro, &res, &err), &err);
-    assert_true(res.converged);
-    const double *Ef = dfle_model_field(m, DFLE_FIELD_E_F, &err);
-    const double *Edf = dfle_model_field(m, DFLE_FIELD_E_DF, &err);
-    const double *S = dfle_model_field(m, DFLE_FIELD_S, &err);
     int df_seen = 0, fl_seen = 0;
-    for (size_t i = 0; i + 1 < dfle_model_size(m); i++) {
+    (void)state;
+    rig_fluvial(&r);
+    rig_debris_flows(&r, 300.0);
+    rig_build(&r, 5e-4, 0);
+    assert_ok(rig_run(&r, 1e-4, 0, &res, &err), &err);
+    assert_true(res.converged);
+    const double *Ef = dfle_model_field(r.m, DFLE_FIELD_E_F, &err);
+    const double *Edf = dfle_model_field(r.m, DFLE_FIELD_E_DF, &err);
+    const double *S = dfle_model_field(r.m, DFLE_FIELD_S, &err);
+    for (size_t i = 0; i + 1 < dfle_model_size(r.m); i++) {
         assert_close(Ef[i] + Edf[i], 5e-4, 1e-4, 0);
         assert_true(S[i] > 0);
         df_seen |= Edf[i] > 0.9 * 5e-4;
@@ -143,43 +146,28 @@ static void steady_state_balances_uplift(void **state)
      * rivers at the outlet. */
     assert_true(df_seen && fl_seen);
     assert_true(Edf[0] > Ef[0]);
-    dfle_model_free(m);
-    dfle_law_free(law);
-    dfle_router_free(rt);
-    dfle_fluvial_free(fl);
-    dfle_channel_free(ch);
+    rig_free(&r);
 }
 
 static void uplift_alone_raises_every_node_by_U_t(void **state)
 {
-    dfle_channel *ch = default_channel();
-    dfle_model_opts mo;
-    dfle_model *m;
-    dfle_run_opts ro;
+    rig r = {0};
     dfle_run_result res;
     dfle_error err;
     (void)state;
-    dfle_model_opts_default(&mo);
-    mo.channel = ch;
-    mo.dt_max = 300;
-    assert_ok(dfle_model_new(&mo, &m, &err), &err);
-    double z0 = dfle_model_field(m, DFLE_FIELD_Z, &err)[10];
-    dfle_run_opts_default(&ro);
-    ro.max_time = 1000;
-    ro.tol = 0;
-    assert_ok(dfle_model_run(m, &ro, &res, &err), &err);
+    rig_build(&r, 5e-4, 300);
+    double z0 = dfle_model_field(r.m, DFLE_FIELD_Z, &err)[10];
+    assert_ok(rig_run(&r, 0, 1000, &res, &err), &err);
     assert_int_equal(res.reason, DFLE_STOP_TIME);
     assert_false(res.converged);
     assert_int_equal(res.steps, 4); /* 300 + 300 + 300 + 100 */
     assert_close(res.time, 1000, 1e-12, 0);
-    const double *z = dfle_model_field(m, DFLE_FIELD_Z, &err);
+    const double *z = dfle_model_field(r.m, DFLE_FIELD_Z, &err);
     assert_close(z[10], z0 + 5e-4 * 1000, 1e-12, 0);
-    assert_close(z[dfle_model_size(m) - 1], 0.0, 0, 0); /* base level fixed */
-    assert_close(dfle_model_time(m), 1000, 1e-12, 0);
-    dfle_model_free(m);
-    dfle_channel_free(ch);
+    assert_close(z[dfle_model_size(r.m) - 1], 0.0, 0, 0); /* base level fixed */
+    assert_close(dfle_model_time(r.m), 1000, 1e-12, 0);
+    rig_free(&r);
 }
-
 /* --- mocks through the ops tables -------------------------------------- */
 
 typedef struct mock {
@@ -237,27 +225,22 @@ static const dfle_router_ops cached_router_ops = {
 static const dfle_law_ops mock_law_ops = {
     .name = "mock", .flow_factor = mock_factor, .rate = mock_rate};
 
+static void rig_mocks(rig *r, mock *rk, mock *lk)
+{
+    assert_int_equal(dfle_router_new(&cached_router_ops, rk, &r->rt, NULL), DFLE_OK);
+    assert_int_equal(dfle_law_new(&mock_law_ops, lk, &r->law, NULL), DFLE_OK);
+    rig_build(r, 5e-4, 0);
+}
+
 static void non_local_router_is_routed_once_and_law_cached(void **state)
 {
-    dfle_channel *ch = default_channel();
+    rig r = {0};
     mock rk = {0}, lk = {0};
-    dfle_router *rt;
-    dfle_law *law;
-    dfle_model_opts mo;
-    dfle_model *m;
-    dfle_run_opts ro;
     dfle_run_result res;
     dfle_error err;
     (void)state;
-    assert_int_equal(dfle_router_new(&cached_router_ops, &rk, &rt, NULL), DFLE_OK);
-    assert_int_equal(dfle_law_new(&mock_law_ops, &lk, &law, NULL), DFLE_OK);
-    dfle_model_opts_default(&mo);
-    mo.channel = ch;
-    mo.router = rt;
-    mo.law = law;
-    assert_ok(dfle_model_new(&mo, &m, &err), &err);
-    dfle_run_opts_default(&ro);
-    assert_ok(dfle_model_run(m, &ro, &res, &err), &err);
+    rig_mocks(&r, &rk, &lk);
+    assert_ok(rig_run(&r, -1, 0, &res, &err), &err);
     assert_true(res.converged);
     assert_true(res.steps > 10);
     assert_int_equal(rk.routes, 1);
@@ -265,42 +248,24 @@ static void non_local_router_is_routed_once_and_law_cached(void **state)
     assert_int_equal(lk.factors, 1);
     assert_true(lk.rates > (int)res.steps); /* every step, plus dE/dS */
     /* Steady state of U = 1e-3 S^2: S = sqrt(U / 1e-3) everywhere. */
-    const double *S = dfle_model_field(m, DFLE_FIELD_S, &err);
-    for (size_t i = 0; i + 1 < dfle_model_size(m); i++)
+    const double *S = dfle_model_field(r.m, DFLE_FIELD_S, &err);
+    for (size_t i = 0; i + 1 < dfle_model_size(r.m); i++)
         assert_close(S[i], sqrt(0.5), 1e-3, 0);
-    dfle_model_free(m);
-    dfle_law_free(law);
-    dfle_router_free(rt);
-    dfle_channel_free(ch);
+    rig_free(&r);
 }
 
 static void nan_is_reported_with_node_and_time(void **state)
 {
-    dfle_channel *ch = default_channel();
+    rig r = {0};
     mock rk = {0}, lk = {.poison_after = 20};
-    dfle_router *rt;
-    dfle_law *law;
-    dfle_model_opts mo;
-    dfle_model *m;
-    dfle_run_opts ro;
     dfle_run_result res;
     dfle_error err;
     (void)state;
-    assert_int_equal(dfle_router_new(&cached_router_ops, &rk, &rt, NULL), DFLE_OK);
-    assert_int_equal(dfle_law_new(&mock_law_ops, &lk, &law, NULL), DFLE_OK);
-    dfle_model_opts_default(&mo);
-    mo.channel = ch;
-    mo.router = rt;
-    mo.law = law;
-    assert_ok(dfle_model_new(&mo, &m, &err), &err);
-    dfle_run_opts_default(&ro);
-    assert_int_equal(dfle_model_run(m, &ro, &res, &err), DFLE_ENUMERIC);
+    rig_mocks(&r, &rk, &lk);
+    assert_int_equal(rig_run(&r, -1, 0, &res, &err), DFLE_ENUMERIC);
     assert_msg_contains(err.msg, "E_df is not finite at node 7");
     assert_msg_contains(err.msg, "t = ");
-    dfle_model_free(m);
-    dfle_law_free(law);
-    dfle_router_free(rt);
-    dfle_channel_free(ch);
+    rig_free(&r);
 }
 
 static int cancel_at_once(void *ud, const dfle_run_status *st)
@@ -314,27 +279,18 @@ static int cancel_at_once(void *ud, const dfle_run_status *st)
 
 static void limits_and_cancellation(void **state)
 {
-    dfle_channel *ch = default_channel();
-    dfle_stochastic_threshold_opts so;
-    dfle_fluvial *fl;
-    dfle_model_opts mo;
-    dfle_model *m;
+    rig r = {0};
     dfle_run_opts ro;
     dfle_run_result res;
     dfle_error err;
     int calls = 0;
     (void)state;
-    dfle_stochastic_threshold_opts_default(&so);
-    assert_int_equal(dfle_fluvial_new_stochastic_threshold(&so, &fl, NULL), DFLE_OK);
-    dfle_model_opts_default(&mo);
-    mo.channel = ch;
-    mo.fluvial = fl;
-    mo.U = 2e-3;
-    assert_ok(dfle_model_new(&mo, &m, &err), &err);
-    assert_ok(dfle_model_set_U(m, 5e-4, &err), &err);
+    rig_fluvial(&r);
+    rig_build(&r, 2e-3, 0);
+    assert_ok(dfle_model_set_U(r.m, 5e-4, &err), &err);
     dfle_run_opts_default(&ro);
     ro.max_steps = 7;
-    assert_ok(dfle_model_run(m, &ro, &res, &err), &err);
+    assert_ok(dfle_model_run(r.m, &ro, &res, &err), &err);
     assert_int_equal(res.reason, DFLE_STOP_STEPS);
     assert_int_equal(res.steps, 7);
     assert_string_equal(dfle_stop_reason_name(res.reason), "steps");
@@ -342,30 +298,30 @@ static void limits_and_cancellation(void **state)
     dfle_run_opts_default(&ro);
     ro.progress = cancel_at_once;
     ro.progress_ud = &calls;
-    assert_int_equal(dfle_model_run(m, &ro, &res, &err), DFLE_ECANCELED);
+    assert_int_equal(dfle_model_run(r.m, &ro, &res, &err), DFLE_ECANCELED);
     assert_int_equal(calls, 1);
 
     ro.progress = NULL;
     ro.max_time = -1;
-    assert_int_equal(dfle_model_run(m, &ro, &res, &err), DFLE_EINVAL);
+    assert_int_equal(dfle_model_run(r.m, &ro, &res, &err), DFLE_EINVAL);
     assert_msg_contains(err.msg, "max_time");
-    dfle_model_free(m);
-    dfle_fluvial_free(fl);
-    dfle_channel_free(ch);
+    rig_free(&r);
 }
 
 static void bad_options_are_named(void **state)
 {
-    dfle_channel *ch = default_channel();
+    rig r = {0};
     dfle_model_opts mo;
     dfle_model *m = NULL;
     dfle_error err;
     double z[3] = {1, 2, 3};
     (void)state;
+    rig_debris_flows(&r, 300.0);
+    rig_build(&r, 5e-4, 0);
     dfle_model_opts_default(&mo);
     assert_int_equal(dfle_model_new(&mo, &m, &err), DFLE_EINVAL);
     assert_msg_contains(err.msg, "channel is required");
-    mo.channel = ch;
+    mo.channel = r.ch;
     mo.U = 0;
     assert_int_equal(dfle_model_new(&mo, &m, &err), DFLE_EINVAL);
     assert_msg_contains(err.msg, "U must be > 0");
@@ -374,19 +330,19 @@ static void bad_options_are_named(void **state)
     assert_int_equal(dfle_model_new(&mo, &m, &err), DFLE_EINVAL);
     assert_msg_contains(err.msg, "cfl");
     mo.cfl = 0.5;
-    assert_ok(dfle_model_new(&mo, &m, &err), &err);
-    assert_int_equal(dfle_model_set_z(m, z, 3, &err), DFLE_EINVAL);
+    mo.router = r.rt; /* a router without a law */
+    assert_int_equal(dfle_model_new(&mo, &m, &err), DFLE_EINVAL);
+    assert_msg_contains(err.msg, "needs an erosion law");
+    assert_null(m);
+    assert_int_equal(dfle_model_set_z(r.m, z, 3, &err), DFLE_EINVAL);
     assert_msg_contains(err.msg, "z has 3 values");
-    assert_int_equal(dfle_model_set_U(m, NAN, &err), DFLE_EINVAL);
-    assert_null(dfle_model_field(m, 99, &err));
-    dfle_model_free(m);
-    dfle_channel_free(ch);
+    assert_int_equal(dfle_model_set_U(r.m, NAN, &err), DFLE_EINVAL);
+    assert_null(dfle_model_field(r.m, 99, &err));
+    rig_free(&r);
 }
-
 static void fields_and_csv(void **state)
 {
-    dfle_channel *ch = default_channel();
-    dfle_model_opts mo;
+    rig r = {0};
     dfle_model *m;
     dfle_error err;
     char path[] = "/tmp/dfle_test_csv_XXXXXX", line[512];
@@ -396,9 +352,8 @@ static void fields_and_csv(void **state)
     assert_int_equal(dfle_field_lookup("E_df"), DFLE_FIELD_E_DF);
     assert_int_equal(dfle_field_lookup("nope"), -1);
     assert_string_equal(dfle_field_unit(DFLE_FIELD_TAU), "Pa");
-    dfle_model_opts_default(&mo);
-    mo.channel = ch;
-    assert_ok(dfle_model_new(&mo, &m, &err), &err);
+    rig_build(&r, 5e-4, 0);
+    m = r.m;
     fd = mkstemp(path);
     assert_true(fd >= 0);
     assert_ok(dfle_model_write_csv(m, path, &err), &err);
@@ -414,8 +369,7 @@ static void fields_and_csv(void **state)
     remove(path);
     assert_int_equal(dfle_model_write_csv(m, "/nonexistent/dir/x.csv", &err), DFLE_EIO);
     assert_msg_contains(err.msg, "/nonexistent/dir/x.csv");
-    dfle_model_free(m);
-    dfle_channel_free(ch);
+    rig_free(&r);
 }
 
 int main(void)
