@@ -49,6 +49,8 @@ CLI       := $(BUILD)/dfle
 MODULE    := $(BUILD)/dfle.so
 
 .PHONY: all test check memcheck bench install uninstall clean
+# Keep test objects between builds (make would delete them as intermediates).
+.SECONDARY:
 all: $(CLI) $(MODULE)
 
 $(BUILD)/obj/src/lua/%.o: src/lua/%.c
@@ -102,13 +104,16 @@ install: all
 	install -m 755 $(CLI) $(DESTDIR)$(PREFIX)/bin/dfle
 	install -m 644 $(MODULE) $(DESTDIR)$(PREFIX)/lib/lua/5.4/dfle.so
 	install -m 644 $(LIB_CORE) $(DESTDIR)$(PREFIX)/lib/libdfle.a
+	install -d $(DESTDIR)$(PREFIX)/lib/pkgconfig
+	printf 'prefix=%s\nincludedir=$${prefix}/include\nlibdir=$${prefix}/lib\n\nName: dfle\nDescription: debris-flow and fluvial channel-profile model (C library)\nVersion: %s\nRequires.private: gsl\nLibs: -L$${libdir} -ldfle -lm\nCflags: -I$${includedir}\n' \
+	    '$(PREFIX)' '$(VERSION)' > $(DESTDIR)$(PREFIX)/lib/pkgconfig/dfle.pc
 	install -m 644 include/dfle/*.h $(DESTDIR)$(PREFIX)/include/dfle/
 	install -m 644 README.md doc/*.md $(DESTDIR)$(PREFIX)/share/doc/dfle/
 	install -m 644 examples/*.lua $(DESTDIR)$(PREFIX)/share/doc/dfle/examples/
 
 uninstall:
 	rm -f $(DESTDIR)$(PREFIX)/bin/dfle $(DESTDIR)$(PREFIX)/lib/lua/5.4/dfle.so \
-	    $(DESTDIR)$(PREFIX)/lib/libdfle.a
+	    $(DESTDIR)$(PREFIX)/lib/libdfle.a $(DESTDIR)$(PREFIX)/lib/pkgconfig/dfle.pc
 	rm -rf $(DESTDIR)$(PREFIX)/include/dfle $(DESTDIR)$(PREFIX)/share/doc/dfle
 
 clean:

@@ -116,6 +116,16 @@ int dfle_channel_new(const dfle_channel_opts *o, dfle_channel **out,
         dfle_channel *ch = *out;
         ch->A[i] = o->A0 + o->hack_coef * pow(ch->x[i], o->hack_exp);
         ch->w[i] = o->k_w * pow(ch->A[i], o->b);
+        /* Extreme exponents overflow here; say so now, not as NaN later. */
+        if (!(isfinite(ch->A[i]) && isfinite(ch->w[i]) && ch->w[i] > 0)) {
+            dfle_error_set(err, DFLE_EINVAL,
+                           "channel: A = %g m^2, w = %g m at node %zu (x = %g m) are not "
+                           "finite and positive; check hack_coef, hack_exp, k_w and b",
+                           ch->A[i], ch->w[i], i + 1, ch->x[i]);
+            dfle_channel_free(ch);
+            *out = NULL;
+            return DFLE_EINVAL;
+        }
     }
     return DFLE_OK;
 }

@@ -69,7 +69,7 @@ void dfle_run_opts_default(dfle_run_opts *o)
     memset(o, 0, sizeof *o);
     o->max_time = 2e7;
     o->tol = 1e-3;
-    o->max_steps = 50000000u;
+    o->max_steps = 10000000u;
 }
 
 static const struct {

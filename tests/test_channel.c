@@ -76,6 +76,9 @@ static void bad_parameters_are_named(void **state)
     dfle_channel_opts_default(&o);
     o.dx = 1e-9;
     expect_error(&o, "nodes");
+    dfle_channel_opts_default(&o);
+    o.b = 80; /* (8e6)^80 overflows: caught at construction, not as NaN later */
+    expect_error(&o, "not finite and positive");
 }
 
 static void arrays_are_validated_and_copied(void **state)

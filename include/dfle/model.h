@@ -106,7 +106,9 @@ typedef struct dfle_run_opts {
     void *progress_ud;
 } dfle_run_opts;
 
-/* tol = 1e-3, max_time = 2e7 yr, max_steps = 5e7. */
+/* tol = 1e-3, max_time = 2e7 yr, max_steps = 1e7 (about ten minutes on
+ * the default 403-node grid: long enough for any sane run, short enough
+ * that a run with a vanishing time step ends with reason "steps"). */
 void dfle_run_opts_default(dfle_run_opts *o);
 
 enum dfle_stop_reason {
