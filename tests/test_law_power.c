@@ -58,6 +58,19 @@ static void integer_exponents_match_pow(void **state)
     assert_close(E[0], 0.49, 1e-15, 0);
     dfle_flow_release(&flow);
     dfle_law_free(law);
+    /* Larger whole exponents go through squaring: still pow() to round-off. */
+    o.alpha = 7;
+    o.beta = 3;
+    assert_int_equal(dfle_law_new_power(&o, &law, NULL), DFLE_OK);
+    assert_int_equal(dfle_flow_init(&flow, 1, NULL), DFLE_OK);
+    flow.h[0] = 1.37;
+    flow.t_p[0] = 1.0;
+    flow.Theta[0] = 1.0;
+    assert_int_equal(dfle_law_flow_factor(law, &ctx, F, NULL), DFLE_OK);
+    assert_int_equal(dfle_law_rate(law, &ctx, F, E, NULL), DFLE_OK);
+    assert_close(E[0], pow(0.7, 7) * pow(1.37, 3), 1e-14, 0);
+    dfle_flow_release(&flow);
+    dfle_law_free(law);
 }
 
 static int dummy_factor(void *s, const dfle_law_ctx *c, double *F, dfle_error *e)
