@@ -433,12 +433,12 @@ int dfle_model_run(dfle_model *m, const dfle_run_opts *o, dfle_run_result *res,
     memset(res, 0, sizeof *res);
     res->dt_min = INFINITY;
     if (!(isfinite(o->max_time) && o->max_time > 0))
-        return dfle_error_set(err, DFLE_EINVAL, "run: max_time must be > 0 yr (got %g)",
+        return dfle_error_set(err, DFLE_EINVAL, "model: max_time must be > 0 yr (got %g)",
                               o->max_time);
     if (!(isfinite(o->tol) && o->tol >= 0))
-        return dfle_error_set(err, DFLE_EINVAL, "run: tol must be >= 0 (got %g)", o->tol);
+        return dfle_error_set(err, DFLE_EINVAL, "model: tol must be >= 0 (got %g)", o->tol);
     if (o->max_steps == 0)
-        return dfle_error_set(err, DFLE_EINVAL, "run: max_steps must be > 0");
+        return dfle_error_set(err, DFLE_EINVAL, "model: max_steps must be > 0");
 
     for (;;) {
         double r, c = 0.0, dt;
@@ -487,7 +487,7 @@ int dfle_model_run(dfle_model *m, const dfle_run_opts *o, dfle_run_result *res,
             };
             if (o->progress(o->progress_ud, &s) != 0)
                 return dfle_error_set(err, DFLE_ECANCELED,
-                                      "run: stopped by the progress callback at t = %g yr", t);
+                                      "model: run stopped by the progress callback at t = %g yr", t);
         }
     }
     res->converged = res->reason == DFLE_STOP_STEADY;
@@ -537,7 +537,7 @@ int dfle_model_write_csv(dfle_model *m, const char *path, dfle_error *err)
             return err != NULL ? err->code : DFLE_ESTATE;
     f = fopen(path, "w");
     if (f == NULL)
-        return dfle_error_set(err, DFLE_EIO, "write_csv: cannot open '%s' for writing", path);
+        return dfle_error_set(err, DFLE_EIO, "model: cannot open '%s' for writing", path);
     for (int k = 0; k < DFLE_FIELD_COUNT; k++)
         fprintf(f, "%s%s (%s)", k ? "," : "", field_info[k].name, field_info[k].unit);
     fputc('\n', f);
@@ -548,6 +548,6 @@ int dfle_model_write_csv(dfle_model *m, const char *path, dfle_error *err)
     }
     bad = ferror(f);
     if (fclose(f) != 0 || bad)
-        return dfle_error_set(err, DFLE_EIO, "write_csv: error writing '%s'", path);
+        return dfle_error_set(err, DFLE_EIO, "model: error writing '%s'", path);
     return DFLE_OK;
 }

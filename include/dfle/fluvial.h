@@ -38,7 +38,7 @@ typedef struct dfle_stochastic_threshold_opts {
     double n_manning; /* Manning coefficient [s m^-1/3]                      */
     double g;       /* gravity [m/s^2]                                       */
     double tau_c_coef; /* critical Shields stress in tau_c = coef g drho D [-] */
-    /* Overrides: when > 0 (or, for K, >= 0) they replace the derived value. */
+    /* Overrides replace the derived value when >= 0 (n: when > 0). */
     double K_override;  /* [m^(1-2m_s)/yr]; < 0 means derive              */
     double m_override;  /* < 0 means derive                                */
     double n_override;  /* < 0 means derive                                */

@@ -90,6 +90,16 @@ void dfle_lua_push_array(lua_State *L, const double *v, size_t n);
  * stack; *n receives its length.  `what` names it in errors. */
 double *dfle_lua_check_array(lua_State *L, int idx, const char *what, size_t *n);
 
+/* v as a whole number in [lo, hi], or raise naming `name`. */
+lua_Integer dfle_lua_check_whole(lua_State *L, double v, const char *fn, const char *name,
+                                 double lo, double hi);
+
+/* Slope-area pairs of argument `arg`: a dfle.model (its nodes above the
+ * outlet) or a table {A = {...}, S = {...}} (copied to scratch userdata
+ * left on the stack).  Returns the number of pairs. */
+size_t dfle_lua_slope_area(lua_State *L, int arg, const char *fn, const double **A,
+                           const double **S);
+
 /* Progress reporting, installed by the CLI (library users get none). */
 typedef struct dfle_lua_progress {
     dfle_progress_fn update;

@@ -10,6 +10,7 @@
  */
 #include "dfle_lua.h"
 
+#include <math.h>
 #include <string.h>
 
 #include "dfle/analysis.h"
@@ -19,43 +20,12 @@
 
 #define DEFAULT_NBINS 100
 
-/* Push the (A, S) pairs of argument `arg` as two scratch arrays and
- * return them: a model gives its nodes above the outlet (the outlet's
- * slope only repeats its neighbour's), a table gives {A = , S = }. */
-static size_t get_slope_area(lua_State *L, int arg, const char *fn, const double **A,
-                             const double **S)
-{
-    size_t n, nS;
-    if (luaL_testudata(L, arg, DFLE_LUA_MODEL) != NULL) {
-        dfle_model *m = dfle_lua_check_model(L, arg);
-        dfle_error err;
-        *A = dfle_model_field(m, DFLE_FIELD_A, &err);
-        *S = *A != NULL ? dfle_model_field(m, DFLE_FIELD_S, &err) : NULL;
-        if (*A == NULL || *S == NULL)
-            dfle_lua_raise(L, &err);
-        return dfle_model_size(m) - 1;
-    }
-    if (!lua_istable(L, arg))
-        luaL_error(L, "dfle.%s: expected a dfle.model or a table {A = {...}, S = {...}}, got %s",
-                   fn, luaL_typename(L, arg));
-    lua_getfield(L, arg, "A");
-    *A = dfle_lua_check_array(L, -1, "A", &n);
-    lua_getfield(L, arg, "S");
-    *S = dfle_lua_check_array(L, -1, "S", &nS);
-    if (n != nS)
-        luaL_error(L, "dfle.%s: A has %d values but S has %d", fn, (int)n, (int)nS);
-    return n;
-}
-
 static size_t get_nbins(lua_State *L, int opts, const char *fn)
 {
     double nbins = DEFAULT_NBINS;
     const dfle_lua_param params[] = {{"nbins", &nbins}};
-    static const char *const other[] = {"title", NULL};
-    dfle_lua_read_params(L, opts, fn, params, 1, other);
-    if (!(nbins >= 1 && nbins <= 1e6 && nbins == (double)(size_t)nbins))
-        luaL_error(L, "dfle.%s: nbins must be a whole number >= 1 (got %f)", fn, nbins);
-    return (size_t)nbins;
+    dfle_lua_read_params(L, opts, fn, params, 1, NULL);
+    return (size_t)dfle_lua_check_whole(L, nbins, fn, "nbins", 1, 1e6);
 }
 
 static void set_number(lua_State *L, const char *k, double v)
@@ -85,24 +55,27 @@ static void push_bins(lua_State *L, const dfle_bins *b)
 static int l_fit_slope_area(lua_State *L)
 {
     const double *A = NULL, *S = NULL;
-    size_t n = get_slope_area(L, 1, "fit_slope_area", &A, &S);
-    size_t nbins = get_nbins(L, 2, "fit_slope_area");
+    size_t nbins, n;
     dfle_bins bins;
     dfle_eq2_fit fit;
     dfle_error err;
     int st;
+
+    lua_settop(L, 2); /* scratch arrays go above the arguments */
+    nbins = get_nbins(L, 2, "fit_slope_area");
+    n = dfle_lua_slope_area(L, 1, "fit_slope_area", &A, &S);
 
     memset(&bins, 0, sizeof bins);
     st = dfle_slope_area_fit(n, A, S, nbins, &bins, &fit, &err);
     if (st == DFLE_EFIT) {
         dfle_bins_release(&bins);
         lua_pushnil(L);
-        lua_pushfstring(L, "dfle.%s", err.msg);
+        lua_pushfstring(L, "dfle.fit_slope_area: %s", err.msg);
         return 2;
     }
     if (st != DFLE_OK) {
         dfle_bins_release(&bins);
-        return dfle_lua_raise(L, &err);
+        return luaL_error(L, "dfle.fit_slope_area: %s", err.msg);
     }
     /* Build the table without raising in between: bins are malloc'd. */
     lua_createtable(L, 0, 12);
@@ -172,18 +145,19 @@ static int l_analytical_slope(lua_State *L)
     analytical_params(L, &p, &A);
     lua_getfield(L, 3, "A");
     if (lua_type(L, -1) == LUA_TNUMBER) {
-        if (!(A > 0))
-            luaL_error(L, "dfle.analytical_slope: A must be > 0 m^2 (got %f)", A);
+        if (!(isfinite(A) && A > 0))
+            luaL_error(L, "dfle.analytical_slope: A must be a finite area > 0 m^2 (got %s)",
+                       dfle_lua_number_text(L, A));
         lua_pushnumber(L, dfle_analytical_slope(&p, A));
         return 1;
     }
     if (lua_istable(L, -1)) {
         size_t n;
-        double *a = dfle_lua_check_array(L, -1, "A", &n);
+        double *a = dfle_lua_check_array(L, -1, "analytical_slope: A", &n);
         for (size_t i = 0; i < n; i++) {
-            if (!(a[i] > 0))
-                luaL_error(L, "dfle.analytical_slope: A[%d] must be > 0 m^2 (got %f)",
-                           (int)i + 1, a[i]);
+            if (!(isfinite(a[i]) && a[i] > 0))
+                luaL_error(L, "dfle.analytical_slope: A[%d] must be a finite area > 0 m^2 (got %s)",
+                           (int)i + 1, dfle_lua_number_text(L, a[i]));
             a[i] = dfle_analytical_slope(&p, a[i]);
         }
         dfle_lua_push_array(L, a, n);

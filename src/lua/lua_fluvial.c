@@ -33,14 +33,19 @@ static int l_stochastic_threshold(lua_State *L)
     dfle_stochastic_threshold_opts_default(&o);
     dfle_lua_read_params(L, 1, "fluvial.stochastic_threshold", params,
                          sizeof params / sizeof params[0], NULL);
-    /* An override given as a negative number would silently mean
-     * "derive"; reject it instead. */
+    /* In C a negative override means "derive"; from Lua an override is
+     * only ever a value, so check it like any parameter. */
     if (!lua_isnoneornil(L, 1)) {
-        static const char *const overrides[] = {"K", "m_s", "n_s"};
+        static const struct { const char *key; int zero_ok; } overrides[] = {
+            {"K", 1}, {"m_s", 1}, {"n_s", 0}};
         for (int i = 0; i < 3; i++) {
-            if (lua_getfield(L, 1, overrides[i]) == LUA_TNUMBER && lua_tonumber(L, -1) < 0)
-                luaL_error(L, "dfle.fluvial.stochastic_threshold: %s must be >= 0 (got %f)",
-                           overrides[i], lua_tonumber(L, -1));
+            if (lua_getfield(L, 1, overrides[i].key) == LUA_TNUMBER) {
+                double v = lua_tonumber(L, -1);
+                if (v < 0 || (v == 0 && !overrides[i].zero_ok))
+                    luaL_error(L, "dfle.fluvial.stochastic_threshold: %s must be %s 0 (got %s)",
+                               overrides[i].key, overrides[i].zero_ok ? ">=" : ">",
+                               dfle_lua_number_text(L, v));
+            }
             lua_pop(L, 1);
         }
     }

@@ -100,7 +100,8 @@ static int l_model_new(lua_State *L)
     o.fluvial = udata_ptr(L, base + 2);
     o.router = udata_ptr(L, base + 3);
     o.law = udata_ptr(L, base + 4);
-    if (o.channel == NULL || (lua_isuserdata(L, base + 3) && o.router == NULL) ||
+    if (o.channel == NULL || (lua_isuserdata(L, base + 2) && o.fluvial == NULL) ||
+        (lua_isuserdata(L, base + 3) && o.router == NULL) ||
         (lua_isuserdata(L, base + 4) && o.law == NULL))
         luaL_error(L, "dfle.model: a component has been closed");
 
@@ -129,7 +130,7 @@ static int l_model_set_z(lua_State *L)
 {
     dfle_model *m = dfle_lua_check_model(L, 1);
     size_t n;
-    double *z = dfle_lua_check_array(L, 2, "z", &n);
+    double *z = dfle_lua_check_array(L, 2, "model:set_z: z", &n);
     dfle_error err;
     if (dfle_model_set_z(m, z, n, &err) != DFLE_OK)
         return dfle_lua_raise(L, &err);
@@ -168,6 +169,7 @@ static int model_run(lua_State *L, int steady)
     static const char *const steady_keys[] = {"progress", NULL};
     static const char *const run_keys[] = {"progress", NULL};
     dfle_model *m = dfle_lua_check_model(L, 1);
+    const char *fn = steady ? "model:run_to_steady" : "model:run";
     dfle_run_opts o;
     dfle_run_result res;
     dfle_error err;
@@ -180,25 +182,28 @@ static int model_run(lua_State *L, int steady)
     if (steady) {
         const dfle_lua_param params[] = {
             {"tol", &o.tol}, {"max_time", &o.max_time}, {"max_steps", &max_steps}};
-        dfle_lua_read_params(L, 2, "model:run_to_steady", params, 3, steady_keys);
+        dfle_lua_read_params(L, 2, fn, params, 3, steady_keys);
         if (!(o.tol > 0))
-            luaL_error(L, "dfle.model:run_to_steady: tol must be > 0 (got %f)", o.tol);
+            luaL_error(L, "dfle.%s: tol must be > 0 (got %s)", fn, dfle_lua_number_text(L, o.tol));
+        if (!(o.max_time > 0))
+            luaL_error(L, "dfle.%s: max_time must be > 0 yr (got %s)", fn,
+                       dfle_lua_number_text(L, o.max_time));
     } else {
         const dfle_lua_param params[] = {{"years", &years}, {"max_steps", &max_steps}};
         luaL_checktype(L, 2, LUA_TTABLE);
-        dfle_lua_read_params(L, 2, "model:run", params, 2, run_keys);
+        dfle_lua_read_params(L, 2, fn, params, 2, run_keys);
         if (lua_getfield(L, 2, "years") == LUA_TNIL)
             luaL_error(L, "dfle.model:run: parameter 'years' is required");
         lua_pop(L, 1);
+        if (!(years > 0))
+            luaL_error(L, "dfle.model:run: years must be > 0 (got %s)", dfle_lua_number_text(L, years));
         o.max_time = years;
         o.tol = 0; /* plain time stepping: no steady-state stop */
     }
-    if (!(max_steps >= 1 && max_steps <= 1e15))
-        luaL_error(L, "dfle.model:run: max_steps must be >= 1 (got %f)", max_steps);
-    o.max_steps = (size_t)max_steps;
+    o.max_steps = (size_t)dfle_lua_check_whole(L, max_steps, fn, "max_steps", 1, 1e15);
     if (lua_istable(L, 2) && lua_getfield(L, 2, "progress") != LUA_TNIL) {
         if (!lua_isboolean(L, -1))
-            luaL_error(L, "dfle.model:run: parameter 'progress' must be a boolean");
+            luaL_error(L, "dfle.%s: parameter 'progress' must be a boolean", fn);
         if (!lua_toboolean(L, -1))
             prog = NULL;
     }
@@ -300,8 +305,13 @@ static int l_model_property(lua_State *L)
 
 static int l_model_tostring(lua_State *L)
 {
-    dfle_model *m = dfle_lua_check_model(L, 1);
+    dfle_lua_model *u = luaL_checkudata(L, 1, DFLE_LUA_MODEL);
+    dfle_model *m = u->m;
     char buf[200];
+    if (m == NULL) {
+        lua_pushliteral(L, "dfle.model (closed)");
+        return 1;
+    }
     snprintf(buf, sizeof buf, "dfle.model(n = %zu, U = %g m/yr, t = %g yr, fluvial = %s, router = %s)",
              dfle_model_size(m), dfle_model_U(m), dfle_model_time(m),
              dfle_model_fluvial(m) ? dfle_fluvial_name(dfle_model_fluvial(m)) : "off",

@@ -43,31 +43,6 @@ static int opt_bool(lua_State *L, int idx, const char *key, const char *fn)
     return v;
 }
 
-/* Slope-area pairs of a model (nodes above the outlet) or a table. */
-static size_t plot_pairs(lua_State *L, int arg, const double **A, const double **S)
-{
-    if (luaL_testudata(L, arg, DFLE_LUA_MODEL) != NULL) {
-        dfle_model *m = dfle_lua_check_model(L, arg);
-        dfle_error err;
-        if ((*A = dfle_model_field(m, DFLE_FIELD_A, &err)) == NULL ||
-            (*S = dfle_model_field(m, DFLE_FIELD_S, &err)) == NULL)
-            dfle_lua_raise(L, &err);
-        return dfle_model_size(m) - 1;
-    }
-    if (lua_istable(L, arg)) {
-        size_t n, nS;
-        lua_getfield(L, arg, "A");
-        *A = dfle_lua_check_array(L, -1, "A", &n);
-        lua_getfield(L, arg, "S");
-        *S = dfle_lua_check_array(L, -1, "S", &nS);
-        if (n != nS)
-            luaL_error(L, "dfle.plot: A has %d values but S has %d", (int)n, (int)nS);
-        return n;
-    }
-    return (size_t)luaL_error(L, "dfle.plot: expected a dfle.model or {A = , S = }, got %s",
-                              luaL_typename(L, arg));
-}
-
 static double fit_field(lua_State *L, int idx, const char *key)
 {
     double v;
@@ -78,25 +53,33 @@ static double fit_field(lua_State *L, int idx, const char *key)
     return v;
 }
 
+/* The options table at idx: absent, or a table of known keys. */
+static void check_opts(lua_State *L, int idx, const char *fn, const dfle_lua_param *params,
+                       size_t np)
+{
+    static const char *const title[] = {"title", NULL};
+    if (!lua_isnoneornil(L, idx) && !lua_istable(L, idx))
+        luaL_error(L, "dfle.%s: options must be a table, got %s", fn, dfle_lua_typename(L, idx));
+    dfle_lua_read_params(L, idx, fn, params, np, title);
+}
+
 static int l_plot_slope_area(lua_State *L)
 {
     const double *A = NULL, *S = NULL;
-    size_t n = plot_pairs(L, 1, &A, &S);
-    const char *path = luaL_checkstring(L, 2);
-    const char *title = opt_string(L, 4, "title", "plot.slope_area");
+    const char *path, *title;
     double nbins = DEFAULT_NBINS;
+    const dfle_lua_param params[] = {{"nbins", &nbins}};
     dfle_eq2_fit fit, *fitp = NULL;
     dfle_bins bins;
     dfle_error err;
+    size_t n;
     int st;
 
-    if (lua_istable(L, 4)) {
-        const dfle_lua_param params[] = {{"nbins", &nbins}};
-        static const char *const other[] = {"title", NULL};
-        dfle_lua_read_params(L, 4, "plot.slope_area", params, 1, other);
-        if (!(nbins >= 1 && nbins <= 1e6))
-            luaL_error(L, "dfle.plot.slope_area: nbins must be >= 1 (got %f)", nbins);
-    }
+    lua_settop(L, 4); /* scratch arrays go above the arguments */
+    path = luaL_checkstring(L, 2);
+    check_opts(L, 4, "plot.slope_area", params, 1);
+    title = opt_string(L, 4, "title", "plot.slope_area");
+    dfle_lua_check_whole(L, nbins, "plot.slope_area", "nbins", 1, 1e6);
     memset(&fit, 0, sizeof fit);
     if (lua_istable(L, 3)) {
         fit.S_df = fit_field(L, 3, "S_df");
@@ -104,15 +87,16 @@ static int l_plot_slope_area(lua_State *L)
         fit.a2 = fit_field(L, 3, "a2");
         fit.r2 = fit_field(L, 3, "r2");
         fitp = &fit;
-    } else if (!lua_isnoneornil(L, 3) && !(lua_isboolean(L, 3) && !lua_toboolean(L, 3))) {
+    } else if (!lua_isnil(L, 3) && !(lua_isboolean(L, 3) && !lua_toboolean(L, 3))) {
         luaL_argerror(L, 3, "expected a fit table from dfle.fit_slope_area, nil or false");
     }
+    n = dfle_lua_slope_area(L, 1, "plot.slope_area", &A, &S);
     memset(&bins, 0, sizeof bins);
     st = dfle_bins_compute(n, A, S, (size_t)nbins, &bins, &err);
     if (st != DFLE_OK)
-        return dfle_lua_raise(L, &err);
+        return luaL_error(L, "dfle.plot.slope_area: %s", err.msg);
     /* No fit given: fit now; a fit that fails just leaves the curve out. */
-    if (fitp == NULL && lua_isnoneornil(L, 3)) {
+    if (fitp == NULL && lua_isnil(L, 3)) {
         dfle_error fit_err;
         if (dfle_slope_area_fit(n, A, S, (size_t)nbins, NULL, &fit, &fit_err) == DFLE_OK)
             fitp = &fit;
@@ -128,10 +112,12 @@ static int l_plot_profile(lua_State *L)
 {
     dfle_model *m = dfle_lua_check_model(L, 1);
     const char *path = luaL_checkstring(L, 2);
-    const char *title = opt_string(L, 3, "title", "plot.profile");
+    const char *title;
     const double *x, *z, *S;
     dfle_error err;
 
+    check_opts(L, 3, "plot.profile", NULL, 0);
+    title = opt_string(L, 3, "title", "plot.profile");
     if ((x = dfle_model_field(m, DFLE_FIELD_X, &err)) == NULL ||
         (z = dfle_model_field(m, DFLE_FIELD_Z, &err)) == NULL ||
         (S = dfle_model_field(m, DFLE_FIELD_S, &err)) == NULL)
@@ -185,9 +171,9 @@ static int l_plot_xy(lua_State *L)
         series[k].label = opt_string(L, s_idx, "label", "plot.xy");
         series[k].lines = opt_bool(L, s_idx, "lines", "plot.xy");
         lua_getfield(L, s_idx, "x");
-        series[k].x = dfle_lua_check_array(L, -1, "series.x", &series[k].n);
+        series[k].x = dfle_lua_check_array(L, -1, "plot.xy: series.x", &series[k].n);
         lua_getfield(L, s_idx, "y");
-        series[k].y = dfle_lua_check_array(L, -1, "series.y", &ny);
+        series[k].y = dfle_lua_check_array(L, -1, "plot.xy: series.y", &ny);
         if (ny != series[k].n)
             luaL_error(L, "dfle.plot.xy: series[%d] has %d x but %d y values", (int)k + 1,
                        (int)series[k].n, (int)ny);

@@ -5,6 +5,7 @@
 #include "dfle_lua.h"
 
 #include <math.h>
+#include <stdio.h>
 #include <string.h>
 
 /* Format the list of known keys into the message buffer for an
@@ -124,6 +125,10 @@ void dfle_lua_register_type(lua_State *L, const char *tname, const luaL_Reg *met
             lua_pushnil(L);
         lua_pushcclosure(L, object_index, 2);
         lua_setfield(L, -2, "__index");
+        /* Scripts must not reach __gc: freeing a component a model still
+         * uses would leave the model reading freed memory. */
+        lua_pushliteral(L, "dfle objects do not share their metatable");
+        lua_setfield(L, -2, "__metatable");
     }
     lua_pop(L, 1);
 }
@@ -173,13 +178,13 @@ double *dfle_lua_check_array(lua_State *L, int idx, const char *what, size_t *n)
 
     idx = lua_absindex(L, idx);
     if (!lua_istable(L, idx))
-        luaL_error(L, "dfle: %s must be an array of numbers, got %s", what,
+        luaL_error(L, "dfle.%s must be an array of numbers, got %s", what,
                    luaL_typename(L, idx));
     len = lua_rawlen(L, idx);
     v = lua_newuserdatauv(L, (len ? len : 1) * sizeof *v, 0);
     for (lua_Unsigned i = 0; i < len; i++) {
         if (lua_rawgeti(L, idx, (lua_Integer)i + 1) != LUA_TNUMBER)
-            luaL_error(L, "dfle: %s[%d] must be a number, got %s", what, (int)i + 1,
+            luaL_error(L, "dfle.%s[%d] must be a number, got %s", what, (int)i + 1,
                        luaL_typename(L, -1));
         v[i] = lua_tonumber(L, -1);
         lua_pop(L, 1);
@@ -219,4 +224,45 @@ const char *dfle_lua_number_text(lua_State *L, double v)
     if (isinf(v))
         return lua_pushstring(L, v > 0 ? "inf" : "-inf");
     return lua_pushfstring(L, "%f", v);
+}
+
+lua_Integer dfle_lua_check_whole(lua_State *L, double v, const char *fn, const char *name,
+                                 double lo, double hi)
+{
+    if (!(v >= lo && v <= hi && v == floor(v)))
+        luaL_error(L, "dfle.%s: %s must be a whole number in [%s, %s] (got %s)", fn, name,
+                   dfle_lua_number_text(L, lo), dfle_lua_number_text(L, hi),
+                   dfle_lua_number_text(L, v));
+    return (lua_Integer)v;
+}
+
+size_t dfle_lua_slope_area(lua_State *L, int arg, const char *fn, const double **A,
+                           const double **S)
+{
+    size_t n, nS;
+    char what[80];
+
+    arg = lua_absindex(L, arg);
+    if (luaL_testudata(L, arg, DFLE_LUA_MODEL) != NULL) {
+        dfle_model *m = dfle_lua_check_model(L, arg);
+        dfle_error err;
+        if ((*A = dfle_model_field(m, DFLE_FIELD_A, &err)) == NULL ||
+            (*S = dfle_model_field(m, DFLE_FIELD_S, &err)) == NULL)
+            dfle_lua_raise(L, &err);
+        /* The outlet is held at base level; its slope only repeats its
+         * neighbour's, so it is not a data point. */
+        return dfle_model_size(m) - 1;
+    }
+    if (!lua_istable(L, arg))
+        luaL_error(L, "dfle.%s: expected a dfle.model or a table {A = {...}, S = {...}}, got %s",
+                   fn, dfle_lua_typename(L, arg));
+    lua_getfield(L, arg, "A");
+    snprintf(what, sizeof what, "%s: A", fn);
+    *A = dfle_lua_check_array(L, -1, what, &n);
+    lua_getfield(L, arg, "S");
+    snprintf(what, sizeof what, "%s: S", fn);
+    *S = dfle_lua_check_array(L, -1, what, &nS);
+    if (n != nS)
+        luaL_error(L, "dfle.%s: A has %d values but S has %d", fn, (int)n, (int)nS);
+    return n;
 }

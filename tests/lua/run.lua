@@ -1,0 +1,270 @@
+-- run.lua - the Lua-level test runner of the dfle scripting API.
+--
+--   build/dfle -q tests/lua/run.lua build/dfle [filter]
+--
+-- Loads every tests/lua/test_*.lua next to this file (sorted by name).
+-- Each returns a table { test_name = function() ... end, ... }; every
+-- test runs under xpcall with a traceback.  Prints "ok - file: name" or
+-- "FAIL - file: name" plus the message, and ends with the line
+-- "N passed, N failed"; exits 1 if anything failed.
+--
+-- arg[1] is the path of the dfle binary (for CLI tests, in T.dfle);
+-- an optional arg[2] runs only tests whose "file: name" contains it.
+-- A test named "BUG: ..." exposes a known bug and fails until it is fixed.
+
+local here = (arg and arg[0] or ""):match("^(.*)/[^/]*$") or "."
+local filter = arg and arg[2]
+
+-- Shell quoting for paths put into io.popen / os.execute commands.
+local function shquote(s)
+    return "'" .. tostring(s):gsub("'", "'\\''") .. "'"
+end
+
+-- Absolute path of the dfle binary: tests may change nothing about the
+-- working directory, but a relative path is fragile inside `sh -c`.
+local function absolute(p)
+    if p == nil or p:sub(1, 1) == "/" then return p end
+    local pwd = os.getenv("PWD")
+    if pwd == nil then
+        local h = io.popen("pwd")
+        pwd = h:read("l")
+        h:close()
+    end
+    return pwd .. "/" .. p
+end
+
+---------------------------------------------------------------------------
+-- Assertion helpers, shared by all test files as the global T.
+---------------------------------------------------------------------------
+T = {}
+T.dfle = absolute(arg and arg[1])  -- path of the dfle binary (CLI tests)
+T.dir = absolute(here)              -- tests/lua
+T.root = T.dir:match("^(.*)/tests/lua$") or (T.dir .. "/../..")
+T.shquote = shquote
+
+local function fmt(v)
+    if type(v) == "string" then return string.format("%q", v) end
+    if type(v) == "number" then return string.format("%.17g", v) end
+    return tostring(v)
+end
+T.fmt = fmt
+
+local function fail(msg, level)
+    error(msg, (level or 1) + 1)
+end
+T.fail = fail
+
+function T.ok(cond, msg)
+    if not cond then fail(msg or "assertion failed", 2) end
+    return cond
+end
+
+function T.eq(a, b, msg)
+    if a ~= b then
+        fail(string.format("%sexpected %s, got %s", msg and (msg .. ": ") or "", fmt(b), fmt(a)), 2)
+    end
+end
+
+-- |a - b| <= abs + rel |b|; NaN never passes.
+function T.close(a, b, rel, abs, msg)
+    rel, abs = rel or 1e-9, abs or 0
+    if type(a) ~= "number" or type(b) ~= "number" then
+        fail(string.format("%snot numbers: %s, %s", msg and (msg .. ": ") or "", fmt(a), fmt(b)), 2)
+    end
+    local d = math.abs(a - b)
+    if not (d <= abs + rel * math.abs(b)) then
+        fail(string.format("%s%s and %s differ by %.3g (allowed %.3g)", msg and (msg .. ": ") or "",
+                           fmt(a), fmt(b), d, abs + rel * math.abs(b)), 2)
+    end
+end
+
+-- The string s matches the Lua pattern p.
+function T.match(s, p, msg)
+    if type(s) ~= "string" or not s:find(p) then
+        fail(string.format("%s%s does not match pattern %q", msg and (msg .. ": ") or "", fmt(s), p), 2)
+    end
+    return s
+end
+
+-- The string s contains each literal text.
+function T.has(s, ...)
+    for i = 1, select("#", ...) do
+        local text = select(i, ...)
+        if type(s) ~= "string" or not s:find(text, 1, true) then
+            fail(string.format("%s lacks %q", fmt(s), text), 2)
+        end
+    end
+    return s
+end
+
+-- fn must raise; the message must match the Lua pattern. Returns it.
+function T.errors(fn, pattern)
+    local ok, msg = pcall(fn)
+    if ok then fail("expected an error matching " .. string.format("%q", pattern) .. ", got none", 2) end
+    if type(msg) ~= "string" then fail("error object is a " .. type(msg) .. ", not a string", 2) end
+    if pattern ~= nil and not msg:find(pattern) then
+        fail(string.format("error %q does not match pattern %q", msg, pattern), 2)
+    end
+    return msg
+end
+
+-- fn must raise with a message containing every literal text given.
+function T.errors_with(fn, ...)
+    local ok, msg = pcall(fn)
+    if ok then fail("expected an error, got none", 2) end
+    if type(msg) ~= "string" then fail("error object is a " .. type(msg) .. ", not a string", 2) end
+    for i = 1, select("#", ...) do
+        local text = select(i, ...)
+        if not msg:find(text, 1, true) then
+            fail(string.format("error %q lacks %q", msg, text), 2)
+        end
+    end
+    return msg
+end
+
+-- Like T.errors_with, and the message must start with the position
+-- ("file:line: ") of the line where function `where` is defined: the
+-- line of the API call.  T.raises_here(fn, ...) is T.raises_at(fn, fn,
+-- ...) for a one-line closure fn that makes the call itself.
+function T.raises_at(where, fn, ...)
+    local info = debug.getinfo(where, "S")
+    local ok, msg = pcall(fn)
+    if ok then fail("expected an error, got none", 2) end
+    if type(msg) ~= "string" then fail("error object is a " .. type(msg) .. ", not a string", 2) end
+    local pos = info.short_src .. ":" .. info.linedefined .. ": "
+    if msg:sub(1, #pos) ~= pos then
+        fail(string.format("error %q does not start with the caller's position %q", msg, pos), 2)
+    end
+    for i = 1, select("#", ...) do
+        local text = select(i, ...)
+        if not msg:find(text, 1, true) then
+            fail(string.format("error %q lacks %q", msg, text), 2)
+        end
+    end
+    return msg
+end
+
+function T.raises_here(fn, ...)
+    return T.raises_at(fn, fn, ...)
+end
+
+-- Temporary paths, removed after each test.
+local temps = {}
+function T.tmpname(suffix)
+    local p = os.tmpname()
+    temps[#temps + 1] = p
+    if suffix then
+        p = p .. suffix
+        temps[#temps + 1] = p
+    end
+    return p
+end
+
+function T.write_file(path, text)
+    local f = assert(io.open(path, "wb"))
+    f:write(text)
+    f:close()
+end
+
+function T.read_file(path)
+    local f, err = io.open(path, "rb")
+    if f == nil then return nil, err end
+    local s = f:read("a")
+    f:close()
+    return s
+end
+
+-- Run the dfle binary on a script text (written to a temporary file)
+-- with extra command-line words; returns combined output, the exit
+-- status (true/nil as os.execute) and the exit code.
+function T.run_dfle(script, args, opts)
+    opts = opts or {}
+    local path = T.tmpname(".lua")
+    T.write_file(path, script)
+    local cmd = shquote(T.dfle) .. " " .. (opts.flags or "-q") .. " " .. shquote(path)
+    for _, a in ipairs(args or {}) do cmd = cmd .. " " .. shquote(a) end
+    local h = io.popen(cmd .. (opts.stderr_only and " 2>&1 >/dev/null" or " 2>&1"))
+    local out = h:read("a")
+    local ok, how, code = h:close()
+    return out, ok, code, how
+end
+
+---------------------------------------------------------------------------
+-- Discovery and running.
+---------------------------------------------------------------------------
+local function list_tests()
+    local files = {}
+    local h = io.popen("ls -1 " .. shquote(here) .. " 2>/dev/null")
+    if h then
+        for name in h:lines() do
+            if name:match("^test_.*%.lua$") then files[#files + 1] = name end
+        end
+        h:close()
+    end
+    table.sort(files)
+    return files
+end
+
+local passed, failed, failures = 0, 0, {}
+
+local function report(ok, label, msg)
+    if ok then
+        passed = passed + 1
+        print("ok - " .. label)
+    else
+        failed = failed + 1
+        failures[#failures + 1] = label
+        print("FAIL - " .. label)
+        for line in (tostring(msg) .. "\n"):gmatch("(.-)\n") do
+            print("    " .. line)
+        end
+    end
+end
+
+local function cleanup()
+    for i = #temps, 1, -1 do
+        os.remove(temps[i])
+        temps[i] = nil
+    end
+end
+
+local files = list_tests()
+if #files == 0 then
+    report(false, "run.lua: discovery", "no tests/lua/test_*.lua found in " .. here)
+end
+
+for _, file in ipairs(files) do
+    local chunk, lerr = loadfile(here .. "/" .. file)
+    local ok, tests = false, lerr
+    if chunk then
+        ok, tests = xpcall(chunk, debug.traceback, T)
+        if ok and type(tests) ~= "table" then
+            ok, tests = false, "the file returned a " .. type(tests) .. ", not a table of tests"
+        end
+    end
+    if not ok then
+        report(false, file .. ": (load)", tests)
+    else
+        local names = {}
+        for name, fn in pairs(tests) do
+            if type(fn) == "function" then names[#names + 1] = name end
+        end
+        table.sort(names)
+        for _, name in ipairs(names) do
+            local label = file .. ": " .. name
+            if filter == nil or label:find(filter, 1, true) then
+                local tok, terr = xpcall(tests[name], debug.traceback)
+                cleanup()
+                collectgarbage()
+                report(tok, label, terr)
+            end
+        end
+    end
+end
+
+if failed > 0 then
+    print("failed: " .. table.concat(failures, "; "))
+end
+print(string.format("%d passed, %d failed", passed, failed))
+io.stdout:flush()
+if failed > 0 then os.exit(1, true) end

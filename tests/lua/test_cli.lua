@@ -1,0 +1,175 @@
+-- test_cli.lua - the dfle command: options, exit codes, error reports,
+-- script arguments.  Uses the binary given to the runner (T.dfle).
+local T = ...
+local tests = {}
+
+local q = T.shquote
+
+local function need_binary()
+    T.ok(T.dfle ~= nil, "run.lua needs the dfle binary as arg[1]")
+    local f = io.open(T.dfle, "rb")
+    T.ok(f ~= nil, "no dfle binary at " .. tostring(T.dfle))
+    f:close()
+end
+
+-- Run a shell command; returns output (stdout + stderr unless `streams`
+-- says otherwise), ok, exit code.
+local function sh(cmd, streams)
+    local h = io.popen(cmd .. (streams or " 2>&1"))
+    local out = h:read("a")
+    local ok, _, code = h:close()
+    return out, ok, code
+end
+
+tests["--help: usage on stdout, exit 0"] = function()
+    need_binary()
+    for _, opt in ipairs{ "--help", "-h" } do
+        local out, ok, code = sh(q(T.dfle) .. " " .. opt, " 2>/dev/null")
+        T.eq(ok, true, opt .. " exit status")
+        T.eq(code, 0)
+        T.match(out, "^usage: ")
+        T.has(out, "script.lua", "-q")
+    end
+    -- os.execute reports the same.
+    local ok, how, code = os.execute(q(T.dfle) .. " --help >/dev/null 2>&1")
+    T.eq(ok, true)
+    T.eq(how, "exit")
+    T.eq(code, 0)
+end
+
+tests["--version: prints 'dfle <version>' matching dfle.version"] = function()
+    need_binary()
+    for _, opt in ipairs{ "--version", "-v" } do
+        local out, ok = sh(q(T.dfle) .. " " .. opt, " 2>/dev/null")
+        T.eq(ok, true)
+        T.match(out, "^dfle ")
+        T.has(out, "dfle " .. dfle.version)
+    end
+end
+
+tests["no script: exit code 2 and usage on stderr"] = function()
+    need_binary()
+    local ok, how, code = os.execute(q(T.dfle) .. " >/dev/null 2>&1")
+    T.eq(ok, nil)
+    T.eq(how, "exit")
+    T.eq(code, 2)
+    local err = sh(q(T.dfle), " 2>&1 >/dev/null")
+    T.has(err, "no script", "usage")
+    -- -q alone is no script either.
+    local _, _, code2 = os.execute(q(T.dfle) .. " -q >/dev/null 2>&1")
+    T.eq(code2, 2)
+end
+
+tests["unknown option: exit code 2, names the option"] = function()
+    need_binary()
+    local out, ok, code = sh(q(T.dfle) .. " --frobnicate x.lua")
+    T.eq(ok, nil)
+    T.eq(code, 2)
+    T.has(out, "--frobnicate")
+end
+
+tests["script error: exit 1, 'dfle:' + file:line + traceback on stderr"] = function()
+    need_binary()
+    local script = T.tmpname(".lua")
+    T.write_file(script, "local x = 1\n\nerror('boom here')\n")
+    local err, ok, code = sh(q(T.dfle) .. " -q " .. q(script), " 2>&1 >/dev/null")
+    T.eq(ok, nil)
+    T.eq(code, 1)
+    T.match(err, "^dfle: ")
+    T.has(err, script .. ":3: boom here", "stack traceback")
+end
+
+tests["script error from the API: message names the call site"] = function()
+    need_binary()
+    local out, ok, code = T.run_dfle("\n\nlocal ch = dfle.channel{ dx = -5 }\n", nil, { stderr_only = true })
+    T.eq(ok, nil)
+    T.eq(code, 1)
+    T.match(out, "^dfle: ")
+    T.match(out, "%.lua:3: dfle%.channel: ")
+    T.has(out, "dx", "stack traceback")
+end
+
+tests["syntax error: exit 1 with file:line"] = function()
+    need_binary()
+    local out, ok, code = T.run_dfle("local a =\nlocal = 2\n", nil, { stderr_only = true })
+    T.eq(ok, nil)
+    T.eq(code, 1)
+    T.match(out, "^dfle: ")
+    T.match(out, "%.lua:2: ")
+end
+
+tests["missing script file: non-zero exit with a clear message"] = function()
+    need_binary()
+    local path = T.tmpname() .. "-does-not-exist.lua"
+    local out, ok, code = sh(q(T.dfle) .. " -q " .. q(path))
+    T.eq(ok, nil)
+    T.ok(code ~= 0, "exit code " .. tostring(code))
+    T.match(out, "^dfle: ")
+    T.has(out, "cannot open", path)
+end
+
+tests["script arguments arrive in arg and ..."] = function()
+    need_binary()
+    local out, ok = T.run_dfle([[
+        local n = select("#", ...)
+        print("n=" .. n)
+        print("dots=" .. table.concat({...}, "|"))
+        print("arg=" .. table.concat(arg, "|"))
+        print("arg0=" .. tostring(arg[0]:match("[^/]*$")))
+        print("argm1=" .. tostring(arg[-1]))
+    ]], { "alpha", "two words", "", "-q" })
+    T.eq(ok, true, out)
+    T.has(out, "n=4\n", "dots=alpha|two words||-q\n", "arg=alpha|two words||-q\n", "argm1=-q\n")
+    T.match(out, "arg0=[^\n]*%.lua\n")
+end
+
+tests["-q and --quiet are accepted; dfle is a global"] = function()
+    need_binary()
+    for _, flag in ipairs{ "-q", "--quiet", "" } do
+        local out, ok = T.run_dfle("print(type(dfle), type(dfle.model), dfle.version)", nil, { flags = flag })
+        T.eq(ok, true, out)
+        T.has(out, "table\tfunction\t" .. dfle.version)
+    end
+end
+
+tests["-- ends option parsing"] = function()
+    need_binary()
+    local script = T.tmpname(".lua")
+    T.write_file(script, "print('got', ...)")
+    local out, ok = sh(q(T.dfle) .. " -q -- " .. q(script) .. " --help")
+    T.eq(ok, true, out)
+    T.has(out, "got\t--help")
+end
+
+tests["- reads the script from standard input"] = function()
+    need_binary()
+    local out, ok = sh("echo 'print(\"from stdin\", ...)' | " .. q(T.dfle) .. " -q - x y")
+    T.eq(ok, true, out)
+    T.has(out, "from stdin\tx\ty")
+end
+
+tests["os.exit code and a successful run"] = function()
+    need_binary()
+    local _, ok, code = T.run_dfle("os.exit(7)")
+    T.eq(ok, nil)
+    T.eq(code, 7)
+    local out, ok2, code2 = T.run_dfle([[
+        local m = dfle.model{ channel = dfle.channel{ A_max = 2e5 } }
+        local r = m:run{ years = 100 }
+        print(r.reason, m.time)
+    ]])
+    T.eq(ok2, true, out)
+    T.eq(code2, 0)
+    T.has(out, "time\t100")
+end
+
+tests["non-string error object: reported, exit 1"] = function()
+    need_binary()
+    local out, ok, code = T.run_dfle("error({})", nil, { stderr_only = true })
+    T.eq(ok, nil)
+    T.eq(code, 1)
+    T.match(out, "^dfle: ")
+    T.has(out, "table")
+end
+
+return tests

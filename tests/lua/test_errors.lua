@@ -1,0 +1,454 @@
+-- test_errors.lua - misuse of the API raises a clear error that names
+-- the parameter and carries the caller's file:line; expected failures
+-- (a fit that cannot converge) return nil, message.
+local T = ...
+local tests = {}
+
+-- fn must raise "test_errors.lua:<line of fn>: ..." containing every text.
+local function raises(fn, ...)
+    local msg = T.raises_here(fn, ...)
+    T.match(msg, "test_errors%.lua:%d+:")
+    return msg
+end
+
+-- The same, for a call made by the one-line function `where`.
+local function raises_at(where, fn, ...)
+    local msg = T.raises_at(where, fn, ...)
+    T.match(msg, "test_errors%.lua:%d+:")
+    return msg
+end
+
+local function copy(t)
+    local c = {}
+    for k, v in pairs(t) do c[k] = v end
+    return c
+end
+
+local function small_model(opts)
+    opts = opts or {}
+    opts.channel = opts.channel or dfle.channel{ A_max = 2e5 }
+    return dfle.model(opts)
+end
+
+---------------------------------------------------------------------------
+-- Every constructor and every function taking an options table gets the
+-- same classes of bad input.  Each entry:
+--   call(opts)  makes the call with an options table (or other value),
+--               on one line: the error must point at that line;
+--   prep(opts)  optional: completes the options before the call;
+--   base        a valid options table;
+--   num         a numeric parameter that must be > 0 (for negative,
+--               zero, NaN, Inf and wrong type);
+--   known       text the unknown-key message must list;
+--   nontable    text the message for a non-table argument must contain;
+--   bugs        case -> explanation, for cases that expose a known bug.
+---------------------------------------------------------------------------
+local subjects = {
+    {
+        name = "dfle.channel", base = {}, num = "dx", known = "dx, A0",
+        call = function(o) return dfle.channel(o) end,
+    },
+    {
+        name = "dfle.fluvial.stochastic_threshold", base = {}, num = "k_e", known = "k_e, rho_w",
+        call = function(o) return dfle.fluvial.stochastic_threshold(o) end,
+    },
+    {
+        name = "dfle.fluvial.stream_power", base = { K = 1e-5, m = 0.5, n = 1 }, num = "n",
+        known = "K, m, n",
+        call = function(o) return dfle.fluvial.stream_power(o) end,
+    },
+    {
+        name = "dfle.router.empirical", base = {}, num = "M0", known = "M0, gamma, mu, tau_y",
+        call = function(o) return dfle.router.empirical(o) end,
+    },
+    {
+        name = "dfle.law.power", base = {}, num = "k_df", known = "k_df, alpha, beta",
+        call = function(o) return dfle.law.power(o) end,
+    },
+    {
+        name = "dfle.model", base = {}, num = "U", known = "U, cfl, dt_max",
+        prep = function(o)
+            if type(o) == "table" then o.channel = o.channel or dfle.channel{ A_max = 2e5 } end
+        end,
+        call = function(o) return dfle.model(o) end,
+    },
+    {
+        name = "model:run_to_steady", base = {}, num = "tol", known = "tol, max_time",
+        call = function(o) return small_model{ router = false }:run_to_steady(o) end,
+    },
+    {
+        name = "model:run", base = { years = 10 }, num = "years", known = "years",
+        call = function(o) return small_model{ router = false }:run(o) end,
+    },
+    {
+        name = "dfle.fit_slope_area", base = {}, num = "nbins", known = "nbins",
+        call = function(o) return dfle.fit_slope_area(small_model(), o) end,
+    },
+    {
+        name = "dfle.analytical_slope", base = { A = 1e4 }, num = "U", known = "U, k_w, b",
+        call = function(o) return dfle.analytical_slope(dfle.router.empirical{}, dfle.law.power{}, o) end,
+    },
+    {
+        name = "dfle.analytical_exponent", base = {}, num = "U", known = "U, k_w, b",
+        call = function(o) return dfle.analytical_exponent(dfle.router.empirical{}, dfle.law.power{}, o) end,
+    },
+    {
+        name = "dfle.plot.slope_area", base = {}, num = "nbins", known = "nbins, title",
+        call = function(o) return dfle.plot.slope_area(small_model(), T.tmpname(".png"), nil, o) end,
+    },
+}
+
+local cases = {
+    ["unknown key"] = function(s)
+        local o = copy(s.base)
+        o.bogus = 1
+        return o, { "unknown parameter 'bogus'", s.known }
+    end,
+    ["wrong type (string for a number)"] = function(s)
+        local o = copy(s.base)
+        o[s.num] = "12"
+        return o, { "'" .. s.num .. "'", "number", "string" }
+    end,
+    ["wrong type (boolean for a number)"] = function(s)
+        local o = copy(s.base)
+        o[s.num] = true
+        return o, { "'" .. s.num .. "'", "number", "boolean" }
+    end,
+    negative = function(s)
+        local o = copy(s.base)
+        o[s.num] = -1
+        return o, { s.num, "must be" }
+    end,
+    zero = function(s)
+        local o = copy(s.base)
+        o[s.num] = 0
+        return o, { s.num, "must be" }
+    end,
+    NaN = function(s)
+        local o = copy(s.base)
+        o[s.num] = 0 / 0
+        return o, { "'" .. s.num .. "'", "finite" }
+    end,
+    Inf = function(s)
+        local o = copy(s.base)
+        o[s.num] = 1 / 0
+        return o, { "'" .. s.num .. "'", "finite" }
+    end,
+    ["-Inf"] = function(s)
+        local o = copy(s.base)
+        o[s.num] = -1 / 0
+        return o, { "'" .. s.num .. "'", "finite" }
+    end,
+    ["positional (array) argument"] = function(s)
+        return { 5 }, { "named" }
+    end,
+    ["non-table"] = function(s)
+        return "dx = 5", { "table" }
+    end,
+}
+
+for _, s in ipairs(subjects) do
+    for case, make in pairs(cases) do
+        -- Every message names its function (or the failing C check's
+        -- object), so a script author knows which call was wrong.
+        local title = s.name .. ": " .. case
+        local bug = s.bugs and s.bugs[case]
+        if bug then title = "BUG: " .. title .. " (" .. bug .. ")" end
+        tests[title] = function()
+            local arg, texts = make(s)
+            if s.prep then s.prep(arg) end
+            raises_at(s.call, function() return s.call(arg) end, table.unpack(texts))
+        end
+    end
+end
+
+-- The error position must be where the script called, not inside a helper.
+tests["position: the message starts with the calling line"] = function()
+    local ok, msg = pcall(function()
+        dfle.channel{ dx = -1 } -- this line
+    end)
+    T.eq(ok, false)
+    local line = debug.getinfo(1, "l").currentline - 3
+    T.match(msg, "^[^:]*test_errors%.lua:" .. line .. ": ")
+    T.has(msg, "dx")
+end
+
+---------------------------------------------------------------------------
+-- Specific misuse.
+---------------------------------------------------------------------------
+tests["fluvial.stream_power: each of K, m, n is required"] = function()
+    raises(function() return dfle.fluvial.stream_power{ m = 0.5, n = 1 } end, "'K'", "required")
+    raises(function() return dfle.fluvial.stream_power{ K = 1, n = 1 } end, "'m'", "required")
+    raises(function() return dfle.fluvial.stream_power{ K = 1, m = 0.5 } end, "'n'", "required")
+    raises(function() return dfle.fluvial.stream_power{ K = -1, m = 0.5, n = 1 } end, "K", ">= 0")
+    raises(function() return dfle.fluvial.stream_power{ K = 1, m = -0.5, n = 1 } end, "m", ">= 0")
+    raises(function() return dfle.fluvial.stream_power() end, "table")
+end
+
+tests["fluvial.stochastic_threshold: negative overrides are rejected"] = function()
+    raises(function() return dfle.fluvial.stochastic_threshold{ K = -1 } end, "K", ">= 0")
+    raises(function() return dfle.fluvial.stochastic_threshold{ m_s = -1 } end, "m_s")
+    raises(function() return dfle.fluvial.stochastic_threshold{ n_s = -1 } end, "n_s")
+    raises(function() return dfle.fluvial.stochastic_threshold{ rho_s = 900 } end, "rho_s")
+    raises(function() return dfle.fluvial.stochastic_threshold{ omega_s = 1 } end, "omega_s")
+end
+
+-- n_s = 0 is not a valid slope exponent (stream_power rejects n = 0),
+-- but the derived n_s = 2.333 is used instead, silently.
+tests["fluvial.stochastic_threshold: n_s = 0 is refused, not taken as derive"] = function()
+    raises(function() return dfle.fluvial.stochastic_threshold{ n_s = 0 } end, "n_s")
+end
+
+tests["channel: geometry errors name the parameter"] = function()
+    raises(function() return dfle.channel{ A0 = -5 } end, "A0")
+    raises(function() return dfle.channel{ hack_exp = 0 } end, "hack_exp")
+    raises(function() return dfle.channel{ k_w = 0 } end, "k_w")
+    raises(function() return dfle.channel{ length = -10 } end, "length")
+    raises(function() return dfle.channel{ A_max = 10 } end, "A_max")
+    raises(function() return dfle.channel{ dx = 1000, length = 1000 } end, "3 nodes")
+end
+
+tests["router.empirical and law.power: range errors name the parameter"] = function()
+    raises(function() return dfle.router.empirical{ gamma = -0.1 } end, "gamma", ">= 0")
+    raises(function() return dfle.router.empirical{ tau_y = -1 } end, "tau_y", ">= 0")
+    raises(function() return dfle.router.empirical{ mu = 0 } end, "mu", "> 0")
+    raises(function() return dfle.law.power{ alpha = -1 } end, "alpha", ">= 0")
+    raises(function() return dfle.law.power{ beta = -1 } end, "beta", ">= 0")
+end
+
+tests["model: cfl and dt_max ranges"] = function()
+    local ch = dfle.channel{ A_max = 2e5 }
+    raises(function() return dfle.model{ channel = ch, cfl = 1.5 } end, "cfl")
+    raises(function() return dfle.model{ channel = ch, cfl = 0 } end, "cfl")
+    raises(function() return dfle.model{ channel = ch, dt_max = -1 } end, "dt_max")
+end
+
+tests["model: law given with router = false"] = function()
+    local ch, law = dfle.channel{ A_max = 2e5 }, dfle.law.power{}
+    raises(function() return dfle.model{ channel = ch, router = false, law = law } end, "law", "router")
+end
+
+tests["model: a router without a law"] = function()
+    local ch = dfle.channel{ A_max = 2e5 }
+    raises(function() return dfle.model{ channel = ch, law = false } end, "law")
+end
+
+tests["model: wrong component types"] = function()
+    local ch, rt, law = dfle.channel{ A_max = 2e5 }, dfle.router.empirical{}, dfle.law.power{}
+    -- A channel where a router is expected: both types are named.
+    raises(function() return dfle.model{ channel = ch, router = ch } end, "'router'", "dfle.router", "dfle.channel")
+    raises(function() return dfle.model{ channel = rt } end, "'channel'", "dfle.channel", "dfle.router")
+    raises(function() return dfle.model{ channel = ch, law = rt } end, "'law'", "dfle.law")
+    raises(function() return dfle.model{ channel = ch, fluvial = law } end, "'fluvial'", "dfle.fluvial")
+    raises(function() return dfle.model{ channel = ch, fluvial = true } end, "'fluvial'", "boolean")
+    raises(function() return dfle.model{ channel = ch, router = "empirical" } end, "'router'", "string")
+    raises(function() return dfle.model{ channel = false } end, "'channel'")
+    raises(function() return dfle.model{ channel = {} } end, "'channel'", "table")
+end
+
+tests["model:run: years is required"] = function()
+    local m = small_model{ router = false }
+    raises(function() return m:run{} end, "'years'", "required")
+    raises(function() return m:run{ max_steps = 10 } end, "'years'", "required")
+    raises(function() return m:run() end, "table")
+end
+
+tests["model:run and run_to_steady: max_steps, max_time, progress"] = function()
+    local m = small_model{ router = false }
+    raises(function() return m:run{ years = 10, max_steps = 0 } end, "max_steps")
+    raises(function() return m:run{ years = 10, max_steps = 0 / 0 } end, "max_steps", "finite")
+    raises(function() return m:run{ years = 10, progress = "yes" } end, "'progress'", "boolean")
+    raises(function() return m:run_to_steady{ max_time = -1 } end, "max_time")
+    raises(function() return m:run_to_steady{ max_time = 1 / 0 } end, "max_time", "finite")
+    raises(function() return m:run_to_steady{ max_steps = -3 } end, "max_steps")
+    raises(function() return m:run_to_steady{ progress = 1 } end, "'progress'", "boolean")
+    T.eq(m.time, 0, "no time was simulated by the failed calls")
+end
+
+tests["model:get: unknown field lists the fields"] = function()
+    local m = small_model()
+    raises(function() return m:get("nope") end, "'nope'", "x, A, w, z, S", "tau")
+    raises(function() return m:get() end, "string expected")
+    raises(function() return m.channel:get("S") end, "'S'")
+end
+
+tests["model:set_z: wrong length, wrong values"] = function()
+    local m = small_model()
+    raises(function() return m:set_z{ 1, 2, 3 } end, "z", "3", tostring(m.n))
+    local z = m:get("z")
+    z[5] = "high"
+    raises(function() return m:set_z(z) end, "z[5]", "string")
+    z[5] = 0 / 0
+    raises(function() return m:set_z(z) end, "z", "not finite")
+    raises(function() return m:set_z("z") end, "z", "array")
+    raises(function() return m:set_z() end, "z")
+end
+
+tests["model:set_U: range and type"] = function()
+    local m = small_model()
+    raises(function() return m:set_U(-1) end, "U", "> 0")
+    raises(function() return m:set_U(0) end, "U", "> 0")
+    raises(function() return m:set_U(0 / 0) end, "U")
+    raises(function() return m:set_U(1 / 0) end, "U")
+    raises(function() return m:set_U("fast") end, "number expected")
+    T.eq(m.U, 5e-4, "U unchanged")
+end
+
+tests["model:init_fluvial_steady: needs a fluvial law"] = function()
+    local m = small_model()
+    raises(function() return m:init_fluvial_steady(dfle.router.empirical{}) end, "dfle.fluvial", "dfle.router")
+    raises(function() return m:init_fluvial_steady(m.channel) end, "dfle.fluvial", "dfle.channel")
+end
+
+tests["model methods: wrong self"] = function()
+    local ch = dfle.channel{ A_max = 2e5 }
+    local m = small_model()
+    raises(function() return m.get(ch, "S") end, "dfle.model", "dfle.channel")
+    raises(function() return m.run(nil, { years = 1 }) end, "dfle.model")
+    raises(function() return dfle.plot.profile(ch, T.tmpname(".png")) end, "dfle.model", "dfle.channel")
+end
+
+tests["model:write_csv: unwritable path names the path"] = function()
+    local m = small_model()
+    raises(function() return m:write_csv("/nonexistent-dir/sub/profile.csv") end, "/nonexistent-dir/sub/profile.csv")
+    raises(function() return m:write_csv() end, "string expected")
+end
+
+tests["model: a run that blows up names the node and field"] = function()
+    local m = small_model{ fluvial = dfle.fluvial.stream_power{ K = 1e-3, m = 0, n = 200 }, router = false }
+    local z = {}
+    for i = 1, m.n do z[i] = (m.n - i) * 1e4 end -- S = 2000: S^200 overflows
+    m:set_z(z)
+    raises(function() return m:run{ years = 100 } end, "E_f", "not finite", "node 1")
+    raises(function() return m:get("S") end, "not finite")
+    raises(function() return m:write_csv(T.tmpname(".csv")) end, "not finite")
+    -- The model recovers once given a sane state.
+    m:init_fluvial_steady(dfle.fluvial.stochastic_threshold{})
+    T.eq(m:run{ years = 10 }.reason, "time")
+end
+
+tests["fit_slope_area: mismatched, missing or non-numeric arrays"] = function()
+    raises(function() return dfle.fit_slope_area({ A = { 1, 2, 3 }, S = { 1, 2 } }, {}) end, "A has 3", "S has 2")
+    raises(function() return dfle.fit_slope_area({ A = { 1, 2, 3 } }, {}) end, "S")
+    raises(function() return dfle.fit_slope_area({ A = { 1, "x", 3 }, S = { 1, 2, 3 } }, {}) end, "A[2]")
+    raises(function() return dfle.fit_slope_area("data") end, "dfle.model", "string")
+    raises(function() return dfle.fit_slope_area(dfle.channel{}) end, "dfle.model")
+    raises(function() return dfle.fit_slope_area(small_model(), { nbins = 2.5 }) end, "nbins")
+end
+
+tests["fit_slope_area: data it cannot fit returns nil, message"] = function()
+    local A, pure, flat = {}, {}, {}
+    for i = 1, 200 do
+        A[i] = 10 ^ (3 + 4 * (i - 1) / 199)
+        pure[i] = 3 * A[i] ^ -0.5 -- a pure power law: no roll-over, A_df -> 0
+        flat[i] = 0.3             -- a constant slope: no transition
+    end
+    for _, S in ipairs{ pure, flat } do
+        local f, msg = dfle.fit_slope_area({ A = A, S = S }, {})
+        T.eq(f, nil)
+        T.eq(type(msg), "string")
+        T.has(msg, "fit")
+    end
+    -- Too few bins to fit three parameters.
+    local f, msg = dfle.fit_slope_area({ A = { 1e3, 1e4, 1e5 }, S = { 0.8, 0.5, 0.1 } }, {})
+    T.eq(f, nil)
+    T.has(msg, "need at least 4")
+end
+
+tests["analytical_slope: bad arguments"] = function()
+    local rt, law, ch = dfle.router.empirical{}, dfle.law.power{}, dfle.channel{ A_max = 2e5 }
+    -- A channel where a router is expected.
+    raises(function() return dfle.analytical_slope(ch, law, { A = 1e4 }) end, "dfle.router", "dfle.channel")
+    raises(function() return dfle.analytical_slope(law, rt, { A = 1e4 }) end, "dfle.router", "dfle.law")
+    raises(function() return dfle.analytical_slope(rt, rt, { A = 1e4 }) end, "dfle.law")
+    raises(function() return dfle.analytical_slope(rt, law, { U = 5e-4 }) end, "'A'")
+    raises(function() return dfle.analytical_slope(rt, law, { A = -1 }) end, "A", "> 0")
+    raises(function() return dfle.analytical_slope(rt, law, { A = 0 }) end, "A", "> 0")
+    raises(function() return dfle.analytical_slope(rt, law, { A = 0 / 0 }) end, "A")
+    raises(function() return dfle.analytical_slope(rt, law, { A = "big" }) end, "'A'")
+    raises(function() return dfle.analytical_slope(rt, law, { A = { 1e4, -1 } }) end, "A[2]")
+    raises(function() return dfle.analytical_slope(rt, law, { A = 1e4, k_w = 0 }) end, "k_w")
+    raises(function() return dfle.analytical_slope(rt, law) end, "table")
+    -- alpha = beta / 3 makes Eq. (19) undefined.
+    local bad = dfle.law.power{ alpha = 1, beta = 3 }
+    raises(function() return dfle.analytical_slope(rt, bad, { A = 1e4 }) end, "alpha")
+end
+
+-- Numeric parameters must be finite everywhere else; A = inf returns 0.
+tests["analytical_slope: an infinite area is refused"] = function()
+    local rt, law = dfle.router.empirical{}, dfle.law.power{}
+    raises(function() return dfle.analytical_slope(rt, law, { A = 1 / 0 }) end, "A")
+    raises(function() return dfle.analytical_slope(rt, law, { A = { 1e4, 1 / 0 } }) end, "A[2]")
+end
+
+tests["plot: bad paths, fits and series"] = function()
+    local m = small_model()
+    raises(function() return dfle.plot.profile(m, T.tmpname(".txt")) end, ".png")
+    raises(function() return dfle.plot.profile(m, "/nonexistent-dir/p.png") end, "/nonexistent-dir/p.png")
+    raises(function() return dfle.plot.profile(m) end, "string expected")
+    raises(function() return dfle.plot.profile(m, T.tmpname(".png"), { title = 5 }) end, "'title'", "string")
+    raises(function() return dfle.plot.slope_area(m, T.tmpname(".png"), 5) end, "fit")
+    raises(function() return dfle.plot.slope_area(m, T.tmpname(".png"), { S_df = 1 }) end, "A_df")
+    raises(function() return dfle.plot.slope_area("m", T.tmpname(".png")) end, "dfle.model")
+    raises(function() return dfle.plot.xy{ series = { { x = { 1 }, y = { 1 } } } } end, "'path'")
+    raises(function() return dfle.plot.xy{ path = 5, series = { { x = { 1 }, y = { 1 } } } } end, "'path'", "string")
+    raises(function() return dfle.plot.xy{ path = T.tmpname(".png"), series = {} } end, "series")
+    raises(function() return dfle.plot.xy{ path = T.tmpname(".png"), series = { { x = { 1, 2 }, y = { 1 } } } } end, "series[1]")
+    raises(function() return dfle.plot.xy{ path = T.tmpname(".png"), series = { { x = { 1 }, y = { 1 }, colour = "red" } } } end, "'colour'", "label")
+    raises(function() return dfle.plot.xy{ path = T.tmpname(".png"), series = { { x = { 1 }, y = { 1 } } }, logx = "yes" } end, "'logx'", "boolean")
+    raises(function() return dfle.plot.xy{ path = T.tmpname(".png"), series = { { x = { 1 }, y = { 1 } } }, bogus = 1 } end, "'bogus'", "path, series")
+    raises(function() return dfle.plot.xy("x.png") end, "table")
+end
+
+-- Options with a misspelt key are silently ignored by plot.profile.
+tests["plot.profile: unknown option keys and non-table options are refused"] = function()
+    local m = small_model()
+    raises(function() return dfle.plot.profile(m, T.tmpname(".png"), { titel = "x" }) end, "'titel'")
+    raises(function() return dfle.plot.profile(m, T.tmpname(".png"), "title") end, "table")
+end
+
+-- A component whose __gc has been called from Lua is "closed".  The
+-- model constructor checks channel, router and law for that, but not
+-- the fluvial law: a closed one silently means "no fluvial erosion".
+tests["model: a closed fluvial law is refused, not taken as off"] = function()
+    local fl = dfle.fluvial.stochastic_threshold{}
+    debug.getmetatable(fl).__gc(fl)
+    local ch = dfle.channel{ A_max = 2e5 }
+    raises(function() return dfle.model{ channel = ch, fluvial = fl, router = false } end, "closed")
+end
+
+tests["model: closed channel, router or law are refused"] = function()
+    local ch, rt, law = dfle.channel{ A_max = 2e5 }, dfle.router.empirical{}, dfle.law.power{}
+    local dead_rt, dead_law = dfle.router.empirical{}, dfle.law.power{}
+    debug.getmetatable(dead_rt).__gc(dead_rt)
+    debug.getmetatable(dead_law).__gc(dead_law)
+    raises(function() return dfle.model{ channel = ch, router = dead_rt, law = law } end, "closed")
+    raises(function() return dfle.model{ channel = ch, router = rt, law = dead_law } end, "closed")
+    local dead_ch = dfle.channel{ A_max = 2e5 }
+    debug.getmetatable(dead_ch).__gc(dead_ch)
+    raises(function() return dfle.model{ channel = dead_ch } end, "closed")
+    raises(function() return dead_ch.n end, "closed")
+    raises(function() return dead_rt:params() end, "closed")
+end
+
+-- If __gc were reachable, a script could free a channel that a live model
+-- still borrows and the model would read freed memory.  Run in a child
+-- process so that, were it ever reachable again, the runner stays clean.
+tests["metatables are protected: a script cannot free a component a model uses"] = function()
+    local out, ok = T.run_dfle([[
+        local ch = dfle.channel{ A_max = 2e5 }
+        local m = dfle.model{ channel = ch, router = false }
+        local mt = getmetatable(ch)
+        if type(mt) ~= "table" or type(mt.__gc) ~= "function" then
+            print("PROTECTED")
+            return
+        end
+        mt.__gc(ch)
+        local fine = pcall(m.get, m, "A")
+        print(fine and "USED FREED CHANNEL" or "RAISED")
+    ]])
+    T.ok(ok, out)
+    T.ok(out:find("PROTECTED", 1, true) or out:find("RAISED", 1, true), out)
+end
+
+return tests
