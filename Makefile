@@ -104,6 +104,7 @@ install: all
 	install -m 755 $(CLI) $(DESTDIR)$(PREFIX)/bin/dfle
 	install -m 644 $(MODULE) $(DESTDIR)$(PREFIX)/lib/lua/5.4/dfle.so
 	install -m 644 $(LIB_CORE) $(DESTDIR)$(PREFIX)/lib/libdfle.a
+	install -m 644 $(LIB_LUA) $(DESTDIR)$(PREFIX)/lib/libdfle_lua.a
 	install -d $(DESTDIR)$(PREFIX)/lib/pkgconfig
 	printf 'prefix=%s\nincludedir=$${prefix}/include\nlibdir=$${prefix}/lib\n\nName: dfle\nDescription: debris-flow and fluvial channel-profile model (C library)\nVersion: %s\nRequires.private: gsl\nLibs: -L$${libdir} -ldfle -lm\nCflags: -I$${includedir}\n' \
 	    '$(PREFIX)' '$(VERSION)' > $(DESTDIR)$(PREFIX)/lib/pkgconfig/dfle.pc
@@ -113,7 +114,8 @@ install: all
 
 uninstall:
 	rm -f $(DESTDIR)$(PREFIX)/bin/dfle $(DESTDIR)$(PREFIX)/lib/lua/5.4/dfle.so \
-	    $(DESTDIR)$(PREFIX)/lib/libdfle.a $(DESTDIR)$(PREFIX)/lib/pkgconfig/dfle.pc
+	    $(DESTDIR)$(PREFIX)/lib/libdfle.a $(DESTDIR)$(PREFIX)/lib/libdfle_lua.a \
+	    $(DESTDIR)$(PREFIX)/lib/pkgconfig/dfle.pc
 	rm -rf $(DESTDIR)$(PREFIX)/include/dfle $(DESTDIR)$(PREFIX)/share/doc/dfle
 
 clean:

@@ -13,8 +13,8 @@
  *
  * Why the CFL condition has this form: erosion depends on the slope to
  * the downstream node, so a perturbation travels upstream like a
- * kinematic wave with celerity dE/dS / dx [m/yr per m].  Forward Euler
- * with an upwind difference is stable while dt dE/dS / dx <= 1.  dE/dS
+ * kinematic wave with speed c = dE/dS [m/yr].  Forward Euler with an
+ * upwind difference is stable while c dt / dx <= 1.  dE/dS
  * is exact for the fluvial power law and a one-sided finite difference
  * for the debris-flow part, which works for any router and law behind
  * the ops tables (a Lua law included) without asking them for

@@ -7,8 +7,8 @@
  *
  * Stepping is explicit forward Euler, as in the paper.  The step is set
  * by a CFL condition on the upwind slope: erosion that depends on the
- * downstream slope moves information upstream at celerity
- * c_i = dE_i/dS_i / dx, so dt = cfl * dx / max_i |dE_i/dS_i|, capped at
+ * downstream slope moves a slope perturbation upstream at the speed
+ * c_i = |dE_i/dS_i| [m/yr], so dt = cfl * dx / max_i c_i, capped at
  * dt_max and at the time left in the run.
  *
  * Steady state (explicit and configurable): the run stops when
