@@ -5,3 +5,4 @@ DFLE=${1:-build/dfle}
 here=$(dirname "$0")
 echo "dfle benchmarks on $(uname -m), $(nproc) cores, $(date -u +%Y-%m-%d)"
 "$DFLE" -q "$here/steady_state.lua"
+"$DFLE" -q "$here/process.lua"

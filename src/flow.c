@@ -9,7 +9,7 @@
 #include <stdlib.h>
 #include <string.h>
 
-enum { FLOW_ARRAYS = 7 };
+enum { FLOW_ARRAYS = 8 };
 
 int dfle_flow_init(dfle_flow *flow, size_t n, dfle_error *err)
 {
@@ -29,6 +29,7 @@ int dfle_flow_init(dfle_flow *flow, size_t n, dfle_error *err)
     flow->t_p = block + 4 * n;
     flow->tau = block + 5 * n;
     flow->Theta = block + 6 * n;
+    flow->integral = block + 7 * n;
     return DFLE_OK;
 }
 
@@ -45,4 +46,5 @@ void dfle_flow_clear(dfle_flow *flow)
     if (flow->M != NULL)
         memset(flow->M, 0, FLOW_ARRAYS * flow->n * sizeof *flow->M);
     flow->runout_end = 0;
+    flow->time_resolved = 0;
 }

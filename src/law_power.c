@@ -50,6 +50,12 @@ static int power_flow_factor(void *state, const dfle_law_ctx *ctx, double *F,
     const power_law *pl = state;
     const dfle_flow *fl = ctx->flow;
     (void)err;
+    if (fl->time_resolved) {
+        /* Eq. (11): the router has summed h^beta Phi dt already. */
+        for (size_t i = 0; i < ctx->n; i++)
+            F[i] = fl->integral[i];
+        return DFLE_OK;
+    }
     for (size_t i = 0; i < ctx->n; i++)
         F[i] = fl->t_p[i] * power_of(fl->h[i], pl->opts.beta, pl->beta_int) * fl->Theta[i];
     return DFLE_OK;
@@ -68,12 +74,20 @@ static int power_rate(void *state, const dfle_law_ctx *ctx, const double *F,
     return DFLE_OK;
 }
 
+static double power_integrand(void *state, double h, double v, double lambda)
+{
+    const power_law *pl = state;
+    (void)v, (void)lambda;
+    return power_of(h, pl->opts.beta, pl->beta_int);
+}
+
 static void power_destroy(void *state) { free(state); }
 
 static const dfle_law_ops power_ops = {
     .name = "power",
     .flow_factor = power_flow_factor,
     .rate = power_rate,
+    .integrand = power_integrand,
     .destroy = power_destroy,
 };
 

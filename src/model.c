@@ -248,6 +248,11 @@ int dfle_model_init_fluvial_steady(dfle_model *m, const dfle_fluvial *fl,
     return DFLE_OK;
 }
 
+void dfle_model_invalidate_flow(dfle_model *m)
+{
+    invalidate(m);
+}
+
 int dfle_model_set_z(dfle_model *m, const double *z, size_t n, dfle_error *err)
 {
     if (n != m->n)
@@ -271,6 +276,9 @@ static int debris_flow_erosion(dfle_model *m, const double *S, dfle_flow *flow,
     int st;
 
     if (route) {
+        /* Time-resolved routers sum the law's Eq. (11) integrand as they go. */
+        flow->integrand = dfle_law_get_ops(m->law)->integrand;
+        flow->integrand_state = dfle_law_state(m->law);
         st = dfle_router_route(m->rt, m->ch, S, flow, err);
         if (st != DFLE_OK)
             return st;

@@ -5,6 +5,15 @@
  * thing the two share, which is what lets any law run with any router.
  * Arrays hold n values (one per node).  The flow reaches nodes
  * [0, runout_end); beyond that every array is zero and E_df = 0.
+ *
+ * Two kinds of router fill it:
+ *  - bulk routers (the empirical one): one representative value per
+ *    node, used as in Eq. (6);
+ *  - time-resolved routers (the process-based one): peaks over the flow
+ *    event, and `integral`, the Eq. (11) sum of g(h, v, lambda) Phi dt
+ *    [s times the unit of g] over the flow's own time steps, where g is
+ *    the law's integrand (h^beta for the power law).  The model sets
+ *    `integrand` before routing.
  */
 #ifndef DFLE_FLOW_H
 #define DFLE_FLOW_H
@@ -26,9 +35,16 @@ typedef struct dfle_flow {
     double *t_p;       /* passage time [s]                                */
     double *tau;       /* basal shear stress [Pa]                         */
     double *Theta;     /* threshold factor 1 - tau_y/tau [-]              */
+
+    /* Time-resolved routers only (time_resolved = 1). */
+    int time_resolved;
+    double *integral;  /* Eq. (11): sum over flow steps of g Phi dt        */
+    double (*integrand)(void *law_state, double h, double v, double lambda);
+    void *integrand_state; /* first argument of integrand               */
 } dfle_flow;
 
-/* Allocate zeroed arrays for n nodes; runout_end starts at 0. */
+/* Allocate zeroed arrays for n nodes (integral included); runout_end
+ * starts at 0, time_resolved at 0, integrand NULL. */
 int dfle_flow_init(dfle_flow *flow, size_t n, dfle_error *err);
 
 /* Release the arrays (flow may be zeroed or NULL); idempotent. */

@@ -11,7 +11,9 @@
  *   E_df,i = rate(S_i, F_i, node i)          every landscape step
  *
  * For the power family of Eq. (6), F = t_p h^beta Theta and
- * E_df = k_df S^alpha F.  Laws are `static const dfle_law_ops` tables
+ * E_df = k_df S^alpha F.  With a time-resolved router (Eq. 11) the
+ * router sums the law's integrand over the flow (flow.h) and
+ * F = sum h^beta Phi dt.  Laws are `static const dfle_law_ops` tables
  * with a private state, exactly like routers; a law written in Lua is
  * one more table.  Ops return 0 or a negative dfle_status with `err` set.
  */
@@ -43,6 +45,11 @@ typedef struct dfle_law_ops {
     /* Required.  Fill E[0..n) [m/yr] from ctx->S and the cached F. */
     int (*rate)(void *state, const dfle_law_ctx *ctx, const double *F,
                 double *E, dfle_error *err);
+    /* Optional; needed only with time-resolved routers (the process-based
+     * one).  The integrand g of Eq. (11) at one node and flow step: the
+     * router sums g Phi dt into flow->integral, which flow_factor then
+     * reads.  For the power law g = h^beta.  h [m], v [m/s], lambda [-]. */
+    double (*integrand)(void *state, double h, double v, double lambda);
     /* Optional.  Release the state. */
     void (*destroy)(void *state);
 } dfle_law_ops;

@@ -80,6 +80,11 @@ size_t dfle_model_size(const dfle_model *m);
  * stochastic-threshold law. */
 int dfle_model_init_fluvial_steady(dfle_model *m, const dfle_fluvial *fl,
                                    dfle_error *err);
+/* Forget the routed flow: the next evaluation routes again.  Needed when
+ * the model's router was used directly (its memory of the last routing
+ * no longer matches the model's cached flow). */
+void dfle_model_invalidate_flow(dfle_model *m);
+
 /* Set elevations [m] (n values; the outlet value is the base level). */
 int dfle_model_set_z(dfle_model *m, const double *z, size_t n,
                      dfle_error *err);

@@ -8,6 +8,8 @@
  */
 #include "dfle_lua.h"
 
+#include <math.h>
+#include <stdio.h>
 #include <string.h>
 
 #include "dfle/analysis.h"
@@ -127,6 +129,72 @@ static int l_plot_profile(lua_State *L)
     return 0;
 }
 
+/* dfle.plot.flow(m, route_result, path [, {exaggeration = 50, title =}]):
+ * the bed and the flow surface z + e h at each snapshot of a routing,
+ * like the paper's Fig. E1 (depth exaggerated so it shows at all). */
+static int l_plot_flow(lua_State *L)
+{
+    dfle_model *m = dfle_lua_check_model(L, 1);
+    const char *path = luaL_checkstring(L, 3);
+    double e = 50.0;
+    const dfle_lua_param params[] = {{"exaggeration", &e}};
+    const size_t n = dfle_model_size(m);
+    const double *x, *z;
+    dfle_plot_series *series;
+    dfle_plot_opts o;
+    char *labels;
+    size_t ns, k = 0;
+    dfle_error err;
+
+    luaL_checktype(L, 2, LUA_TTABLE);
+    lua_settop(L, 4);
+    check_opts(L, 4, "plot.flow", params, 1);
+    if (!(e > 0))
+        luaL_error(L, "dfle.plot.flow: exaggeration must be > 0 (got %s)", dfle_lua_number_text(L, e));
+    if ((x = dfle_model_field(m, DFLE_FIELD_X, &err)) == NULL ||
+        (z = dfle_model_field(m, DFLE_FIELD_Z, &err)) == NULL)
+        return dfle_lua_raise(L, &err);
+    if (lua_getfield(L, 2, "snapshots") != LUA_TTABLE || lua_rawlen(L, -1) == 0)
+        luaL_error(L, "dfle.plot.flow: the routing has no snapshots; route with "
+                      "rt:route(m, {snapshots = {t1, t2, ...}})");
+    ns = lua_rawlen(L, 5);
+    series = lua_newuserdatauv(L, (ns + 1) * sizeof *series, 0);
+    labels = lua_newuserdatauv(L, (ns + 1) * 48, 0);
+    memset(&o, 0, sizeof o);
+    o.title = opt_string(L, 4, "title", "plot.flow");
+    o.xlabel = "Distance from channel head, x (m)";
+    o.ylabel = "Elevation (m)";
+    series[k++] = (dfle_plot_series){.label = "bed", .n = n, .x = x, .y = z, .lines = 1};
+    for (size_t j = 1; j <= ns; j++) {
+        size_t nh;
+        double t, *surf;
+        luaL_checkstack(L, 4, "too many snapshots");
+        lua_rawgeti(L, 5, (lua_Integer)j);
+        if (!lua_istable(L, -1) || lua_getfield(L, -1, "t") != LUA_TNUMBER)
+            luaL_error(L, "dfle.plot.flow: snapshot %d lacks its time t", (int)j);
+        t = lua_tonumber(L, -1);
+        lua_pop(L, 1);
+        if (isnan(t)) { /* the flow ended before this time */
+            lua_pop(L, 1);
+            continue;
+        }
+        lua_getfield(L, -1, "h");
+        surf = dfle_lua_check_array(L, -1, "plot.flow: snapshot h", &nh);
+        if (nh != n)
+            luaL_error(L, "dfle.plot.flow: snapshot %d has %d depths, the model %d nodes", (int)j,
+                       (int)nh, (int)n);
+        for (size_t i = 0; i < n; i++)
+            surf[i] = z[i] + e * surf[i];
+        snprintf(labels + k * 48, 48, "t = %.4g s", t);
+        series[k] = (dfle_plot_series){.label = labels + k * 48, .n = n, .x = x, .y = surf, .lines = 1};
+        k++;
+        /* leave the arrays on the stack: they back the series */
+    }
+    if (dfle_plot_xy(path, &o, series, k, &err) != DFLE_OK)
+        return dfle_lua_raise(L, &err);
+    return 0;
+}
+
 /* dfle.plot.xy{path =, series = {...}, ...}: any curves, e.g. several
  * models' slope-area data on one figure. */
 static int l_plot_xy(lua_State *L)
@@ -190,6 +258,7 @@ void dfle_lua_open_plot(lua_State *L)
     static const luaL_Reg funcs[] = {
         {"slope_area", l_plot_slope_area},
         {"profile", l_plot_profile},
+        {"flow", l_plot_flow},
         {"xy", l_plot_xy},
         {NULL, NULL}};
     lua_newtable(L);

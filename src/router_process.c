@@ -1,0 +1,334 @@
+/*
+ * router_process.c - the process-based debris-flow router (Sect. 2.2,
+ * Appendix E), behind the same dfle_router_ops as the empirical one.
+ *
+ * A routing builds a flow1d grid of n_ghost + n cells (ghosts first),
+ * places the pile, and steps the two-phase equations until the flow has
+ * left or come to rest (router_process.h states the criterion), summing
+ * the erosion law's integrand over the flow's own time steps (Eq. 11).
+ * Routing costs thousands of flow steps, so the router remembers the
+ * slopes it last routed over and asks to be routed again only when one
+ * has moved by reroute_dS (0.05 in the paper).
+ */
+#include "dfle/router_process.h"
+
+#include <math.h>
+#include <stdlib.h>
+#include <string.h>
+
+#define MAX_SNAPSHOTS 1000
+#define MAX_GHOSTS 10000
+
+typedef struct process {
+    dfle_process_opts opts;
+    /* Slopes of the last routing, for needs_reroute. */
+    double *S_last;
+    size_t n_last;
+    /* Report of the last routing and its arrays. */
+    dfle_process_report report;
+    double *arrival;
+    /* Snapshot request and results. */
+    size_t n_snap;
+    double *snap_times, *snap_t, *snap_h;
+} process;
+
+void dfle_process_opts_default(dfle_process_opts *o)
+{
+    dfle_flow1d_params_default(&o->flow);
+    o->M0 = 200.0;
+    o->n_ghost = 20;
+    o->reroute_dS = 0.05;
+    o->q_erode = 0.01;
+    o->q_rest = 1e-3;
+    o->volume_tol = 1e-4;
+    o->t_max = 3600.0;
+    o->frequency_scaling = 0;
+    o->gamma = 0.0;
+}
+
+const char *dfle_process_end_name(int end)
+{
+    switch (end) {
+    case DFLE_PROCESS_LEFT: return "left";
+    case DFLE_PROCESS_REST: return "rest";
+    case DFLE_PROCESS_TIME: return "time";
+    default: return "unknown";
+    }
+}
+
+/* Make room for n-node results (arrival, slopes, snapshots). */
+static int process_reserve(process *pr, size_t n, dfle_error *err)
+{
+    if (pr->n_last == n && pr->S_last != NULL)
+        return DFLE_OK;
+    free(pr->S_last);
+    free(pr->arrival);
+    free(pr->snap_h);
+    pr->S_last = calloc(n, sizeof *pr->S_last);
+    pr->arrival = calloc(n, sizeof *pr->arrival);
+    pr->snap_h = calloc(pr->n_snap * n + 1, sizeof *pr->snap_h);
+    pr->n_last = 0;
+    if (pr->S_last == NULL || pr->arrival == NULL || pr->snap_h == NULL)
+        return dfle_error_set(err, DFLE_ENOMEM, "router.process: out of memory for %zu nodes", n);
+    pr->n_last = n;
+    return DFLE_OK;
+}
+
+static void record_snapshots(process *pr, size_t *next, double t, const double *h, size_t n)
+{
+    while (*next < pr->n_snap && t >= pr->snap_times[*next]) {
+        pr->snap_t[*next] = t;
+        memcpy(pr->snap_h + *next * n, h, n * sizeof *h);
+        (*next)++;
+    }
+}
+
+static int process_route(void *state, const dfle_channel *ch, const double *S, dfle_flow *flow,
+                         dfle_error *err)
+{
+    process *pr = state;
+    const dfle_process_opts *o = &pr->opts;
+    const size_t n = dfle_channel_size(ch), G = (size_t)o->n_ghost, N = G + n;
+    const double dx = dfle_channel_dx(ch);
+    const double *w = dfle_channel_w(ch), *A = dfle_channel_A(ch);
+    double *cw = NULL, *cS = NULL, *h, *q, released, out_total = 0.0, t = 0.0, t_entry = -1.0;
+    dfle_flow1d *f = NULL;
+    size_t steps = 0, next_snap = 0;
+    int st, end;
+
+    if (flow->integrand == NULL)
+        return dfle_error_set(err, DFLE_EINVAL,
+                              "router.process: the erosion law has no Eq. (11) integrand, so it "
+                              "cannot be used with a time-resolved router");
+    if (flow->n != n)
+        return dfle_error_set(err, DFLE_EINVAL, "router.process: flow has %zu nodes, channel %zu",
+                              flow->n, n);
+    if ((st = process_reserve(pr, n, err)) != DFLE_OK)
+        return st;
+    cw = malloc(N * sizeof *cw);
+    cS = malloc(N * sizeof *cS);
+    if (cw == NULL || cS == NULL) {
+        st = dfle_error_set(err, DFLE_ENOMEM, "router.process: out of memory");
+        goto done;
+    }
+    /* Ghost cells extend the head: its width, its slope. */
+    for (size_t k = 0; k < N; k++) {
+        cw[k] = k < G ? w[0] : w[k - G];
+        cS[k] = k < G ? S[0] : S[k - G];
+    }
+    if ((st = dfle_flow1d_new(N, dx, cw, cS, &o->flow, &f, err)) != DFLE_OK)
+        goto done;
+    h = dfle_flow1d_h(f);
+    q = dfle_flow1d_q(f);
+    for (size_t k = 0; k < G; k++)
+        h[k] = o->M0 / ((double)G * dx * w[0]); /* a static pile of volume M0 */
+    released = dfle_flow1d_volume(f, 0, N);
+
+    dfle_flow_clear(flow);
+    flow->time_resolved = 1;
+    for (size_t i = 0; i < n; i++)
+        pr->arrival[i] = NAN;
+    for (size_t j = 0; j < pr->n_snap; j++)
+        pr->snap_t[j] = NAN;
+    record_snapshots(pr, &next_snap, 0.0, h + G, n);
+
+    for (;;) {
+        double dt = dfle_flow1d_stable_dt(f), outflow, left, qmax = 0.0;
+        if (isinf(dt)) { /* everything dry: nothing left to move */
+            end = DFLE_PROCESS_LEFT;
+            break;
+        }
+        if (dt > o->t_max - t)
+            dt = o->t_max - t;
+        if ((st = dfle_flow1d_step(f, dt, t_entry < 0 ? -1.0 : t - t_entry, &outflow, err)) != DFLE_OK)
+            goto done;
+        t += dt;
+        steps++;
+        out_total += outflow;
+        /* The flow enters the domain when it first crosses the head. */
+        if (t_entry < 0 && dfle_flow1d_face_volume(f, G) > 0)
+            t_entry = t;
+        for (size_t i = 0; i < n; i++) {
+            const size_t k = G + i;
+            const double hk = h[k], qk = fabs(q[k]);
+            if (qk > qmax)
+                qmax = qk;
+            if (hk > flow->h[i])
+                flow->h[i] = hk;
+            flow->M[i] += dfle_flow1d_face_volume(f, k + 1);
+            if (qk > o->q_erode) { /* Phi = 1 */
+                const double v = qk / hk;
+                const double lam = dfle_flow1d_lambda(f, hk, t_entry < 0 ? -1.0 : t - t_entry);
+                const double tau = (1.0 - lam) * o->flow.rho * o->flow.g * cos(atan(S[i])) * hk *
+                                   dfle_flow1d_phi(f, k, hk, v);
+                flow->integral[i] += flow->integrand(flow->integrand_state, hk, v, lam) * dt;
+                flow->t_p[i] += dt;
+                if (isnan(pr->arrival[i]))
+                    pr->arrival[i] = t;
+                if (v > flow->v[i])
+                    flow->v[i] = v;
+                if (qk * w[i] > flow->Q[i])
+                    flow->Q[i] = qk * w[i];
+                if (tau > flow->tau[i])
+                    flow->tau[i] = tau;
+            }
+        }
+        for (size_t k = 0; k < G; k++)
+            if (fabs(q[k]) > qmax)
+                qmax = fabs(q[k]);
+        record_snapshots(pr, &next_snap, t, h + G, n);
+        left = dfle_flow1d_volume(f, 0, N);
+        if (!isfinite(left) || !isfinite(qmax)) {
+            st = dfle_error_set(err, DFLE_ENUMERIC,
+                                "router.process: the flow became non-finite at t = %g s", t);
+            goto done;
+        }
+        if (left <= o->volume_tol * released) {
+            end = DFLE_PROCESS_LEFT;
+            break;
+        }
+        if (qmax <= o->q_rest) {
+            end = DFLE_PROCESS_REST;
+            break;
+        }
+        if (t >= o->t_max) {
+            end = DFLE_PROCESS_TIME;
+            break;
+        }
+    }
+
+    /* Results: reach, threshold factor, Appendix D scaling. */
+    flow->runout_end = 0;
+    for (size_t i = 0; i < n; i++) {
+        if (flow->t_p[i] > 0) {
+            flow->runout_end = i + 1;
+            flow->Theta[i] = 1.0;
+        }
+        if (o->frequency_scaling)
+            flow->integral[i] *= 1000.0 * pow(1e-6 * A[i], o->gamma) / o->M0;
+    }
+    memcpy(pr->S_last, S, n * sizeof *S);
+    pr->report = (dfle_process_report){
+        .routed = 1, .end = end, .volume_in = released, .volume_out = out_total,
+        .volume_left = dfle_flow1d_volume(f, 0, N), .duration = t, .steps = steps, .n = n,
+        .arrival = pr->arrival, .n_snapshots = pr->n_snap, .snapshot_t = pr->snap_t,
+        .snapshot_h = pr->snap_h,
+    };
+    st = DFLE_OK;
+done:
+    dfle_flow1d_free(f);
+    free(cw);
+    free(cS);
+    return st;
+}
+
+static int process_needs_reroute(void *state, size_t n, const double *S)
+{
+    process *pr = state;
+    if (!pr->report.routed || pr->n_last != n)
+        return 1;
+    for (size_t i = 0; i < n; i++)
+        if (fabs(S[i] - pr->S_last[i]) >= pr->opts.reroute_dS)
+            return 1;
+    return 0;
+}
+
+static void process_destroy(void *state)
+{
+    process *pr = state;
+    if (pr == NULL)
+        return;
+    free(pr->S_last);
+    free(pr->arrival);
+    free(pr->snap_times);
+    free(pr->snap_t);
+    free(pr->snap_h);
+    free(pr);
+}
+
+static const dfle_router_ops process_ops = {
+    .name = "process",
+    .route = process_route,
+    .needs_reroute = process_needs_reroute,
+    .destroy = process_destroy,
+};
+
+int dfle_router_new_process(const dfle_process_opts *o, dfle_router **out, dfle_error *err)
+{
+    process *pr;
+    int st;
+
+    *out = NULL;
+    if ((st = dfle_flow1d_params_check(&o->flow, "router.process", err)) != DFLE_OK)
+        return st;
+    const struct { const char *name; double v; int zero_ok; } pos[] = {
+        {"M0", o->M0, 0},           {"reroute_dS", o->reroute_dS, 0},
+        {"q_erode", o->q_erode, 1}, {"q_rest", o->q_rest, 1},
+        {"volume_tol", o->volume_tol, 1}, {"t_max", o->t_max, 0},
+        {"gamma", o->gamma, 1},
+    };
+    for (size_t i = 0; i < sizeof pos / sizeof pos[0]; i++)
+        if (!(isfinite(pos[i].v) && (pos[i].zero_ok ? pos[i].v >= 0 : pos[i].v > 0)))
+            return dfle_error_set(err, DFLE_EINVAL, "router.process: %s must be %s 0 (got %g)",
+                                  pos[i].name, pos[i].zero_ok ? ">=" : ">", pos[i].v);
+    if (o->n_ghost < 1 || o->n_ghost > MAX_GHOSTS)
+        return dfle_error_set(err, DFLE_EINVAL, "router.process: n_ghost must be in [1, %d] (got %d)",
+                              MAX_GHOSTS, o->n_ghost);
+    pr = calloc(1, sizeof *pr);
+    if (pr == NULL)
+        return dfle_error_set(err, DFLE_ENOMEM, "router.process: out of memory");
+    pr->opts = *o;
+    pr->opts.flow.outlet_wall = 0; /* the outlet is open */
+    return dfle_router_new(&process_ops, pr, out, err);
+}
+
+const dfle_process_opts *dfle_router_process_opts(const dfle_router *rt)
+{
+    if (rt == NULL || dfle_router_get_ops(rt) != &process_ops)
+        return NULL;
+    return &((const process *)dfle_router_state(rt))->opts;
+}
+
+const dfle_process_report *dfle_router_process_report(const dfle_router *rt)
+{
+    if (rt == NULL || dfle_router_get_ops(rt) != &process_ops)
+        return NULL;
+    return &((const process *)dfle_router_state(rt))->report;
+}
+
+int dfle_router_process_set_snapshots(dfle_router *rt, size_t k, const double *times,
+                                      dfle_error *err)
+{
+    process *pr;
+    double *nt = NULL, *ns = NULL;
+
+    if (rt == NULL || dfle_router_get_ops(rt) != &process_ops)
+        return dfle_error_set(err, DFLE_EINVAL, "router: snapshots need a process-based router");
+    pr = dfle_router_state(rt);
+    if (k > MAX_SNAPSHOTS)
+        return dfle_error_set(err, DFLE_EINVAL, "router.process: at most %d snapshots (got %zu)",
+                              MAX_SNAPSHOTS, k);
+    for (size_t j = 0; j < k; j++)
+        if (!(isfinite(times[j]) && times[j] >= 0 && (j == 0 || times[j] > times[j - 1])))
+            return dfle_error_set(err, DFLE_EINVAL,
+                                  "router.process: snapshot times must be finite, >= 0 s and "
+                                  "increasing (time %zu is %g)", j + 1, times[j]);
+    if (k > 0) {
+        nt = malloc(k * sizeof *nt);
+        ns = malloc(k * sizeof *ns);
+        if (nt == NULL || ns == NULL) {
+            free(nt);
+            free(ns);
+            return dfle_error_set(err, DFLE_ENOMEM, "router.process: out of memory");
+        }
+        memcpy(nt, times, k * sizeof *nt);
+    }
+    free(pr->snap_times);
+    free(pr->snap_t);
+    pr->snap_times = nt;
+    pr->snap_t = ns;
+    pr->n_snap = k;
+    pr->n_last = 0; /* resize the snapshot store on the next routing */
+    pr->report.routed = 0;
+    return DFLE_OK;
+}
