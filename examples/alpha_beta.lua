@@ -26,7 +26,7 @@ local fluvial = dfle.fluvial.stochastic_threshold{ k_e = 5e-14 }
 local csv = assert(io.open(outdir .. "/alpha_beta.csv", "w"))
 csv:write("gamma,alpha,beta,converged,time_yr,S_df,A_df_m2,a2,r2,S_max_minus_S_ch\n")
 print(("%5s %5s %5s %10s %8s %10s %6s %7s %9s"):format(
-  "gamma", "alpha", "beta", "time (yr)", "S_df", "A_df (m2)", "a2", "R^2", "Smax-Sch"))
+  "gamma", "alpha", "beta", "method", "S_df", "A_df (m2)", "a2", "R^2", "Smax-Sch"))
 local series = {}
 for _, gamma in ipairs(gammas) do
 local router = dfle.router.empirical{ M0 = 3000, gamma = gamma, mu = 500, tau_y = 300 }
@@ -40,8 +40,8 @@ for _, beta in ipairs(betas) do
     local run = m:run_to_steady{ tol = 1e-3, max_time = 2e7 }
     local fit, why = dfle.fit_slope_area(m)
     if fit then
-      print(("%5g %5g %5g %10.3g %8.3f %10.3g %6.2f %7.4f %9.4f"):format(
-        gamma, alpha, beta, run.time, fit.S_df, fit.A_df, fit.a2, fit.r2, fit.S_max_minus_S_ch))
+      print(("%5g %5g %5g %10s %8.3f %10.3g %6.2f %7.4f %9.4f"):format(
+        gamma, alpha, beta, run.method, fit.S_df, fit.A_df, fit.a2, fit.r2, fit.S_max_minus_S_ch))
       csv:write(("%g,%g,%g,%s,%g,%g,%g,%g,%g,%g\n"):format(gamma, alpha, beta, tostring(run.converged),
         run.time, fit.S_df, fit.A_df, fit.a2, fit.r2, fit.S_max_minus_S_ch))
       xs[#xs + 1], ys[#ys + 1] = alpha, fit.S_max_minus_S_ch

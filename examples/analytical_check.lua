@@ -36,8 +36,8 @@ print(("Eq. (20): N = %.6f (NOTES.md: -0.024706)")
       :format(dfle.analytical_exponent(router, law, { U = U })))
 print(("Eq. (19) at A = 1e4 m^2: S = %.5f (NOTES.md: 0.73834)")
       :format(dfle.analytical_slope(router, law, { U = U, A = 1e4 })))
-print(("steady state after %.3g yr; largest |S_model/S_Eq19 - 1| = %.2e at A = %.3g m^2")
-      :format(run.time, worst, A[at]))
+print(("steady state (%s method); largest |S_model/S_Eq19 - 1| = %.2e at A = %.3g m^2")
+      :format(run.method, worst, A[at]))
 
 dfle.plot.xy{
   path = outdir .. "/analytical_check.png",

@@ -31,9 +31,9 @@ print("fluvial law: " .. tostring(model.fluvial))
 
 model:init_fluvial_steady()                          -- Eq. (26)
 local run = model:run_to_steady{ tol = 1e-3, max_time = 2e7 }
-print(("run: %s after %.4g yr, %d steps, max|dz/dt|/U = %.2e")
+print(("run: %s by the %s method (max|dz/dt|/U = %.2e)")
       :format(run.converged and "steady state" or ("stopped (" .. run.reason .. ")"),
-              run.time, run.steps, run.rate_ratio))
+              run.method, run.rate_ratio))
 if not run.converged then
   io.stderr:write("quickstart: no steady state reached\n")
   os.exit(1)

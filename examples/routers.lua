@@ -41,8 +41,8 @@ for _, name in ipairs{ "empirical", "process" } do
   local t0 = os.clock()
   local run = model:run_to_steady{ tol = 1e-3, max_time = 2e7 }
   local fit = assert(dfle.fit_slope_area(model))
-  print(("%-9s: %s after %.3g yr, %d steps, %d routings, %.2f s; S_df = %.3f, A_df = %.3g m^2, a2 = %.2f, R^2 = %.3f, S_max - S_ch = %.3f")
-        :format(name, run.converged and "steady" or run.reason, run.time, run.steps,
+  print(("%-9s: %s (%s method), %d steps, %d routings, %.2f s; S_df = %.3f, A_df = %.3g m^2, a2 = %.2f, R^2 = %.3f, S_max - S_ch = %.3f")
+        :format(name, run.converged and "steady" or run.reason, run.method, run.steps,
                 run.routings, os.clock() - t0, fit.S_df, fit.A_df, fit.a2, fit.r2,
                 fit.S_max_minus_S_ch))
   model:write_csv(("%s/steady_%s.csv"):format(outdir, name))

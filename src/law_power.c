@@ -69,7 +69,9 @@ static int power_rate(void *state, const dfle_law_ctx *ctx, const double *F,
     (void)err;
     for (size_t i = 0; i < ctx->n; i++) {
         double s = ctx->S[i];
-        E[i] = s > 0 ? k_df * power_of(s, alpha, pl->alpha_int) * F[i] : 0.0;
+        /* F = 0 (no flow, or Theta = 0) means no erosion, whatever S^alpha
+         * is: never form inf * 0 at absurd trial slopes. */
+        E[i] = s > 0 && F[i] != 0 ? k_df * power_of(s, alpha, pl->alpha_int) * F[i] : 0.0;
     }
     return DFLE_OK;
 }

@@ -28,33 +28,13 @@
 #include <string.h>
 
 #include "dfle/flow.h"
+#include "model_internal.h"
 
 /* Relative slope perturbation of the finite-difference dE/dS: large
  * enough to stay clear of round-off in E, small enough to be local. */
 #define CELERITY_EPS 1e-6
 /* Steps between progress reports. */
 #define PROGRESS_EVERY 256
-
-struct dfle_model {
-    const dfle_channel *ch;
-    const dfle_fluvial *fl; /* NULL: no fluvial erosion  */
-    dfle_router *rt;        /* NULL: no debris flows     */
-    dfle_law *law;
-    double U, cfl, dt_max;
-    size_t n;
-    double dx;
-    double time; /* total simulated years */
-
-    /* One block of n-arrays, see model_alloc(). */
-    double *z, *S, *E_f, *E_df, *dzdt, *F, *KAm;
-    double *S_pert, *E_pert, *F_pert, *celerity;
-    dfle_flow flow, flow_pert;
-
-    int evaluated;       /* fields match z                        */
-    int flow_valid;      /* flow/F match the last routing         */
-    size_t routings;     /* routings since creation               */
-    size_t nonpositive;  /* nodes with S <= 0 at the last evaluation */
-};
 
 void dfle_model_opts_default(dfle_model_opts *o)
 {
@@ -70,6 +50,9 @@ void dfle_run_opts_default(dfle_run_opts *o)
     o->max_time = 2e7;
     o->tol = 1e-3;
     o->max_steps = 10000000u;
+    o->method = DFLE_METHOD_EXPLICIT;
+    o->rtol = 1e-3;
+    o->direct_tol = 2e-3;
 }
 
 static const struct {
@@ -113,7 +96,7 @@ const char *dfle_stop_reason_name(int reason)
     }
 }
 
-enum { MODEL_ARRAYS = 11 };
+enum { MODEL_ARRAYS = 13 };
 
 static int model_alloc(dfle_model *m, dfle_error *err)
 {
@@ -134,6 +117,17 @@ static int model_alloc(dfle_model *m, dfle_error *err)
     m->E_pert = block + 8 * n;
     m->F_pert = block + 9 * n;
     m->celerity = block + 10 * n;
+    m->z_save = block + 11 * n;
+    m->z_work = block + 12 * n;
+    m->node.n = 1;
+    m->node.M = m->node_block;
+    m->node.Q = m->node_block + 1;
+    m->node.h = m->node_block + 2;
+    m->node.v = m->node_block + 3;
+    m->node.t_p = m->node_block + 4;
+    m->node.tau = m->node_block + 5;
+    m->node.Theta = m->node_block + 6;
+    m->node.integral = m->node_block + 7;
     st = dfle_flow_init(&m->flow, n, err);
     if (st == DFLE_OK)
         st = dfle_flow_init(&m->flow_pert, n, err);
@@ -248,6 +242,11 @@ int dfle_model_init_fluvial_steady(dfle_model *m, const dfle_fluvial *fl,
     return DFLE_OK;
 }
 
+void dfle_mi_touch(dfle_model *m)
+{
+    m->evaluated = 0;
+}
+
 void dfle_model_invalidate_flow(dfle_model *m)
 {
     invalidate(m);
@@ -317,7 +316,7 @@ static int report_nonfinite(const dfle_model *m, size_t i, dfle_error *err)
 }
 
 /* Bring every field up to date with z. */
-static int evaluate(dfle_model *m, dfle_error *err)
+int dfle_mi_evaluate(dfle_model *m, dfle_error *err)
 {
     const size_t n = m->n;
     const double inv_dx = 1.0 / m->dx;
@@ -407,7 +406,7 @@ static int max_celerity(dfle_model *m, double *c_max, dfle_error *err)
     return DFLE_OK;
 }
 
-static double rate_ratio(const dfle_model *m)
+double dfle_mi_rate_ratio(const dfle_model *m)
 {
     double r = 0.0;
     for (size_t i = 0; i + 1 < m->n; i++) {
@@ -420,7 +419,7 @@ static double rate_ratio(const dfle_model *m)
 
 /* Rough completion estimate: the larger of the time used and how far the
  * rate ratio has fallen (on a log scale) from its start towards tol. */
-static double progress_fraction(double t, double max_time, double r0, double r, double tol)
+double dfle_mi_progress_fraction(double t, double max_time, double r0, double r, double tol)
 {
     double f = t / max_time;
     if (tol > 0 && r0 > tol && r > 0) {
@@ -431,29 +430,54 @@ static double progress_fraction(double t, double max_time, double r0, double r, 
     return f < 0 ? 0 : f > 1 ? 1 : f;
 }
 
-int dfle_model_run(dfle_model *m, const dfle_run_opts *o, dfle_run_result *res,
-                   dfle_error *err)
+/* Forward Euler with the CFL step (the paper's method). */
+int dfle_mi_explicit_advance(dfle_model *m, double dt_limit, double *dt_taken, void *state,
+                            dfle_error *err)
+{
+    double c = 0.0, dt;
+    int st;
+    (void)state;
+    if ((st = max_celerity(m, &c, err)) != DFLE_OK)
+        return st;
+    dt = c > 0 ? m->cfl * m->dx / c : m->dt_max;
+    if (dt > m->dt_max)
+        dt = m->dt_max;
+    if (dt > dt_limit)
+        dt = dt_limit;
+    for (size_t i = 0; i + 1 < m->n; i++)
+        m->z[i] += dt * m->dzdt[i];
+    m->evaluated = 0;
+    *dt_taken = dt;
+    return DFLE_OK;
+}
+
+/* Copy z for every record time reached at time t of the run. */
+static void take_records(const dfle_model *m, const dfle_run_opts *o, double t,
+                         dfle_run_result *res)
+{
+    while (res->n_recorded < o->n_record &&
+           t >= o->record_times[res->n_recorded] * (1.0 - 1e-12)) {
+        memcpy(o->record_z + res->n_recorded * m->n, m->z, m->n * sizeof *m->z);
+        res->n_recorded++;
+    }
+}
+
+int dfle_mi_drive(dfle_model *m, const dfle_run_opts *o, dfle_mi_advance_fn advance,
+                  void *state, dfle_run_result *res, dfle_error *err)
 {
     double t = 0.0, r0 = -1.0;
     size_t steps = 0, routings0 = m->routings;
     int st;
 
-    memset(res, 0, sizeof *res);
     res->dt_min = INFINITY;
-    if (!(isfinite(o->max_time) && o->max_time > 0))
-        return dfle_error_set(err, DFLE_EINVAL, "model: max_time must be > 0 yr (got %g)",
-                              o->max_time);
-    if (!(isfinite(o->tol) && o->tol >= 0))
-        return dfle_error_set(err, DFLE_EINVAL, "model: tol must be >= 0 (got %g)", o->tol);
-    if (o->max_steps == 0)
-        return dfle_error_set(err, DFLE_EINVAL, "model: max_steps must be > 0");
-
+    res->dt_max = 0.0;
+    take_records(m, o, 0.0, res);
     for (;;) {
-        double r, c = 0.0, dt;
+        double r, dt, limit;
 
-        if (!m->evaluated && (st = evaluate(m, err)) != DFLE_OK)
+        if (!m->evaluated && (st = dfle_mi_evaluate(m, err)) != DFLE_OK)
             return st;
-        r = rate_ratio(m);
+        r = dfle_mi_rate_ratio(m);
         if (r0 < 0)
             r0 = r;
         res->nonpositive_slope_nodes += m->nonpositive;
@@ -470,16 +494,12 @@ int dfle_model_run(dfle_model *m, const dfle_run_opts *o, dfle_run_result *res,
             res->reason = DFLE_STOP_STEPS;
             break;
         }
-        if ((st = max_celerity(m, &c, err)) != DFLE_OK)
+        /* Land exactly on the end of the run and on every record time. */
+        limit = o->max_time - t;
+        if (res->n_recorded < o->n_record && o->record_times[res->n_recorded] - t < limit)
+            limit = o->record_times[res->n_recorded] - t;
+        if ((st = advance(m, limit, &dt, state, err)) != DFLE_OK)
             return st;
-        dt = c > 0 ? m->cfl * m->dx / c : m->dt_max;
-        if (dt > m->dt_max)
-            dt = m->dt_max;
-        if (dt > o->max_time - t)
-            dt = o->max_time - t;
-        for (size_t i = 0; i + 1 < m->n; i++)
-            m->z[i] += dt * m->dzdt[i];
-        m->evaluated = 0;
         t += dt;
         m->time += dt;
         steps++;
@@ -487,11 +507,12 @@ int dfle_model_run(dfle_model *m, const dfle_run_opts *o, dfle_run_result *res,
             res->dt_min = dt;
         if (dt > res->dt_max)
             res->dt_max = dt;
+        take_records(m, o, t, res);
         if (o->progress != NULL && steps % PROGRESS_EVERY == 0) {
             dfle_run_status s = {
                 .time = t, .max_time = o->max_time, .steps = steps, .dt = dt,
                 .rate_ratio = r, .tol = o->tol,
-                .fraction = progress_fraction(t, o->max_time, r0, r, o->tol),
+                .fraction = dfle_mi_progress_fraction(t, o->max_time, r0, r, o->tol),
             };
             if (o->progress(o->progress_ud, &s) != 0)
                 return dfle_error_set(err, DFLE_ECANCELED,
@@ -499,18 +520,80 @@ int dfle_model_run(dfle_model *m, const dfle_run_opts *o, dfle_run_result *res,
         }
     }
     res->converged = res->reason == DFLE_STOP_STEADY;
-    res->time = t;
-    res->steps = steps;
-    res->routings = m->routings - routings0;
-    res->rate_ratio = rate_ratio(m);
-    if (steps == 0)
+    res->time += t;
+    res->steps += steps;
+    res->routings += m->routings - routings0;
+    res->rate_ratio = dfle_mi_rate_ratio(m);
+    if (res->dt_min > res->dt_max)
         res->dt_min = 0.0;
     return DFLE_OK;
 }
 
+const char *dfle_method_name(int method)
+{
+    static const char *const names[] = {"explicit", "implicit", "direct", "auto"};
+    return method >= 0 && method <= DFLE_METHOD_AUTO ? names[method] : "unknown";
+}
+
+int dfle_method_lookup(const char *name)
+{
+    for (int k = 0; k <= DFLE_METHOD_AUTO; k++)
+        if (strcmp(name, dfle_method_name(k)) == 0)
+            return k;
+    return -1;
+}
+
+int dfle_model_run(dfle_model *m, const dfle_run_opts *o, dfle_run_result *res,
+                   dfle_error *err)
+{
+    dfle_run_opts opts = *o;
+
+    memset(res, 0, sizeof *res);
+    if (!(isfinite(o->max_time) && o->max_time > 0))
+        return dfle_error_set(err, DFLE_EINVAL, "model: max_time must be > 0 yr (got %g)",
+                              o->max_time);
+    if (!(isfinite(o->tol) && o->tol >= 0))
+        return dfle_error_set(err, DFLE_EINVAL, "model: tol must be >= 0 (got %g)", o->tol);
+    if (o->max_steps == 0)
+        return dfle_error_set(err, DFLE_EINVAL, "model: max_steps must be > 0");
+    if (!(isfinite(o->rtol) && o->rtol > 0 && o->rtol < 1))
+        return dfle_error_set(err, DFLE_EINVAL, "model: rtol must be in (0, 1) (got %g)", o->rtol);
+    if (!(isfinite(o->direct_tol) && o->direct_tol > 0 && o->direct_tol < 1))
+        return dfle_error_set(err, DFLE_EINVAL, "model: direct_tol must be in (0, 1) (got %g)",
+                              o->direct_tol);
+    if (o->n_record > 0 && (o->record_times == NULL || o->record_z == NULL))
+        return dfle_error_set(err, DFLE_EINVAL, "model: record times need a place to record");
+    for (size_t k = 0; k < o->n_record; k++)
+        if (!(isfinite(o->record_times[k]) && o->record_times[k] >= 0 &&
+              o->record_times[k] <= o->max_time &&
+              (k == 0 || o->record_times[k] > o->record_times[k - 1])))
+            return dfle_error_set(err, DFLE_EINVAL,
+                                  "model: record times must increase within [0, max_time = %g yr] "
+                                  "(time %zu is %g)", o->max_time, k + 1, o->record_times[k]);
+    if (opts.method == DFLE_METHOD_AUTO)
+        opts.method = o->tol > 0 ? DFLE_METHOD_DIRECT : DFLE_METHOD_EXPLICIT;
+    res->method = opts.method;
+    switch (opts.method) {
+    case DFLE_METHOD_EXPLICIT:
+        return dfle_mi_drive(m, &opts, dfle_mi_explicit_advance, NULL, res, err);
+    case DFLE_METHOD_IMPLICIT:
+        return dfle_mi_run_implicit(m, &opts, res, err);
+    case DFLE_METHOD_DIRECT:
+        if (!(o->tol > 0))
+            return dfle_error_set(err, DFLE_EINVAL,
+                                  "model: the direct method finds steady states only (tol > 0)");
+        if (o->n_record > 0)
+            return dfle_error_set(err, DFLE_EINVAL,
+                                  "model: the direct method has no time to record at");
+        return dfle_mi_run_direct(m, &opts, res, err);
+    default:
+        return dfle_error_set(err, DFLE_EINVAL, "model: unknown method %d", o->method);
+    }
+}
+
 const double *dfle_model_field(dfle_model *m, int field, dfle_error *err)
 {
-    if (!m->evaluated && evaluate(m, err) != DFLE_OK)
+    if (!m->evaluated && dfle_mi_evaluate(m, err) != DFLE_OK)
         return NULL;
     switch (field) {
     case DFLE_FIELD_X: return dfle_channel_x(m->ch);

@@ -58,6 +58,18 @@ int dfle_router_needs_reroute(dfle_router *rt, size_t n, const double *S)
     return rt->ops->needs_reroute(rt->state, n, S) != 0;
 }
 
+int dfle_router_node_flow(dfle_router *rt, const dfle_channel *ch, size_t i,
+                          double S, dfle_flow *node, int *goes_on, dfle_error *err)
+{
+    if (rt->ops->node_flow == NULL)
+        return dfle_error_set(err, DFLE_ESTATE,
+                              "router.%s cannot evaluate the flow at one node", rt->ops->name);
+    *goes_on = rt->ops->node_flow(rt->state, ch, i, S, node);
+    return *goes_on < 0 ? dfle_error_set(err, DFLE_ENOMEM, "router.%s: out of memory",
+                                         rt->ops->name)
+                        : DFLE_OK;
+}
+
 int dfle_router_is_local(const dfle_router *rt)
 {
     return rt->ops->needs_reroute == NULL;

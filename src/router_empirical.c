@@ -73,47 +73,79 @@ static int empirical_fill_cache(empirical *e, const dfle_channel *ch,
     return DFLE_OK;
 }
 
+static void zero_node(dfle_flow *flow, size_t j)
+{
+    flow->M[j] = flow->Q[j] = flow->t_p[j] = flow->h[j] = flow->v[j] = flow->tau[j] =
+        flow->Theta[j] = 0.0;
+}
+
+/* The flow at node i for slope s > 0, written to node j of `flow`; returns
+ * tau [Pa].  Theta may come out negative (tau < tau_y): callers decide. */
+static double empirical_at(const empirical *e, const double *w, size_t i, double s,
+                           dfle_flow *flow, size_t j)
+{
+    const double rho_g = e->opts.rho_b * e->opts.g;
+    double h = cbrt(e->h3_coef[i] / s);
+    double Rh = w[i] * h / (w[i] + 2.0 * h);
+    double tau = rho_g * Rh * s / sqrt(1.0 + s * s); /* sin(atan s) */
+    flow->M[j] = e->M[i];
+    flow->Q[j] = e->Q[i];
+    flow->t_p[j] = e->t_p[i];
+    flow->h[j] = h;
+    flow->v[j] = e->Q[i] / (w[i] * h);
+    flow->tau[j] = tau;
+    flow->Theta[j] = 1.0 - e->opts.tau_y / tau;
+    return tau;
+}
+
+static int ensure_cache(empirical *e, const dfle_channel *ch, dfle_error *err)
+{
+    /* Channels are immutable, so the id identifies the cached terms. */
+    return e->cached_for == dfle_channel_id(ch) ? DFLE_OK : empirical_fill_cache(e, ch, err);
+}
+
 static int empirical_route(void *state, const dfle_channel *ch,
                            const double *S, dfle_flow *flow, dfle_error *err)
 {
     empirical *e = state;
     const double *w = dfle_channel_w(ch);
-    const double rho_g = e->opts.rho_b * e->opts.g, tau_y = e->opts.tau_y;
     size_t n = dfle_channel_size(ch), i;
+    int st;
 
     if (flow->n != n)
         return dfle_error_set(err, DFLE_EINVAL,
                               "router.empirical: flow has %zu nodes, channel %zu", flow->n, n);
-    /* Channels are immutable, so the id identifies the cached terms. */
-    if (e->cached_for != dfle_channel_id(ch)) {
-        int st = empirical_fill_cache(e, ch, err);
-        if (st != DFLE_OK)
-            return st;
-    }
+    if ((st = ensure_cache(e, ch, err)) != DFLE_OK)
+        return st;
+    flow->time_resolved = 0;
     for (i = 0; i < n; i++) {
-        double s = S[i], h, tau, Rh, sin_theta;
-        if (!(s > 0))
-            break; /* no flow on a flat or reverse slope */
-        h = cbrt(e->h3_coef[i] / s);
-        Rh = w[i] * h / (w[i] + 2.0 * h);
-        sin_theta = s / sqrt(1.0 + s * s);
-        tau = rho_g * Rh * sin_theta;
-        if (tau < tau_y)
+        /* No flow on a flat or reverse slope, nor where tau < tau_y. */
+        if (!(S[i] > 0) || empirical_at(e, w, i, S[i], flow, i) < e->opts.tau_y)
             break;
-        flow->M[i] = e->M[i];
-        flow->Q[i] = e->Q[i];
-        flow->t_p[i] = e->t_p[i];
-        flow->h[i] = h;
-        flow->v[i] = e->Q[i] / (w[i] * h);
-        flow->tau[i] = tau;
-        flow->Theta[i] = 1.0 - tau_y / tau;
     }
     flow->runout_end = i;
     /* Beyond the runout nothing flows; zero so every field reads honestly. */
     for (; i < n; i++)
-        flow->M[i] = flow->Q[i] = flow->t_p[i] = flow->h[i] = flow->v[i] =
-            flow->tau[i] = flow->Theta[i] = 0.0;
+        zero_node(flow, i);
     return DFLE_OK;
+}
+
+static int empirical_node_flow(void *state, const dfle_channel *ch, size_t i, double S,
+                               dfle_flow *node)
+{
+    empirical *e = state;
+    if (ensure_cache(e, ch, NULL) != DFLE_OK)
+        return -1;
+    node->time_resolved = 0;
+    if (!(S > 0)) {
+        zero_node(node, 0);
+        return 0;
+    }
+    if (empirical_at(e, dfle_channel_w(ch), i, S, node, 0) < e->opts.tau_y) {
+        node->Theta[0] = 0.0; /* arriving, it stops here: no erosion */
+        return 0;
+    }
+    return 1;
 }
 
 static void empirical_destroy(void *state)
@@ -129,6 +161,7 @@ static const dfle_router_ops empirical_ops = {
     .name = "empirical",
     .route = empirical_route,
     .needs_reroute = NULL, /* cheap and local: route every step */
+    .node_flow = empirical_node_flow,
     .destroy = empirical_destroy,
 };
 

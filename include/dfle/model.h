@@ -103,10 +103,48 @@ typedef struct dfle_run_status {
 } dfle_run_status;
 typedef int (*dfle_progress_fn)(void *ud, const dfle_run_status *st);
 
+/* How to reach the answer (all reach the same steady state):
+ *  - EXPLICIT: forward Euler with the CFL step, as in the paper (the
+ *    reference);
+ *  - IMPLICIT: backward Euler swept from the outlet up, one scalar
+ *    Newton solve per node; unconditionally stable.  For steady states
+ *    the step grows geometrically; for transients (tol = 0) it is
+ *    adapted to the error estimate `rtol` by step doubling;
+ *  - DIRECT: steady state only.  Empirical router: solve U = E_f + E_df
+ *    node by node from the head down, stopping the flow where it would
+ *    stop.  Process-based router: alternate routing and solving until no
+ *    slope changes by more than direct_tol (relative).  If no consistent
+ *    solution is found, the run falls back to IMPLICIT stepping and says
+ *    so in the result;
+ *  - AUTO: DIRECT for steady states, EXPLICIT otherwise. */
+enum dfle_method {
+    DFLE_METHOD_EXPLICIT = 0,
+    DFLE_METHOD_IMPLICIT = 1,
+    DFLE_METHOD_DIRECT = 2,
+    DFLE_METHOD_AUTO = 3
+};
+const char *dfle_method_name(int method); /* "explicit", ... */
+int dfle_method_lookup(const char *name); /* or -1 */
+
 typedef struct dfle_run_opts {
     double max_time;  /* simulated years allowed for this run, > 0        */
     double tol;       /* steady when max|dz/dt| <= tol*U; 0 = never stop  */
     size_t max_steps; /* hard cap on steps (guards against a hang)        */
+    int method;       /* enum dfle_method                    (EXPLICIT)   */
+    double rtol;      /* IMPLICIT transients: local error per step at
+                       * most rtol U dt [m], so a run's error stays
+                       * below rtol times its uplift        (1e-3)      */
+    double direct_tol; /* DIRECT, routed rarely: stop when no slope
+                        * changes by more than this, relative (2e-3).
+                        * A routed flow's erosion sum answers slope
+                        * changes in small steps (cells crossing the Phi
+                        * threshold), so rounds settle to ~1e-3, no less */
+    /* Optional: record z at these times [yr since the start of the run,
+     * increasing, <= max_time] into record_z (n_record x n values).
+     * The steps land on each time exactly. */
+    size_t n_record;
+    const double *record_times;
+    double *record_z;
     dfle_progress_fn progress; /* optional */
     void *progress_ud;
 } dfle_run_opts;
@@ -132,6 +170,12 @@ typedef struct dfle_run_result {
     double rate_ratio; /* final max |dz/dt| / U                        */
     double dt_min, dt_max; /* smallest and largest step taken [yr]     */
     size_t nonpositive_slope_nodes; /* node-steps with S <= 0 (no erosion there) */
+    int method;        /* the method that produced the result        */
+    int fallback;      /* 1: DIRECT found no consistent solution and
+                        * the run continued with IMPLICIT stepping    */
+    size_t iterations; /* DIRECT: routing-and-solving rounds          */
+    size_t n_recorded; /* record times reached                        */
+    char note[160];    /* why a fallback happened, else empty         */
 } dfle_run_result;
 
 /* Step Eq. (3) until steady state, max_time or max_steps.  A NaN or Inf

@@ -33,6 +33,14 @@ typedef struct dfle_router_ops {
      * last routing that the flow must be routed again.  NULL means the
      * router is cheap and local and is routed at every landscape step. */
     int (*needs_reroute)(void *state, size_t n, const double *S);
+    /* Optional; only for routers routed every step.  The flow at node i
+     * alone for slope S, as if it had arrived there: fill the one-node
+     * view `node` (its arrays point at one value each) and return 1 if it
+     * goes on (e.g. tau >= tau_y), 0 if it stops here (then Theta = 0).
+     * The implicit and direct solvers need it to treat E_df at a node as
+     * a function of that node's slope. */
+    int (*node_flow)(void *state, const dfle_channel *ch, size_t i, double S,
+                     dfle_flow *node);
     /* Optional.  Release the state. */
     void (*destroy)(void *state);
 } dfle_router_ops;
@@ -48,6 +56,11 @@ int dfle_router_route(dfle_router *rt, const dfle_channel *ch,
                       const double *S, dfle_flow *flow, dfle_error *err);
 /* 1 if the router must be re-routed for slopes S (always 1 without the op). */
 int dfle_router_needs_reroute(dfle_router *rt, size_t n, const double *S);
+/* The node_flow op, or DFLE_ESTATE (with a message) if the router has
+ * none.  *goes_on receives its verdict. */
+int dfle_router_node_flow(dfle_router *rt, const dfle_channel *ch, size_t i,
+                          double S, dfle_flow *node, int *goes_on, dfle_error *err);
+
 /* 1 if the router is routed at every step (no needs_reroute op). */
 int dfle_router_is_local(const dfle_router *rt);
 

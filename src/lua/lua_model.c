@@ -161,13 +161,19 @@ static void push_result(lua_State *L, const dfle_run_result *r)
     lua_pushnumber(L, r->dt_max), lua_setfield(L, -2, "dt_max");
     lua_pushinteger(L, (lua_Integer)r->nonpositive_slope_nodes);
     lua_setfield(L, -2, "nonpositive_slope_nodes");
+    lua_pushstring(L, dfle_method_name(r->method)), lua_setfield(L, -2, "method");
+    lua_pushboolean(L, r->fallback), lua_setfield(L, -2, "fallback");
+    lua_pushinteger(L, (lua_Integer)r->iterations), lua_setfield(L, -2, "iterations");
+    if (r->note[0] != '\0')
+        lua_pushstring(L, r->note), lua_setfield(L, -2, "note");
 }
 
 /* Shared by run_to_steady and run: `steady` selects the defaults. */
 static int model_run(lua_State *L, int steady)
 {
-    static const char *const steady_keys[] = {"progress", NULL};
-    static const char *const run_keys[] = {"progress", NULL};
+    static const char *const steady_keys[] = {"progress", "method", NULL};
+    static const char *const run_keys[] = {"progress", "method", "record", NULL};
+    static const char *const methods[] = {"explicit", "implicit", "direct", "auto", NULL};
     dfle_model *m = dfle_lua_check_model(L, 1);
     const char *fn = steady ? "model:run_to_steady" : "model:run";
     dfle_run_opts o;
@@ -177,30 +183,61 @@ static int model_run(lua_State *L, int steady)
     const dfle_lua_progress *prog = dfle_lua_get_progress(L);
     int st;
 
+    lua_settop(L, 2);
     dfle_run_opts_default(&o);
+    o.method = steady ? DFLE_METHOD_AUTO : DFLE_METHOD_EXPLICIT;
     max_steps = (double)o.max_steps;
     if (steady) {
-        const dfle_lua_param params[] = {
-            {"tol", &o.tol}, {"max_time", &o.max_time}, {"max_steps", &max_steps}};
-        dfle_lua_read_params(L, 2, fn, params, 3, steady_keys);
+        const dfle_lua_param params[] = {{"tol", &o.tol}, {"max_time", &o.max_time},
+                                         {"max_steps", &max_steps}, {"direct_tol", &o.direct_tol}};
+        dfle_lua_read_params(L, 2, fn, params, 4, steady_keys);
         if (!(o.tol > 0))
             luaL_error(L, "dfle.%s: tol must be > 0 (got %s)", fn, dfle_lua_number_text(L, o.tol));
         if (!(o.max_time > 0))
             luaL_error(L, "dfle.%s: max_time must be > 0 yr (got %s)", fn,
                        dfle_lua_number_text(L, o.max_time));
+        if (!(o.direct_tol > 0 && o.direct_tol < 1))
+            luaL_error(L, "dfle.%s: direct_tol must be in (0, 1) (got %s)", fn,
+                       dfle_lua_number_text(L, o.direct_tol));
     } else {
-        const dfle_lua_param params[] = {{"years", &years}, {"max_steps", &max_steps}};
+        const dfle_lua_param params[] = {{"years", &years}, {"max_steps", &max_steps},
+                                         {"rtol", &o.rtol}};
         luaL_checktype(L, 2, LUA_TTABLE);
-        dfle_lua_read_params(L, 2, fn, params, 2, run_keys);
+        dfle_lua_read_params(L, 2, fn, params, 3, run_keys);
         if (lua_getfield(L, 2, "years") == LUA_TNIL)
             luaL_error(L, "dfle.model:run: parameter 'years' is required");
         lua_pop(L, 1);
         if (!(years > 0))
             luaL_error(L, "dfle.model:run: years must be > 0 (got %s)", dfle_lua_number_text(L, years));
+        if (!(o.rtol > 0 && o.rtol < 1))
+            luaL_error(L, "dfle.model:run: rtol must be in (0, 1) (got %s)",
+                       dfle_lua_number_text(L, o.rtol));
         o.max_time = years;
         o.tol = 0; /* plain time stepping: no steady-state stop */
     }
     o.max_steps = (size_t)dfle_lua_check_whole(L, max_steps, fn, "max_steps", 1, 1e15);
+    if (lua_istable(L, 2) && lua_getfield(L, 2, "method") != LUA_TNIL) {
+        if (lua_type(L, -1) != LUA_TSTRING)
+            luaL_error(L, "dfle.%s: parameter 'method' must be a string, got %s", fn,
+                       dfle_lua_typename(L, -1));
+        o.method = luaL_checkoption(L, -1, NULL, methods);
+        if (!steady && o.method == DFLE_METHOD_DIRECT)
+            luaL_error(L, "dfle.model:run: method 'direct' finds steady states only; use "
+                          "run_to_steady, or 'explicit' or 'implicit' here");
+    }
+    lua_settop(L, 2);
+    if (lua_istable(L, 2) && lua_getfield(L, 2, "record") != LUA_TNIL) {
+        size_t k;
+        double *times = dfle_lua_check_array(L, 3, "model:run: record", &k);
+        for (size_t j = 0; j < k; j++)
+            if (!(times[j] >= 0 && times[j] <= years && (j == 0 || times[j] > times[j - 1])))
+                luaL_error(L, "dfle.model:run: record times must increase within [0, years = %s] "
+                              "(time %d is %s)", dfle_lua_number_text(L, years), (int)j + 1,
+                           dfle_lua_number_text(L, times[j]));
+        o.n_record = k;
+        o.record_times = times;
+        o.record_z = lua_newuserdatauv(L, (k ? k : 1) * dfle_model_size(m) * sizeof(double), 0);
+    }
     if (lua_istable(L, 2) && lua_getfield(L, 2, "progress") != LUA_TNIL) {
         if (!lua_isboolean(L, -1))
             luaL_error(L, "dfle.%s: parameter 'progress' must be a boolean", fn);
@@ -217,6 +254,17 @@ static int model_run(lua_State *L, int steady)
     if (st != DFLE_OK)
         return dfle_lua_raise(L, &err);
     push_result(L, &res);
+    if (o.n_record > 0) {
+        const size_t n = dfle_model_size(m);
+        lua_createtable(L, (int)res.n_recorded, 0);
+        for (size_t j = 0; j < res.n_recorded; j++) {
+            lua_createtable(L, 0, 2);
+            lua_pushnumber(L, o.record_times[j]), lua_setfield(L, -2, "t");
+            dfle_lua_push_array(L, o.record_z + j * n, n), lua_setfield(L, -2, "z");
+            lua_rawseti(L, -2, (lua_Integer)j + 1);
+        }
+        lua_setfield(L, -2, "records");
+    }
     return 1;
 }
 

@@ -147,7 +147,7 @@ end
 tests["model:run_to_steady: max_time bounds an unconverged run"] = function()
     local m = dfle.model{ channel = dfle.channel{ A_max = 2e5 }, U = 1.5e-3 }
     m:set_U(5e-4)
-    local r = m:run_to_steady{ tol = 1e-6, max_time = 3000 }
+    local r = m:run_to_steady{ tol = 1e-6, max_time = 3000, method = "explicit" }
     T.eq(r.converged, false)
     T.eq(r.reason, "time")
     T.close(r.time, 3000, 1e-12)

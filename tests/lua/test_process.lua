@@ -68,9 +68,9 @@ end
 tests["process: a model runs to steady state exactly like an empirical one"] = function()
     local rt = dfle.router.process{}
     local m = small_model(rt)
-    local run = m:run_to_steady{}
+    local run = m:run_to_steady{ method = "explicit" }
     T.ok(run.converged)
-    T.ok(run.routings >= 1 and run.routings < run.steps)
+    T.ok(run.routings >= 1 and run.routings < run.steps) -- the Eq. (11) cache
     local E_f, E_df = m:get("E_f"), m:get("E_df")
     for i = 1, m.n - 1 do T.close(E_f[i] + E_df[i], 5e-4, 1e-3, 0) end
     local fit = assert(dfle.fit_slope_area(m))

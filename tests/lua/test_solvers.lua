@@ -1,0 +1,60 @@
+-- test_solvers.lua - choosing how to reach the answer from Lua.
+local tests = {}
+
+local function model(extra)
+    local o = { channel = dfle.channel{ dx = 10 } }
+    for k, v in pairs(extra or {}) do o[k] = v end
+    return dfle.model(o)
+end
+
+tests["run_to_steady: every method reaches the same steady state"] = function()
+    local S = {}
+    for _, method in ipairs{ "explicit", "implicit", "direct", "auto" } do
+        local m = model()
+        local r = m:run_to_steady{ method = method }
+        T.ok(r.converged, method)
+        T.eq(r.fallback, false)
+        T.eq(r.method, method == "auto" and "direct" or method)
+        S[method] = m:get("S")
+    end
+    for _, method in ipairs{ "implicit", "direct", "auto" } do
+        for i = 1, #S.explicit - 1 do T.close(S[method][i], S.explicit[i], 5e-3, 0) end
+    end
+end
+
+tests["run_to_steady: the direct method says when it falls back"] = function()
+    local m = model{ fluvial = false, router = dfle.router.empirical{ tau_y = 3000 } }
+    local r = m:run_to_steady{ method = "direct", max_time = 1e4 }
+    T.eq(r.fallback, true)
+    T.eq(r.method, "implicit")
+    T.eq(r.converged, false)
+    T.has(r.note, "direct:", "continued by implicit stepping")
+end
+
+tests["run: implicit transients and recorded profiles"] = function()
+    local m = model()
+    m:run_to_steady{}
+    m:set_U(1e-3)
+    local r = m:run{ years = 2e4, method = "implicit", record = { 0, 5e3, 2e4 } }
+    T.eq(r.method, "implicit")
+    T.eq(#r.records, 3)
+    T.eq(r.records[2].t, 5e3)
+    T.eq(#r.records[1].z, m.n)
+    -- Uplift doubled: the head rises, the outlet stays.
+    T.ok(r.records[3].z[1] > r.records[1].z[1] + 1)
+    T.eq(r.records[3].z[m.n], 0)
+    T.close(m.time, 2e4, 1e-12, 0)
+end
+
+tests["method and record errors name themselves"] = function()
+    local m = model()
+    T.raises_here(function() return m:run_to_steady{ method = "newton" } end, "invalid option 'newton'")
+    T.raises_here(function() return m:run_to_steady{ method = 3 } end, "'method' must be a string")
+    T.raises_here(function() return m:run{ years = 10, method = "direct" } end, "steady states only")
+    T.raises_here(function() return m:run{ years = 10, record = { 5, 2 } } end, "record times must increase")
+    T.raises_here(function() return m:run{ years = 10, record = { 20 } } end, "record times must increase")
+    T.raises_here(function() return m:run{ years = 10, rtol = 0 } end, "rtol must be in (0, 1)")
+    T.raises_here(function() return m:run_to_steady{ direct_tol = 2 } end, "direct_tol must be in (0, 1)")
+end
+
+return tests

@@ -1,0 +1,374 @@
+/* test_solvers.c - the implicit and direct methods reach the explicit
+ * method's steady state (and the analytical ones), follow it through a
+ * transient, and fall back when no direct solution exists. */
+#include <math.h>
+#include <stdlib.h>
+#include <string.h>
+
+#include "dfle_test.h"
+#include "dfle/analysis.h"
+#include "dfle/analytical.h"
+#include "dfle/law_power.h"
+#include "dfle/model.h"
+#include "dfle/router_empirical.h"
+#include "dfle/router_process.h"
+
+typedef struct parts {
+    dfle_channel *ch;
+    dfle_fluvial *fl;
+    dfle_router *rt;
+    dfle_law *law;
+} parts;
+
+static void parts_free(parts *p)
+{
+    dfle_law_free(p->law);
+    dfle_router_free(p->rt);
+    dfle_fluvial_free(p->fl);
+    dfle_channel_free(p->ch);
+    memset(p, 0, sizeof *p);
+}
+
+static void make_channel(parts *p, double dx)
+{
+    dfle_channel_opts co;
+    dfle_channel_opts_default(&co);
+    co.dx = dx;
+    assert_int_equal(dfle_channel_new(&co, &p->ch, NULL), DFLE_OK);
+}
+
+static void make_fluvial(parts *p)
+{
+    dfle_stochastic_threshold_opts so;
+    dfle_stochastic_threshold_opts_default(&so);
+    assert_int_equal(dfle_fluvial_new_stochastic_threshold(&so, &p->fl, NULL), DFLE_OK);
+}
+
+static void make_law(parts *p, double k_df, double alpha, double beta)
+{
+    dfle_power_law_opts lo = {.k_df = k_df, .alpha = alpha, .beta = beta};
+    assert_int_equal(dfle_law_new_power(&lo, &p->law, NULL), DFLE_OK);
+}
+
+/* Run a fresh model of these parts to steady state with `method`; return
+ * its slopes (caller frees) and, optionally, the run result. */
+static double *steady_slopes(const parts *p, double U, int method, dfle_run_result *res_out)
+{
+    dfle_model_opts mo;
+    dfle_model *m;
+    dfle_run_opts ro;
+    dfle_run_result res;
+    dfle_error err;
+    dfle_model_opts_default(&mo);
+    mo.channel = p->ch, mo.fluvial = p->fl, mo.router = p->rt, mo.law = p->law, mo.U = U;
+    assert_ok(dfle_model_new(&mo, &m, &err), &err);
+    dfle_run_opts_default(&ro);
+    ro.method = method;
+    assert_ok(dfle_model_run(m, &ro, &res, &err), &err);
+    if (!res.converged || res.fallback)
+        print_message("method %s: reason %s, ratio %g, note %s\n", dfle_method_name(method),
+                      dfle_stop_reason_name(res.reason), res.rate_ratio, res.note);
+    assert_true(res.converged);
+    assert_int_equal(res.fallback, 0);
+    size_t n = dfle_model_size(m);
+    double *S = malloc(n * sizeof *S);
+    memcpy(S, dfle_model_field(m, DFLE_FIELD_S, &err), n * sizeof *S);
+    if (res_out != NULL)
+        *res_out = res;
+    dfle_model_free(m);
+    return S;
+}
+
+/* Every method's slopes within rel of the explicit ones at every node,
+ * and the Eq. (2) fits within 1 %. */
+static void methods_agree(const parts *p, double U, double rel)
+{
+    size_t n = dfle_channel_size(p->ch);
+    double *ref = steady_slopes(p, U, DFLE_METHOD_EXPLICIT, NULL);
+    dfle_eq2_fit fref, f;
+    const double *A = dfle_channel_A(p->ch);
+    int have_fit = dfle_slope_area_fit(n - 1, A, ref, 100, NULL, &fref, NULL) == DFLE_OK;
+    for (int method = DFLE_METHOD_IMPLICIT; method <= DFLE_METHOD_DIRECT; method++) {
+        double *S = steady_slopes(p, U, method, NULL);
+        for (size_t i = 0; i + 1 < n; i++)
+            assert_close(S[i], ref[i], rel, 0);
+        if (have_fit) {
+            assert_ok(dfle_slope_area_fit(n - 1, A, S, 100, NULL, &f, &(dfle_error){0}),
+                      &(dfle_error){0});
+            assert_close(f.S_df, fref.S_df, 0.01, 0);
+            assert_close(f.A_df, fref.A_df, 0.01, 0);
+        }
+        free(S);
+    }
+    free(ref);
+}
+
+static void fig9_defaults(void **state)
+{
+    parts p = {0};
+    dfle_empirical_opts eo;
+    (void)state;
+    make_channel(&p, 5.0);
+    make_fluvial(&p);
+    dfle_empirical_opts_default(&eo);
+    assert_int_equal(dfle_router_new_empirical(&eo, &p.rt, NULL), DFLE_OK);
+    make_law(&p, 1e-4, 6, 1);
+    methods_agree(&p, 5e-4, 5e-3);
+    parts_free(&p);
+}
+
+/* Corners of Tables G3 and G5 (empirical router). */
+static void table_g3_g5_sample(void **state)
+{
+    const struct { double M0, gamma, mu, tau_y, alpha, beta, k_df, U; } set[] = {
+        {500, 0.0, 100, 100, 2, 0.5, 8e-5, 5e-4},    /* G3, low corner   */
+        {3000, 1.0, 500, 600, 8, 3, 2e-4, 5e-4},     /* G3, high corner  */
+        {1000, 0.3, 1000, 600, 6, 1, 5e-5, 1e-4},    /* G5 */
+        {5000, 0.8, 100, 100, 6, 1, 1e-3, 1e-3},     /* G5 */
+    };
+    (void)state;
+    for (size_t k = 0; k < sizeof set / sizeof set[0]; k++) {
+        parts p = {0};
+        dfle_empirical_opts eo;
+        make_channel(&p, 10.0);
+        make_fluvial(&p);
+        dfle_empirical_opts_default(&eo);
+        eo.M0 = set[k].M0, eo.gamma = set[k].gamma, eo.mu = set[k].mu, eo.tau_y = set[k].tau_y;
+        assert_int_equal(dfle_router_new_empirical(&eo, &p.rt, NULL), DFLE_OK);
+        make_law(&p, set[k].k_df, set[k].alpha, set[k].beta);
+        methods_agree(&p, set[k].U, 5e-3);
+        parts_free(&p);
+    }
+}
+
+/* Fig. 6 defaults.  The explicit reference re-routes only when a slope
+ * has moved by reroute_dS; at the paper's 0.05 that lag alone shifts its
+ * steady state by ~1 %, so the comparison uses a tight 0.002. */
+static void fig6_defaults(void **state)
+{
+    parts p = {0};
+    dfle_process_opts po;
+    (void)state;
+    make_channel(&p, 10.0);
+    make_fluvial(&p);
+    dfle_process_opts_default(&po);
+    po.reroute_dS = 0.002;
+    assert_int_equal(dfle_router_new_process(&po, &p.rt, NULL), DFLE_OK);
+    make_law(&p, 1e-4, 6, 1);
+    methods_agree(&p, 5e-4, 5e-3);
+    parts_free(&p);
+}
+
+static void analytical_steady_states(void **state)
+{
+    parts p = {0};
+    dfle_empirical_opts eo;
+    (void)state;
+    /* Fluvial only: Eq. (26). */
+    make_channel(&p, 5.0);
+    make_fluvial(&p);
+    for (int method = DFLE_METHOD_IMPLICIT; method <= DFLE_METHOD_DIRECT; method++) {
+        double *S = steady_slopes(&p, 5e-4, method, NULL);
+        for (size_t i = 0; i + 1 < dfle_channel_size(p.ch); i++)
+            assert_close(S[i], dfle_fluvial_steady_slope(p.fl, 5e-4, dfle_channel_A(p.ch)[i]),
+                         5e-3, 0);
+        free(S);
+    }
+    dfle_fluvial_free(p.fl);
+    p.fl = NULL;
+    /* Debris flows only, tau_y = 0: Eq. (19). */
+    dfle_empirical_opts_default(&eo);
+    eo.tau_y = 0;
+    assert_int_equal(dfle_router_new_empirical(&eo, &p.rt, NULL), DFLE_OK);
+    make_law(&p, 1e-4, 6, 1);
+    dfle_analytical_params ap = {
+        .U = 5e-4, .k_df = 1e-4, .alpha = 6, .beta = 1, .M0 = 3000, .gamma = 0.5,
+        .mu = 500, .c1 = 0.135, .c2 = 0.78, .rho_b = 1800, .g = 9.81, .k_w = 0.05, .b = 0.3,
+    };
+    for (int method = DFLE_METHOD_IMPLICIT; method <= DFLE_METHOD_DIRECT; method++) {
+        double *S = steady_slopes(&p, 5e-4, method, NULL);
+        for (size_t i = 0; i + 1 < dfle_channel_size(p.ch); i++)
+            assert_close(S[i], dfle_analytical_slope(&ap, dfle_channel_A(p.ch)[i]), 5e-3, 0);
+        free(S);
+    }
+    parts_free(&p);
+}
+
+/* Hard cases for the node solver: n_s < 1, a large alpha. */
+static void awkward_exponents(void **state)
+{
+    parts p = {0};
+    dfle_empirical_opts eo;
+    (void)state;
+    make_channel(&p, 10.0);
+    assert_int_equal(dfle_fluvial_new_stream_power(2e-4, 0.35, 0.6, &p.fl, NULL), DFLE_OK);
+    dfle_empirical_opts_default(&eo);
+    assert_int_equal(dfle_router_new_empirical(&eo, &p.rt, NULL), DFLE_OK);
+    make_law(&p, 1e-4, 12, 0.5);
+    methods_agree(&p, 5e-4, 5e-3);
+    parts_free(&p);
+}
+
+/* After an uplift step the implicit run follows the explicit solution:
+ * against an explicit run at a tenth of the usual Courant number (the
+ * reference), implicit with rtol = 1e-3 is at least as close as the
+ * explicit run at the default Courant number, and within 1 % of the
+ * profile's change. */
+static void uplift_step_transient(void **state)
+{
+    parts p = {0};
+    dfle_empirical_opts eo;
+    const double times[] = {5e3, 2e4, 6e4};
+    double *zr[3];
+    (void)state;
+    make_channel(&p, 10.0);
+    make_fluvial(&p);
+    dfle_empirical_opts_default(&eo);
+    assert_int_equal(dfle_router_new_empirical(&eo, &p.rt, NULL), DFLE_OK);
+    make_law(&p, 1e-4, 6, 1);
+    size_t n = dfle_channel_size(p.ch);
+    double z0[202];
+    assert_int_equal(n, 202);
+    for (int k = 0; k < 3; k++) {
+        dfle_model_opts mo;
+        dfle_model *m;
+        dfle_run_opts ro;
+        dfle_run_result res;
+        dfle_error err;
+        dfle_model_opts_default(&mo);
+        mo.channel = p.ch, mo.fluvial = p.fl, mo.router = p.rt, mo.law = p.law;
+        if (k == 2)
+            mo.cfl = 0.05; /* the reference */
+        assert_ok(dfle_model_new(&mo, &m, &err), &err);
+        dfle_run_opts_default(&ro);
+        ro.method = DFLE_METHOD_DIRECT;
+        assert_ok(dfle_model_run(m, &ro, &res, &err), &err);
+        memcpy(z0, dfle_model_field(m, DFLE_FIELD_Z, &err), n * sizeof *z0);
+        assert_ok(dfle_model_set_U(m, 1e-3, &err), &err);
+        zr[k] = malloc(3 * n * sizeof *zr[k]);
+        dfle_run_opts_default(&ro);
+        ro.tol = 0;
+        ro.max_time = 6e4;
+        ro.method = k == 1 ? DFLE_METHOD_IMPLICIT : DFLE_METHOD_EXPLICIT;
+        ro.n_record = 3;
+        ro.record_times = times;
+        ro.record_z = zr[k];
+        assert_ok(dfle_model_run(m, &ro, &res, &err), &err);
+        assert_int_equal(res.n_recorded, 3);
+        dfle_model_free(m);
+    }
+    for (int j = 0; j < 3; j++) {
+        double change = 0, e_expl = 0, e_impl = 0;
+        for (size_t i = 0; i < n; i++) {
+            const double ref = zr[2][j * n + i];
+            change = fmax(change, fabs(ref - z0[i]));
+            e_expl = fmax(e_expl, fabs(zr[0][j * n + i] - ref));
+            e_impl = fmax(e_impl, fabs(zr[1][j * n + i] - ref));
+        }
+        print_message("uplift step, t = %g yr: profile moved up to %.3g m; error against the "
+                      "reference: explicit %.3g m, implicit %.3g m\n", times[j], change, e_expl,
+                      e_impl);
+        assert_true(change > 1.0);
+        assert_true(e_impl <= 0.01 * change);
+        assert_true(e_impl <= e_expl);
+    }
+    for (int k = 0; k < 3; k++)
+        free(zr[k]);
+    parts_free(&p);
+}
+
+/* Fluvial erosion off and a flow that stops half way: below it nothing
+ * erodes, so no steady state exists.  The direct method must say so and
+ * hand over to time stepping, which then runs out of time. */
+static void direct_falls_back_and_says_why(void **state)
+{
+    parts p = {0};
+    dfle_empirical_opts eo;
+    dfle_model_opts mo;
+    dfle_model *m;
+    dfle_run_opts ro;
+    dfle_run_result res;
+    dfle_error err;
+    (void)state;
+    make_channel(&p, 10.0);
+    dfle_empirical_opts_default(&eo);
+    eo.tau_y = 3000; /* stops early */
+    assert_int_equal(dfle_router_new_empirical(&eo, &p.rt, NULL), DFLE_OK);
+    make_law(&p, 1e-4, 6, 1);
+    dfle_model_opts_default(&mo);
+    mo.channel = p.ch, mo.router = p.rt, mo.law = p.law;
+    assert_ok(dfle_model_new(&mo, &m, &err), &err);
+    dfle_run_opts_default(&ro);
+    ro.method = DFLE_METHOD_DIRECT;
+    ro.max_time = 1e4;
+    assert_ok(dfle_model_run(m, &ro, &res, &err), &err);
+    assert_true(res.fallback);
+    assert_int_equal(res.method, DFLE_METHOD_IMPLICIT);
+    assert_false(res.converged);
+    assert_int_equal(res.reason, DFLE_STOP_TIME);
+    assert_msg_contains(res.note, "direct:");
+    assert_msg_contains(res.note, "continued by implicit stepping");
+    dfle_model_free(m);
+    parts_free(&p);
+}
+
+static void records_land_on_their_times(void **state)
+{
+    parts p = {0};
+    dfle_model_opts mo;
+    dfle_model *a, *b;
+    dfle_run_opts ro;
+    dfle_run_result res;
+    dfle_error err;
+    const double times[] = {0.0, 1234.5};
+    double rec[2 * 202];
+    (void)state;
+    make_channel(&p, 10.0);
+    make_fluvial(&p);
+    dfle_model_opts_default(&mo);
+    mo.channel = p.ch, mo.fluvial = p.fl, mo.U = 2e-3;
+    assert_ok(dfle_model_new(&mo, &a, &err), &err);
+    assert_ok(dfle_model_new(&mo, &b, &err), &err);
+    assert_ok(dfle_model_set_U(a, 5e-4, &err), &err);
+    assert_ok(dfle_model_set_U(b, 5e-4, &err), &err);
+    dfle_run_opts_default(&ro);
+    ro.tol = 0;
+    ro.max_time = 3000;
+    ro.n_record = 2, ro.record_times = times, ro.record_z = rec;
+    assert_ok(dfle_model_run(a, &ro, &res, &err), &err);
+    assert_int_equal(res.n_recorded, 2);
+    dfle_run_opts_default(&ro);
+    ro.tol = 0;
+    ro.max_time = 1234.5;
+    assert_ok(dfle_model_run(b, &ro, &res, &err), &err);
+    const double *z = dfle_model_field(b, DFLE_FIELD_Z, &err);
+    for (size_t i = 0; i < 202; i++)
+        assert_close(rec[202 + i], z[i], 1e-9, 1e-9);
+    /* Record times must increase within the run. */
+    const double bad[] = {10.0, 5.0};
+    ro.n_record = 2, ro.record_times = bad, ro.record_z = rec;
+    assert_int_equal(dfle_model_run(b, &ro, &res, &err), DFLE_EINVAL);
+    assert_msg_contains(err.msg, "record times");
+    ro.n_record = 0;
+    ro.method = DFLE_METHOD_DIRECT;
+    assert_int_equal(dfle_model_run(b, &ro, &res, &err), DFLE_EINVAL);
+    assert_msg_contains(err.msg, "steady states only");
+    dfle_model_free(a);
+    dfle_model_free(b);
+    parts_free(&p);
+}
+
+int main(void)
+{
+    const struct CMUnitTest tests[] = {
+        cmocka_unit_test(fig9_defaults),
+        cmocka_unit_test(table_g3_g5_sample),
+        cmocka_unit_test(fig6_defaults),
+        cmocka_unit_test(analytical_steady_states),
+        cmocka_unit_test(awkward_exponents),
+        cmocka_unit_test(uplift_step_transient),
+        cmocka_unit_test(direct_falls_back_and_says_why),
+        cmocka_unit_test(records_land_on_their_times),
+    };
+    return cmocka_run_group_tests(tests, NULL, NULL);
+}
