@@ -22,6 +22,8 @@ LUA_CFLAGS  ?= $(shell $(PKG_CONFIG) --cflags $(LUA_PKG))
 LUA_LIBS    ?= $(shell $(PKG_CONFIG) --libs $(LUA_PKG))
 GSL_CFLAGS  ?= $(shell $(PKG_CONFIG) --cflags gsl)
 GSL_LIBS    ?= $(shell $(PKG_CONFIG) --libs gsl)
+GDAL_CFLAGS ?= $(shell $(PKG_CONFIG) --cflags gdal)
+GDAL_LIBS   ?= $(shell $(PKG_CONFIG) --libs gdal)
 CMOCKA_CFLAGS ?= $(shell $(PKG_CONFIG) --cflags cmocka)
 CMOCKA_LIBS ?= $(shell $(PKG_CONFIG) --libs cmocka)
 
@@ -59,11 +61,11 @@ $(BUILD)/obj/src/lua/%.o: src/lua/%.c
 
 $(BUILD)/obj/src/%.o: src/%.c
 	@mkdir -p $(dir $@)
-	$(CC) $(ALL_CFLAGS) $(LUA_CFLAGS) $(GSL_CFLAGS) -MMD -MP -c $< -o $@
+	$(CC) $(ALL_CFLAGS) $(LUA_CFLAGS) $(GSL_CFLAGS) $(GDAL_CFLAGS) -MMD -MP -c $< -o $@
 
 $(BUILD)/obj/tests/%.o: tests/%.c
 	@mkdir -p $(dir $@)
-	$(CC) $(ALL_CFLAGS) -Isrc $(LUA_CFLAGS) $(GSL_CFLAGS) $(CMOCKA_CFLAGS) -MMD -MP -c $< -o $@
+	$(CC) $(ALL_CFLAGS) -Isrc $(LUA_CFLAGS) $(GSL_CFLAGS) $(GDAL_CFLAGS) $(CMOCKA_CFLAGS) -MMD -MP -c $< -o $@
 
 $(LIB_CORE): $(CORE_OBJ)
 	@mkdir -p $(dir $@)
@@ -74,15 +76,15 @@ $(LIB_LUA): $(LUA_OBJ)
 	$(AR) rcs $@ $^
 
 $(CLI): $(CLI_OBJ) $(LIB_LUA) $(LIB_CORE)
-	$(CC) $(ALL_LDFLAGS) $^ $(LUA_LIBS) $(GSL_LIBS) -lm -o $@
+	$(CC) $(ALL_LDFLAGS) $^ $(LUA_LIBS) $(GSL_LIBS) $(GDAL_LIBS) -lm -o $@
 
 # The Lua module takes its Lua symbols from the host interpreter.
 $(MODULE): $(LUA_OBJ) $(CORE_OBJ)
-	$(CC) -shared $(ALL_LDFLAGS) $^ $(GSL_LIBS) -lm -o $@
+	$(CC) -shared $(ALL_LDFLAGS) $^ $(GSL_LIBS) $(GDAL_LIBS) -lm -o $@
 
 $(BUILD)/tests/%: $(BUILD)/obj/tests/%.o $(LIB_LUA) $(LIB_CORE)
 	@mkdir -p $(dir $@)
-	$(CC) $(ALL_LDFLAGS) $^ $(CMOCKA_LIBS) $(LUA_LIBS) $(GSL_LIBS) -lm -o $@
+	$(CC) $(ALL_LDFLAGS) $^ $(CMOCKA_LIBS) $(LUA_LIBS) $(GSL_LIBS) $(GDAL_LIBS) -lm -o $@
 
 test: all $(TEST_BIN)
 	@BUILD=$(BUILD) sh tests/run-tests.sh
@@ -106,7 +108,7 @@ install: all
 	install -m 644 $(LIB_CORE) $(DESTDIR)$(PREFIX)/lib/libdfle.a
 	install -m 644 $(LIB_LUA) $(DESTDIR)$(PREFIX)/lib/libdfle_lua.a
 	install -d $(DESTDIR)$(PREFIX)/lib/pkgconfig
-	printf 'prefix=%s\nincludedir=$${prefix}/include\nlibdir=$${prefix}/lib\n\nName: dfle\nDescription: debris-flow and fluvial channel-profile model (C library)\nVersion: %s\nRequires.private: gsl\nLibs: -L$${libdir} -ldfle -lm\nCflags: -I$${includedir}\n' \
+	printf 'prefix=%s\nincludedir=$${prefix}/include\nlibdir=$${prefix}/lib\n\nName: dfle\nDescription: debris-flow and fluvial channel-profile model (C library)\nVersion: %s\nRequires.private: gsl gdal\nLibs: -L$${libdir} -ldfle -lm\nCflags: -I$${includedir}\n' \
 	    '$(PREFIX)' '$(VERSION)' > $(DESTDIR)$(PREFIX)/lib/pkgconfig/dfle.pc
 	install -m 644 include/dfle/*.h $(DESTDIR)$(PREFIX)/include/dfle/
 	install -m 644 README.md doc/*.md $(DESTDIR)$(PREFIX)/share/doc/dfle/

@@ -6,4 +6,5 @@ here=$(dirname "$0")
 echo "dfle benchmarks on $(uname -m), $(nproc) cores, $(date -u +%Y-%m-%d)"
 "$DFLE" -q "$here/steady_state.lua"
 "$DFLE" -q "$here/process.lua"
+"$DFLE" -q "$here/dem.lua"
 "$DFLE" -q "$here/methods.lua"

@@ -4,9 +4,10 @@
 #   build:  gcc/clang, make, pkg-config, Lua 5.4 headers, GSL
 #   test:   cmocka, valgrind (make memcheck)
 #   plots:  gnuplot (no X11 needed: the png and svg terminals)
+#   DEMs:   GDAL (GeoTIFF, ESRI ASCII and every raster format GDAL reads)
 set -eu
 
-packages="build-essential pkg-config liblua5.4-dev libgsl-dev libcmocka-dev gnuplot-nox valgrind"
+packages="build-essential pkg-config liblua5.4-dev libgsl-dev libcmocka-dev gnuplot-nox valgrind libgdal-dev"
 
 if [ "$(id -u)" -ne 0 ]; then
     sudo=sudo

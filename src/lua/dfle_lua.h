@@ -121,5 +121,7 @@ void dfle_lua_open_law(lua_State *L);
 void dfle_lua_open_model(lua_State *L);
 void dfle_lua_open_analysis(lua_State *L);
 void dfle_lua_open_plot(lua_State *L);
+void dfle_lua_open_sampling(lua_State *L);
+void dfle_lua_open_dem(lua_State *L);
 
 #endif

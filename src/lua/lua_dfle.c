@@ -39,6 +39,8 @@ int luaopen_dfle(lua_State *L)
     dfle_lua_open_model(L);
     dfle_lua_open_analysis(L);
     dfle_lua_open_plot(L);
+    dfle_lua_open_sampling(L);
+    dfle_lua_open_dem(L);
     lua_pushvalue(L, -1);
     lua_rawsetp(L, LUA_REGISTRYINDEX, &module_key);
     return 1;

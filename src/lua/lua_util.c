@@ -253,9 +253,18 @@ size_t dfle_lua_slope_area(lua_State *L, int arg, const char *fn, const double *
          * neighbour's, so it is not a data point. */
         return dfle_model_size(m) - 1;
     }
+    /* --- dfle.profile (lua_dem.c): a DEM profile or network gives its
+     * own pairs through p:slope_area(), a table read like a user's. --- */
+    if (luaL_testudata(L, arg, "dfle.profile") != NULL) {
+        lua_getfield(L, arg, "slope_area");
+        lua_pushvalue(L, arg);
+        lua_call(L, 1, 1);
+        arg = lua_gettop(L);
+    }
+    /* --- end dfle.profile --- */
     if (!lua_istable(L, arg))
-        luaL_error(L, "dfle.%s: expected a dfle.model or a table {A = {...}, S = {...}}, got %s",
-                   fn, dfle_lua_typename(L, arg));
+        luaL_error(L, "dfle.%s: expected a dfle.model, a dfle.profile or a table "
+                   "{A = {...}, S = {...}}, got %s", fn, dfle_lua_typename(L, arg));
     lua_getfield(L, arg, "A");
     snprintf(what, sizeof what, "%s: A", fn);
     *A = dfle_lua_check_array(L, -1, what, &n);

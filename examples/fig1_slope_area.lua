@@ -1,0 +1,128 @@
+-- fig1_slope_area.lua - the paper's Fig. 1 from a real DEM.
+--
+-- McGuire et al. (2023), Fig. 1: slope and drainage area extracted from
+-- the channel networks of San Gabriel Mountains catchments, put into 100
+-- logarithmically spaced area bins (mean slope per bin), fitted with
+-- Eq. (2), S = S_df / (1 + (A/A_df)^a2), with A_df marked.  This script
+-- does that on the Big Tujunga SRTM DEM (30 m, UTM 11N) for the Fig. 1
+-- outlets it contains:
+--
+--   black  396887 E 3799338 N   (paper: R^2 = 0.95)
+--   blue   384971 E 3799277 N   (paper: R^2 = 0.97)
+--   orange 417896 E 3792642 N   (paper: R^2 = 0.97) - east of this DEM
+--                                (E 376314..412224 m): reported, skipped
+--
+-- For each catchment: the network of every cell above the outlet (with
+-- 30 m cells there is nothing finer than one cell to call a channel
+-- head), slope over 90 m of flow path (3 cells) centred on each cell;
+-- the main-stem profile too, for comparison.  Writes
+--   fig1_fits.csv            one row per catchment and data set
+--   fig1_<name>.csv          the main-stem profile (x, z, A, S, ...)
+--   fig1_<name>.png          binned slope-area, fit, A_df (dfle.plot)
+--   fig1_slope_area.png      all catchments on one plot, like Fig. 1
+--
+--   dfle examples/fig1_slope_area.lua [--quick] [output-directory]
+--
+-- --quick skips the per-catchment plots (for the test suite).  The DEM
+-- is found relative to this script (../../shared/data/dem/) or in
+-- $DFLE_DATA_DIR/dem.
+
+local quick, outdir = false, "."
+for _, a in ipairs(arg) do
+  if a == "--quick" then quick = true else outdir = a end
+end
+
+local here = arg[0]:match("^(.*)/[^/]*$") or "."
+local data = os.getenv("DFLE_DATA_DIR") or (here .. "/../../shared/data")
+local path = data .. "/dem/srtm_bigtujunga30m_utm11.tif"
+
+local catchments = {
+  { name = "black",  E = 396887, N = 3799338, paper_r2 = 0.95 },
+  { name = "blue",   E = 384971, N = 3799277, paper_r2 = 0.97 },
+  { name = "orange", E = 417896, N = 3792642, paper_r2 = 0.97 },
+}
+
+local dem = dfle.dem.read(path)
+print(tostring(dem))
+local t0 = os.clock()
+local filled = dem:fill()
+dem:flow()
+print(("filled %d cells (largest rise %.0f m), routed %d cells in %.2f s; %d on flats")
+      :format(filled.raised, filled.max_raise, dem.n, os.clock() - t0, dem.flats))
+
+local ext = dem.extent
+local fits = {}      -- rows of fig1_fits.csv
+local series = {}    -- the combined plot
+
+for _, c in ipairs(catchments) do
+  if c.E < ext.E_min or c.E >= ext.E_max or c.N < ext.N_min or c.N >= ext.N_max then
+    print(("%s: outlet (%d E, %d N) lies outside this DEM (E %.0f..%.0f, N %.0f..%.0f); skipped")
+          :format(c.name, c.E, c.N, ext.E_min, ext.E_max, ext.N_min, ext.N_max))
+  else
+    local outlet = { c.E, c.N }
+    local net = dem:network{ A_min = dem.dx * dem.dy, outlet = outlet }
+    local main = dem:profile{ outlet = outlet }
+    main:write_csv(("%s/fig1_%s.csv"):format(outdir, c.name))
+    print(("%s: outlet snapped %.0f m to (%.0f E, %.0f N), catchment %.2f km^2, %d cells; " ..
+           "main stem %.2f km")
+          :format(c.name, main.snap_distance, main.outlet.E, main.outlet.N, net.A_max / 1e6,
+                  net.n, main.length / 1e3))
+    for _, set in ipairs{ { "network", net }, { "main stem", main } } do
+      local fit, why = dfle.fit_slope_area(set[2])
+      if fit then
+        print(("  %-9s S_df = %.3f  A_df = %.3g m^2  a2 = %.2f  R^2 = %.3f  S_max - S_ch = %.3f" ..
+               "  (%d bins, %d empty)")
+              :format(set[1], fit.S_df, fit.A_df, fit.a2, fit.r2, fit.S_max_minus_S_ch,
+                      fit.n_points, fit.bins.n_empty))
+        fits[#fits + 1] = { c, set[1], set[2], fit }
+      else
+        print(("  %-9s no fit: %s"):format(set[1], why))
+      end
+    end
+    print(("  paper's R^2 for this catchment: %.2f"):format(c.paper_r2))
+
+    local fit = fits[#fits - 1] and fits[#fits - 1][2] == "network" and fits[#fits - 1][4]
+    if fit then
+      if not quick then
+        dfle.plot.slope_area(net, ("%s/fig1_%s.png"):format(outdir, c.name), fit,
+                             { title = ("Big Tujunga, %s outlet: channel network"):format(c.name) })
+      end
+      -- Fig. 1 style: binned means, the fitted curve, A_df marked.
+      local Af, Sf = {}, {}
+      local lo, hi = fit.bins.A[1], fit.bins.A[#fit.bins.A]
+      for i = 0, 100 do
+        Af[i + 1] = lo * (hi / lo) ^ (i / 100)
+        Sf[i + 1] = fit.S_df / (1 + (Af[i + 1] / fit.A_df) ^ fit.a2)
+      end
+      series[#series + 1] = { x = fit.bins.A, y = fit.bins.S, label = c.name .. " (binned)" }
+      series[#series + 1] = { x = Af, y = Sf, lines = true,
+                              label = ("%s: Eq. (2), R^2 = %.2f"):format(c.name, fit.r2) }
+      -- A_df as a short vertical tick through the curve (where S = S_df / 2).
+      series[#series + 1] = { x = { fit.A_df, fit.A_df }, y = { fit.S_df / 3, fit.S_df * 3 / 4 },
+                              lines = true, label = ("%s: A_{df} = %.3g m^2"):format(c.name, fit.A_df) }
+    end
+  end
+end
+
+-- The fits as CSV.
+local csv = outdir .. "/fig1_fits.csv"
+local f = assert(io.open(csv, "w"))
+f:write("catchment,data,outlet_E (m),outlet_N (m),snapped_E (m),snapped_N (m),A_outlet (m^2)," ..
+        "cells,slope_interval (m),S_df,A_df (m^2),a2,R2,S_max_minus_S_ch,bins,empty_bins\n")
+for _, r in ipairs(fits) do
+  local c, what, p, fit = r[1], r[2], r[3], r[4]
+  f:write(("%s,%s,%d,%d,%.3f,%.3f,%.6g,%d,%g,%.6g,%.6g,%.6g,%.6g,%.6g,%d,%d\n")
+          :format(c.name, what, c.E, c.N, p.outlet.E, p.outlet.N, p.A_max, p.n, p.ds,
+                  fit.S_df, fit.A_df, fit.a2, fit.r2, fit.S_max_minus_S_ch, fit.n_points,
+                  fit.bins.n_empty))
+end
+f:close()
+
+local png = outdir .. "/fig1_slope_area.png"
+if #series > 0 then
+  dfle.plot.xy{ path = png, series = series, logx = true, logy = true,
+                title = "Big Tujunga (SRTM 30 m): binned slope-area, Eq. (2) fits, A_{df}",
+                xlabel = "Drainage area, A (m^2)", ylabel = "Slope, S (m/m)" }
+end
+print("wrote " .. csv .. ", " .. png .. (quick and "" or ", fig1_<name>.png") ..
+      ", fig1_<name>.csv")
