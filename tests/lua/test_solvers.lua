@@ -46,6 +46,24 @@ tests["run: implicit transients and recorded profiles"] = function()
     T.close(m.time, 2e4, 1e-12, 0)
 end
 
+tests["run: any parameter changes mid-run by carrying the profile to a new model"] = function()
+    local ch = dfle.channel{ dx = 20 }
+    local m1 = dfle.model{ channel = ch, law = dfle.law.power{ k_df = 1e-4 } }
+    m1:run_to_steady{}
+    local m2 = dfle.model{ channel = ch, law = dfle.law.power{ k_df = 2e-4 } }
+    m2:set_z(m1:get("z"))
+    local r = m2:run{ years = 5e4, method = "implicit", record = { 0, 5e4 } }
+    local z0, z1 = r.records[1].z, r.records[2].z
+    for i = 1, #z0 do T.eq(z0[i], m1:get("z")[i]) end
+    -- More erodible bedrock: the debris-flow reach at the head lowers.
+    T.ok(z1[1] < z0[1] - 1, ("head %.2f -> %.2f m"):format(z0[1], z1[1]))
+    local new = dfle.model{ channel = ch, law = dfle.law.power{ k_df = 2e-4 } }
+    new:run_to_steady{}
+    T.ok(m2:run_to_steady{}.converged)
+    local a, b = m2:get("S"), new:get("S")
+    for i = 1, #a - 1 do T.close(a[i], b[i], 5e-3, 0) end
+end
+
 tests["method and record errors name themselves"] = function()
     local m = model()
     T.raises_here(function() return m:run_to_steady{ method = "newton" } end, "invalid option 'newton'")
