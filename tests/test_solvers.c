@@ -159,38 +159,40 @@ static void fig6_defaults(void **state)
     parts_free(&p);
 }
 
+/* The implicit and direct steady states against a known S(A). */
+static void matches_known_slopes(const parts *p, double (*known)(const void *, double),
+                                 const void *ctx)
+{
+    for (int method = DFLE_METHOD_IMPLICIT; method <= DFLE_METHOD_DIRECT; method++) {
+        double *S = steady_slopes(p, 5e-4, method, NULL);
+        for (size_t i = 0; i + 1 < dfle_channel_size(p->ch); i++)
+            assert_close(S[i], known(ctx, dfle_channel_A(p->ch)[i]), 5e-3, 0);
+        free(S);
+    }
+}
+
+static double eq26(const void *fl, double A) { return dfle_fluvial_steady_slope(fl, 5e-4, A); }
+static double eq19(const void *ap, double A) { return dfle_analytical_slope(ap, A); }
+
 static void analytical_steady_states(void **state)
 {
     parts p = {0};
     dfle_empirical_opts eo;
+    const dfle_analytical_params ap = {
+        .U = 5e-4, .k_df = 1e-4, .alpha = 6, .beta = 1, .M0 = 3000, .gamma = 0.5,
+        .mu = 500, .c1 = 0.135, .c2 = 0.78, .rho_b = 1800, .g = 9.81, .k_w = 0.05, .b = 0.3,
+    };
     (void)state;
-    /* Fluvial only: Eq. (26). */
     make_channel(&p, 5.0);
     make_fluvial(&p);
-    for (int method = DFLE_METHOD_IMPLICIT; method <= DFLE_METHOD_DIRECT; method++) {
-        double *S = steady_slopes(&p, 5e-4, method, NULL);
-        for (size_t i = 0; i + 1 < dfle_channel_size(p.ch); i++)
-            assert_close(S[i], dfle_fluvial_steady_slope(p.fl, 5e-4, dfle_channel_A(p.ch)[i]),
-                         5e-3, 0);
-        free(S);
-    }
+    matches_known_slopes(&p, eq26, p.fl); /* fluvial only: Eq. (26) */
     dfle_fluvial_free(p.fl);
     p.fl = NULL;
-    /* Debris flows only, tau_y = 0: Eq. (19). */
     dfle_empirical_opts_default(&eo);
     eo.tau_y = 0;
     assert_int_equal(dfle_router_new_empirical(&eo, &p.rt, NULL), DFLE_OK);
     make_law(&p, 1e-4, 6, 1);
-    dfle_analytical_params ap = {
-        .U = 5e-4, .k_df = 1e-4, .alpha = 6, .beta = 1, .M0 = 3000, .gamma = 0.5,
-        .mu = 500, .c1 = 0.135, .c2 = 0.78, .rho_b = 1800, .g = 9.81, .k_w = 0.05, .b = 0.3,
-    };
-    for (int method = DFLE_METHOD_IMPLICIT; method <= DFLE_METHOD_DIRECT; method++) {
-        double *S = steady_slopes(&p, 5e-4, method, NULL);
-        for (size_t i = 0; i + 1 < dfle_channel_size(p.ch); i++)
-            assert_close(S[i], dfle_analytical_slope(&ap, dfle_channel_A(p.ch)[i]), 5e-3, 0);
-        free(S);
-    }
+    matches_known_slopes(&p, eq19, &ap); /* debris flows only, tau_y = 0: Eq. (19) */
     parts_free(&p);
 }
 
