@@ -5,6 +5,8 @@
 #   make check      the same tests built with AddressSanitizer + UBSan
 #   make memcheck   the cmocka tests under valgrind
 #   make bench      benchmark figures (see bench/)
+#   make mpi        build/dfle-mpi, ensembles across MPI ranks (needs mpicc;
+#                   `make test-mpi` checks it; doc/ensembles.md)
 #   make install    PREFIX=/usr/local DESTDIR=
 #   make clean
 #
@@ -12,6 +14,7 @@
 
 VERSION   := 0.1.0
 CC        ?= cc
+MPICC     ?= mpicc
 PKG_CONFIG ?= pkg-config
 LUA_PKG   ?= lua5.4
 BUILD     ?= build
@@ -30,9 +33,9 @@ CMOCKA_LIBS ?= $(shell $(PKG_CONFIG) --libs cmocka)
 OPT       ?= -O2
 WARN      := -Wall -Wextra -Werror -Wshadow -Wstrict-prototypes -Wmissing-prototypes
 CFLAGS    ?= $(OPT) -g
-ALL_CFLAGS := -std=c11 -D_POSIX_C_SOURCE=200809L -fPIC $(WARN) $(CFLAGS) $(SANITIZE) \
+ALL_CFLAGS := -std=c11 -D_POSIX_C_SOURCE=200809L -fPIC -pthread $(WARN) $(CFLAGS) $(SANITIZE) \
               -Iinclude -DDFLE_VERSION='"$(VERSION)"'
-ALL_LDFLAGS := $(LDFLAGS) $(SANITIZE)
+ALL_LDFLAGS := $(LDFLAGS) $(SANITIZE) -pthread
 
 CORE_SRC  := $(wildcard src/*.c)
 CORE_SRC  := $(filter-out src/main.c src/progress.c,$(CORE_SRC))
@@ -50,7 +53,7 @@ LIB_LUA   := $(BUILD)/libdfle_lua.a
 CLI       := $(BUILD)/dfle
 MODULE    := $(BUILD)/dfle.so
 
-.PHONY: all test check memcheck bench install uninstall clean
+.PHONY: all test check memcheck bench install uninstall clean mpi test-mpi
 # Keep test objects between builds (make would delete them as intermediates).
 .SECONDARY:
 all: $(CLI) $(MODULE)
@@ -86,8 +89,16 @@ $(BUILD)/tests/%: $(BUILD)/obj/tests/%.o $(LIB_LUA) $(LIB_CORE)
 	@mkdir -p $(dir $@)
 	$(CC) $(ALL_LDFLAGS) $^ $(CMOCKA_LIBS) $(LUA_LIBS) $(GSL_LIBS) $(GDAL_LIBS) -lm -o $@
 
+# The MPI tests join `make test` wherever mpicc is installed (install-deps
+# installs it), except in sanitizer builds, where OpenMPI's own
+# allocations would drown the report.
+HAVE_MPICC := $(if $(SANITIZE),,$(shell command -v $(MPICC) 2>/dev/null))
+
 test: all $(TEST_BIN)
 	@BUILD=$(BUILD) sh tests/run-tests.sh
+ifneq ($(HAVE_MPICC),)
+	@$(MAKE) --no-print-directory test-mpi
+endif
 
 check:
 	$(MAKE) BUILD=build/san OPT=-O1 \
@@ -98,6 +109,24 @@ memcheck: all $(TEST_BIN)
 
 bench: all
 	@sh bench/run.sh $(CLI)
+
+# --- MPI build (doc/ensembles.md): only these rules need mpicc ---
+
+MPI_CLI   := $(BUILD)/dfle-mpi
+MPI_OBJ   := $(BUILD)/obj-mpi/src/main.o $(BUILD)/obj-mpi/src/mpi/dfle_mpi.o
+
+$(BUILD)/obj-mpi/%.o: %.c
+	@mkdir -p $(dir $@)
+	$(MPICC) $(ALL_CFLAGS) -DDFLE_MPI -Isrc $(LUA_CFLAGS) $(GSL_CFLAGS) -MMD -MP -c $< -o $@
+
+$(MPI_CLI): $(MPI_OBJ) $(BUILD)/obj/src/progress.o $(LIB_LUA) $(LIB_CORE)
+	$(MPICC) $(ALL_LDFLAGS) $^ $(LUA_LIBS) $(GSL_LIBS) $(GDAL_LIBS) -lm -o $@
+
+mpi: $(MPI_CLI)
+
+test-mpi: all $(MPI_CLI)
+	@BUILD=$(BUILD) sh tests/mpi-ensemble.sh
+# --- end MPI build ---
 
 install: all
 	install -d $(DESTDIR)$(PREFIX)/bin $(DESTDIR)$(PREFIX)/lib/lua/5.4 \
@@ -123,4 +152,4 @@ uninstall:
 clean:
 	rm -rf build
 
--include $(shell find $(BUILD)/obj -name '*.d' 2>/dev/null)
+-include $(shell find $(BUILD)/obj $(BUILD)/obj-mpi -name '*.d' 2>/dev/null)

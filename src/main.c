@@ -12,6 +12,7 @@
 #include <stdio.h>
 #include <stdlib.h>
 #include <string.h>
+#include <time.h>
 #include <unistd.h>
 
 #include <lauxlib.h>
@@ -22,7 +23,11 @@
 
 #include "dfle/lua.h"
 #include "lua/dfle_lua.h"
+#include "lua/lua_ensemble.h" /* ensembles: -j, --shard, worker states */
 #include "progress.h"
+#ifdef DFLE_MPI /* the MPI build, `make mpi` (doc/ensembles.md) */
+#include "mpi/dfle_mpi.h"
+#endif
 
 #ifndef DFLE_VERSION
 #define DFLE_VERSION "unknown"
@@ -38,6 +43,9 @@ static void usage(FILE *out)
             "\n"
             "options:\n"
             "  -q, --quiet    no progress bar\n"
+            "  -j N           dfle.ensemble workers (default: all cores)\n"
+            "  --shard i/n    run shard i of n of each dfle.ensemble (1 <= i <= n);\n"
+            "                 --shard slurm takes i, n from SLURM_ARRAY_TASK_*\n"
             "  -h, --help     show this help and exit\n"
             "  -v, --version  show the version and exit\n"
             "  --             stop handling options\n"
@@ -56,6 +64,9 @@ typedef struct cli {
     char **argv;
     dfle_progress_bar bar;
     dfle_lua_progress hooks;
+    dfle_lua_ensemble_host ens; /* --- ensembles (doc/ensembles.md) --- */
+    double ens_last_draw;
+    int ens_drawn;
 } cli;
 
 /* Message handler: append a traceback, as lua.c does. */
@@ -75,6 +86,129 @@ static int msghandler(lua_State *L)
     return 1;
 }
 
+/* --- ensembles (doc/ensembles.md): worker states, -j, --shard, the
+ * ensemble progress line.  A worker's state is made like the main one
+ * (libraries, dfle, `arg`), with the script loaded and its arguments
+ * pushed; dfle.ensemble runs it up to its own call. */
+static void set_arg_table(lua_State *L, const cli *c)
+{
+    lua_createtable(L, c->argc - c->script - 1, c->script + 1);
+    for (int i = 0; i < c->argc; i++) {
+        lua_pushstring(L, c->argv[i]);
+        lua_rawseti(L, -2, i - c->script);
+    }
+    lua_setglobal(L, "arg");
+}
+
+static int open_worker_p(lua_State *L)
+{
+    const cli *c = lua_touserdata(L, 1);
+    const char *script = c->argv[c->script];
+    luaL_openlibs(L);
+    luaL_requiref(L, "dfle", luaopen_dfle, 1);
+    lua_pop(L, 1);
+    set_arg_table(L, c);
+    if (strcmp(script, "-") == 0)
+        return luaL_error(L, "a script read from standard input cannot be rerun by ensemble "
+                             "workers; save it to a file or use -j 1");
+    if (luaL_loadfile(L, script) != LUA_OK)
+        return lua_error(L);
+    luaL_checkstack(L, c->argc, "too many arguments to script");
+    for (int i = c->script + 1; i < c->argc; i++)
+        lua_pushstring(L, c->argv[i]);
+    return c->argc - c->script;
+}
+
+static lua_State *open_worker(void *ud, int *nargs, char *msg, size_t msglen)
+{
+    lua_State *L = luaL_newstate();
+    int n;
+    if (L == NULL) {
+        snprintf(msg, msglen, "cannot create a worker's Lua state: not enough memory");
+        return NULL;
+    }
+    lua_pushcfunction(L, open_worker_p);
+    lua_pushlightuserdata(L, ud);
+    if (lua_pcall(L, 1, LUA_MULTRET, 0) != LUA_OK) {
+        snprintf(msg, msglen, "%s", lua_tostring(L, -1) ? lua_tostring(L, -1) : "worker failed");
+        lua_close(L);
+        return NULL;
+    }
+    n = lua_gettop(L);
+    *nargs = n - 1; /* chunk, then the script's arguments */
+    return L;
+}
+
+static double mono_now(void)
+{
+    struct timespec ts;
+    clock_gettime(CLOCK_MONOTONIC, &ts);
+    return (double)ts.tv_sec + 1e-9 * (double)ts.tv_nsec;
+}
+
+static void ens_progress(void *ud, size_t done, size_t total, size_t failed, double elapsed)
+{
+    cli *c = ud;
+    double t = mono_now(), rate = elapsed > 0 ? (double)done / elapsed : 0;
+    double f = total > 0 ? (double)done / (double)total : 1;
+    int filled = (int)(f * 24 + 0.5);
+    if (c->ens_drawn && t - c->ens_last_draw < 0.1 && done < total)
+        return;
+    c->ens_last_draw = t;
+    fputs("\r[", stderr);
+    for (int i = 0; i < 24; i++)
+        fputc(i < filled ? '#' : '.', stderr);
+    fprintf(stderr, "] %zu/%zu runs  %.1f runs/s", done, total, rate);
+    if (failed > 0)
+        fprintf(stderr, "  %zu failed", failed);
+    if (done > 0 && done < total)
+        fprintf(stderr, "  ETA %.0f s", (double)(total - done) / rate);
+    fputs("\033[K", stderr);
+    fflush(stderr);
+    c->ens_drawn = 1;
+}
+
+static void ens_progress_end(void *ud)
+{
+    cli *c = ud;
+    if (c->ens_drawn) {
+        fputs("\r\033[K", stderr);
+        fflush(stderr);
+    }
+    c->ens_drawn = 0;
+}
+
+/* "i/n" with 1 <= i <= n, or "slurm": SLURM_ARRAY_TASK_ID (from
+ * SLURM_ARRAY_TASK_MIN) of SLURM_ARRAY_TASK_COUNT. */
+static int parse_shard(const char *s, size_t *i, size_t *n)
+{
+    char *end;
+    unsigned long a, b;
+    if (strcmp(s, "slurm") == 0) {
+        const char *id = getenv("SLURM_ARRAY_TASK_ID"), *cnt = getenv("SLURM_ARRAY_TASK_COUNT");
+        const char *min = getenv("SLURM_ARRAY_TASK_MIN");
+        unsigned long m = min != NULL ? strtoul(min, NULL, 10) : 0;
+        if (id == NULL || cnt == NULL)
+            return 0;
+        a = strtoul(id, NULL, 10) - m + 1;
+        b = strtoul(cnt, NULL, 10);
+    } else {
+        a = strtoul(s, &end, 10);
+        if (end == s || *end != '/')
+            return 0;
+        s = end + 1;
+        b = strtoul(s, &end, 10);
+        if (end == s || *end != '\0')
+            return 0;
+    }
+    if (b < 1 || a < 1 || a > b)
+        return 0;
+    *i = a;
+    *n = b;
+    return 1;
+}
+/* --- end ensembles --- */
+
 /* Runs protected: everything that can raise happens here. */
 static int pmain(lua_State *L)
 {
@@ -93,15 +227,15 @@ static int pmain(lua_State *L)
             c->hooks.finish = dfle_progress_bar_finish;
             c->hooks.ud = &c->bar;
             dfle_lua_set_progress(L, &c->hooks);
+            c->ens.progress = ens_progress; /* ensembles */
+            c->ens.progress_end = ens_progress_end;
         }
     }
+    c->ens.open_state = open_worker; /* ensembles */
+    c->ens.ud = c;
+    dfle_lua_set_ensemble_host(L, &c->ens);
     /* arg table: arg[-k] = options and program, arg[0] = script. */
-    lua_createtable(L, nargs, c->script + 1);
-    for (int i = 0; i < c->argc; i++) {
-        lua_pushstring(L, c->argv[i]);
-        lua_rawseti(L, -2, i - c->script);
-    }
-    lua_setglobal(L, "arg");
+    set_arg_table(L, c);
 
     if (luaL_loadfile(L, strcmp(script, "-") == 0 ? NULL : script) != LUA_OK) {
         /* A missing file or a syntax error: the message says it all; a
@@ -136,6 +270,23 @@ int main(int argc, char **argv)
         } else if (strcmp(a, "-v") == 0 || strcmp(a, "--version") == 0) {
             printf("dfle %s (%s)\n", DFLE_VERSION, LUA_RELEASE);
             return EXIT_SUCCESS;
+        } else if (strncmp(a, "-j", 2) == 0) { /* ensembles: -j N or -jN */
+            const char *v = a[2] != '\0' ? a + 2 : (i + 1 < argc ? argv[++i] : "");
+            char *end;
+            long j = strtol(v, &end, 10);
+            if (end == v || *end != '\0' || j < 1 || j > 4096) {
+                fprintf(stderr, "%s: -j needs a number of workers >= 1 (got '%s')\n", progname, v);
+                return 2;
+            }
+            c.ens.workers = (int)j;
+        } else if (strcmp(a, "--shard") == 0) { /* ensembles */
+            const char *v = i + 1 < argc ? argv[++i] : "";
+            if (!parse_shard(v, &c.ens.shard_i, &c.ens.shard_n)) {
+                fprintf(stderr, "%s: --shard needs i/n with 1 <= i <= n, or 'slurm' with "
+                                "SLURM_ARRAY_TASK_ID and SLURM_ARRAY_TASK_COUNT set (got '%s')\n",
+                        progname, v);
+                return 2;
+            }
         } else if (strcmp(a, "--") == 0) {
             i++;
             break;
@@ -157,12 +308,30 @@ int main(int argc, char **argv)
     c.argv = argv;
     current_cli = &c;
 
+#ifdef DFLE_MPI /* ranks > 0 serve ensembles; rank 0 runs the script */
+    {
+        int size, rank = dfle_mpi_init(&size);
+        c.ens.open_state = open_worker;
+        c.ens.ud = &c;
+        if (rank > 0) {
+            gsl_set_error_handler_off();
+            status = dfle_mpi_worker_loop(&c.ens);
+            dfle_mpi_finish(rank);
+            return status;
+        }
+        c.ens.remote = dfle_mpi_remote;
+        dfle_mpi_set_host(&c.ens);
+    }
+#endif
     /* GSL aborts on its errors by default; dfle checks every status instead,
      * so an out-of-memory inside GSL becomes an error message, not a crash. */
     gsl_set_error_handler_off();
     L = luaL_newstate();
     if (L == NULL) {
         fprintf(stderr, "%s: cannot create Lua state: not enough memory\n", progname);
+#ifdef DFLE_MPI
+        dfle_mpi_finish(0);
+#endif
         return EXIT_FAILURE;
     }
     lua_pushcfunction(L, msghandler);
@@ -176,5 +345,8 @@ int main(int argc, char **argv)
         fprintf(stderr, "%s: %s\n", progname, msg != NULL ? msg : "(error object is not a string)");
     }
     lua_close(L);
+#ifdef DFLE_MPI
+    dfle_mpi_finish(0);
+#endif
     return status == LUA_OK ? EXIT_SUCCESS : EXIT_FAILURE;
 }

@@ -462,6 +462,27 @@ static void take_records(const dfle_model *m, const dfle_run_opts *o, double t,
     }
 }
 
+/* Time-varying uplift U(t) (doc/laws.md): the run's uplift callback,
+ * if any, sets U for the coming step, so forcing can change within a run
+ * instead of only between runs (m:set_U). */
+static int apply_uplift(dfle_model *m, const dfle_run_opts *o, dfle_error *err)
+{
+    double U = m->U;
+    int st;
+    if (o->uplift == NULL)
+        return DFLE_OK;
+    if ((st = o->uplift(o->uplift_ud, m->time, &U, err)) != DFLE_OK)
+        return st;
+    if (!(isfinite(U) && U > 0))
+        return dfle_error_set(err, DFLE_EINVAL, "model: U(t) must be > 0 m/yr (got %g at t = %g yr)",
+                              U, m->time);
+    if (U != m->U) {
+        m->U = U;
+        m->evaluated = 0; /* dz/dt = U - E changes */
+    }
+    return DFLE_OK;
+}
+
 int dfle_mi_drive(dfle_model *m, const dfle_run_opts *o, dfle_mi_advance_fn advance,
                   void *state, dfle_run_result *res, dfle_error *err)
 {
@@ -475,6 +496,8 @@ int dfle_mi_drive(dfle_model *m, const dfle_run_opts *o, dfle_mi_advance_fn adva
     for (;;) {
         double r, dt, limit;
 
+        if ((st = apply_uplift(m, o, err)) != DFLE_OK)
+            return st;
         if (!m->evaluated && (st = dfle_mi_evaluate(m, err)) != DFLE_OK)
             return st;
         r = dfle_mi_rate_ratio(m);
@@ -585,6 +608,11 @@ int dfle_model_run(dfle_model *m, const dfle_run_opts *o, dfle_run_result *res,
         if (o->n_record > 0)
             return dfle_error_set(err, DFLE_EINVAL,
                                   "model: the direct method has no time to record at");
+        { /* with U(t): the steady state for U at the current time */
+            int st = apply_uplift(m, o, err);
+            if (st != DFLE_OK)
+                return st;
+        }
         return dfle_mi_run_direct(m, &opts, res, err);
     default:
         return dfle_error_set(err, DFLE_EINVAL, "model: unknown method %d", o->method);

@@ -55,6 +55,7 @@ int dfle_mi_node_erosion(dfle_model *m, size_t i, double S, int with_df, double 
     if (with_df && m->rt != NULL) {
         dfle_law_ctx ctx = {.n = 1, .S = &S, .A = dfle_channel_A(m->ch) + i,
                             .w = dfle_channel_w(m->ch) + i};
+        dfle_flow view; /* lives as long as ctx: rate may read the flow */
         double F, Edf;
         int st;
         if (dfle_router_is_local(m->rt)) {
@@ -68,7 +69,7 @@ int dfle_mi_node_erosion(dfle_model *m, size_t i, double S, int with_df, double 
                 return st;
         } else {
             /* Routed rarely: the cached Eq. (11) factor stands. */
-            dfle_flow view = flow_at(&m->flow, i);
+            view = flow_at(&m->flow, i);
             *goes_on = i < m->flow.runout_end;
             if (!*goes_on) {
                 *E = e;

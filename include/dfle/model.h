@@ -147,6 +147,14 @@ typedef struct dfle_run_opts {
     double *record_z;
     dfle_progress_fn progress; /* optional */
     void *progress_ud;
+    /* Optional, time-varying uplift U(t) (doc/laws.md): set *U [m/yr] for
+     * model time t [yr, dfle_model_time] and return 0, or a negative
+     * status with err set (the run stops with it).  Called before every
+     * landscape step, and once before a direct solve; the model's U
+     * becomes the value returned.  The steady-state test compares |dz/dt|
+     * with tol times the current U. */
+    int (*uplift)(void *ud, double t, double *U, dfle_error *err);
+    void *uplift_ud;
 } dfle_run_opts;
 
 /* tol = 1e-3, max_time = 2e7 yr, max_steps = 1e7 (about ten minutes on

@@ -117,11 +117,14 @@ void dfle_lua_push_module(lua_State *L);
 void dfle_lua_open_channel(lua_State *L);
 void dfle_lua_open_fluvial(lua_State *L);
 void dfle_lua_open_router(lua_State *L);
+void dfle_lua_open_router_define(lua_State *L); /* dfle.router.define, into the router table */
 void dfle_lua_open_law(lua_State *L);
+void dfle_lua_open_law_define(lua_State *L); /* dfle.law.define, into the law table */
 void dfle_lua_open_model(lua_State *L);
 void dfle_lua_open_analysis(lua_State *L);
 void dfle_lua_open_plot(lua_State *L);
 void dfle_lua_open_sampling(lua_State *L);
 void dfle_lua_open_dem(lua_State *L);
+void dfle_lua_open_ensemble(lua_State *L); /* after sampling: wraps dfle.pawn */
 
 #endif

@@ -41,6 +41,7 @@ int luaopen_dfle(lua_State *L)
     dfle_lua_open_plot(L);
     dfle_lua_open_sampling(L);
     dfle_lua_open_dem(L);
+    dfle_lua_open_ensemble(L);
     lua_pushvalue(L, -1);
     lua_rawsetp(L, LUA_REGISTRYINDEX, &module_key);
     return 1;

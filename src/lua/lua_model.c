@@ -16,7 +16,9 @@
 #include <stdio.h>
 #include <string.h>
 
-enum { UV_CHANNEL = 1, UV_FLUVIAL, UV_ROUTER, UV_LAW, UV_COUNT = UV_LAW };
+enum { UV_CHANNEL = 1, UV_FLUVIAL, UV_ROUTER, UV_LAW,
+       UV_U, /* U(t): the uplift function, or nil */
+       UV_COUNT = UV_U };
 
 /* Push component `key` of the options table, or a default built by
  * calling dfle.<ctor_path>{}; push nil when the user said `false`. */
@@ -77,11 +79,30 @@ static int l_model_new(lua_State *L)
     int base;
     const dfle_lua_param params[] = {{"U", &o.U}, {"cfl", &o.cfl}, {"dt_max", &o.dt_max}};
 
+    /* U may be a number [m/yr] or a function of model time [yr]. */
+    static const char *const component_keys_U[] = {"channel", "fluvial", "router", "law", "U",
+                                                   NULL};
+    int U_fn;
+
     dfle_model_opts_default(&o);
     if (!lua_isnoneornil(L, 1))
         luaL_checktype(L, 1, LUA_TTABLE);
     lua_settop(L, 1);
-    dfle_lua_read_params(L, 1, "model", params, 3, component_keys);
+    U_fn = lua_istable(L, 1) && lua_getfield(L, 1, "U") == LUA_TFUNCTION;
+    lua_settop(L, 1);
+    if (U_fn) {
+        dfle_lua_read_params(L, 1, "model", params + 1, 2, component_keys_U);
+        lua_getfield(L, 1, "U");
+        lua_pushnumber(L, 0.0);
+        lua_call(L, 1, 1);
+        if (lua_type(L, -1) != LUA_TNUMBER)
+            luaL_error(L, "dfle.model: U(t) must return a number, got %s (at t = 0)",
+                       dfle_lua_typename(L, -1));
+        o.U = lua_tonumber(L, -1);
+        lua_settop(L, 1);
+    } else {
+        dfle_lua_read_params(L, 1, "model", params, 3, component_keys);
+    }
 
     base = lua_gettop(L);
     push_component(L, 1, "channel", DFLE_LUA_CHANNEL, default_channel, 0);
@@ -106,9 +127,13 @@ static int l_model_new(lua_State *L)
         luaL_error(L, "dfle.model: a component has been closed");
 
     u = dfle_lua_newobject(L, sizeof *u, DFLE_LUA_MODEL, UV_COUNT);
-    for (int k = UV_CHANNEL; k <= UV_COUNT; k++) {
+    for (int k = UV_CHANNEL; k <= UV_LAW; k++) {
         lua_pushvalue(L, base + k);
         lua_setiuservalue(L, -2, k);
+    }
+    if (U_fn) {
+        lua_getfield(L, 1, "U");
+        lua_setiuservalue(L, -2, UV_U);
     }
     if (dfle_model_new(&o, &u->m, &err) != DFLE_OK)
         return dfle_lua_raise(L, &err);
@@ -144,6 +169,8 @@ static int l_model_set_U(lua_State *L)
     dfle_error err;
     if (dfle_model_set_U(m, luaL_checknumber(L, 2), &err) != DFLE_OK)
         return dfle_lua_raise(L, &err);
+    lua_pushnil(L); /* a constant U replaces a U(t) function */
+    lua_setiuservalue(L, 1, UV_U);
     lua_settop(L, 1);
     return 1;
 }
@@ -166,6 +193,42 @@ static void push_result(lua_State *L, const dfle_run_result *r)
     lua_pushinteger(L, (lua_Integer)r->iterations), lua_setfield(L, -2, "iterations");
     if (r->note[0] != '\0')
         lua_pushstring(L, r->note), lua_setfield(L, -2, "note");
+}
+
+/* The run's uplift callback: calls the model's
+ * U function (at stack index fidx of L, the thread running the run) under
+ * lua_pcall with a traceback, so an error comes back as a status. */
+typedef struct { lua_State *L; int fidx; } uplift_ctx;
+
+static int uplift_msgh(lua_State *L)
+{
+    const char *msg = lua_tostring(L, 1);
+    luaL_traceback(L, L, msg != NULL ? msg : "(error object is not a string)", 1);
+    return 1;
+}
+
+static int lua_uplift(void *ud, double t, double *U, dfle_error *err)
+{
+    uplift_ctx *c = ud;
+    lua_State *L = c->L;
+    int top = lua_gettop(L), ok;
+    lua_pushcfunction(L, uplift_msgh);
+    lua_pushvalue(L, c->fidx);
+    lua_pushnumber(L, t);
+    if (lua_pcall(L, 1, 1, top + 1) != LUA_OK) {
+        dfle_error_set(err, DFLE_ECALLBACK, "model: U(t) failed at t = %g yr: %s", t,
+                       lua_tostring(L, -1) != NULL ? lua_tostring(L, -1) : "?");
+        lua_settop(L, top);
+        return DFLE_ECALLBACK;
+    }
+    ok = lua_type(L, -1) == LUA_TNUMBER;
+    if (ok)
+        *U = lua_tonumber(L, -1);
+    else
+        dfle_error_set(err, DFLE_ECALLBACK, "model: U(t) must return a number, got %s (at t = %g yr)",
+                       dfle_lua_typename(L, -1), t);
+    lua_settop(L, top);
+    return ok ? DFLE_OK : DFLE_ECALLBACK;
 }
 
 /* Shared by run_to_steady and run: `steady` selects the defaults. */
@@ -247,6 +310,13 @@ static int model_run(lua_State *L, int steady)
     if (prog != NULL) {
         o.progress = prog->update;
         o.progress_ud = prog->ud;
+    }
+    /* A U(t) function stays on the stack for the run. */
+    uplift_ctx uc = {L, 0};
+    if (lua_getiuservalue(L, 1, UV_U) == LUA_TFUNCTION) {
+        uc.fidx = lua_gettop(L);
+        o.uplift = lua_uplift;
+        o.uplift_ud = &uc;
     }
     st = dfle_model_run(m, &o, &res, &err);
     if (prog != NULL && prog->finish != NULL)

@@ -1,5 +1,6 @@
 /*
- * lua_router.c - dfle.router.empirical{...}: debris-flow routers.
+ * lua_router.c - dfle.router.empirical{...}, dfle.router.process{...} and
+ * dfle.router.define{...} (lua_router_define.c): debris-flow routers.
  *
  * A router object from Lua is just the C router handle; the model takes
  * it through the ops table, whatever its kind.  rt:params() returns the
@@ -99,17 +100,29 @@ static void push_process_params(lua_State *L, const dfle_process_opts *o)
     lua_setfield(L, -2, "frequency_scaling");
 }
 
-/* Push the parameters of any router kind as a table. */
+/* Push the parameters of any router kind as a table (the router object
+ * is at index 1). */
 static void push_params(lua_State *L, dfle_router *rt)
 {
     const dfle_empirical_opts *eo = dfle_router_empirical_opts(rt);
     const dfle_process_opts *po = dfle_router_process_opts(rt);
-    if (eo != NULL)
+    if (eo != NULL) {
         push_empirical_params(L, eo);
-    else if (po != NULL)
+    } else if (po != NULL) {
         push_process_params(L, po);
-    else
+    } else {
         lua_newtable(L);
+        /* A Lua-defined router keeps its params as user value 2: copy. */
+        if (lua_getiuservalue(L, 1, 2) == LUA_TTABLE) {
+            lua_pushnil(L);
+            while (lua_next(L, -2) != 0) {
+                lua_pushvalue(L, -2);
+                lua_insert(L, -2);
+                lua_settable(L, -5);
+            }
+        }
+        lua_pop(L, 1);
+    }
 }
 
 static void set_array(lua_State *L, const char *key, const double *v, size_t n)
@@ -261,5 +274,6 @@ void dfle_lua_open_router(lua_State *L)
     lua_setfield(L, -2, "empirical");
     lua_pushcfunction(L, l_router_process);
     lua_setfield(L, -2, "process");
+    dfle_lua_open_router_define(L); /* dfle.router.define (lua_router_define.c) */
     lua_setfield(L, -2, "router");
 }

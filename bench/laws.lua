@@ -1,0 +1,76 @@
+-- laws.lua - what a law written in Lua costs: whole-run CPU time of the
+-- default steady state (Fig. 9 defaults: empirical router, Eq. (6) with
+-- alpha = 6, beta = 1, Table G1 fluvial law, dx = 5 m, A_max = 8 km^2)
+-- with the built-in dfle.law.power and with the same law written with
+-- dfle.law.define (as factor + rate, and as rate alone), by the explicit
+-- method and by the default (direct) one; best of several repetitions,
+-- and the ratio Lua / built-in.  Target (issue 6): ratio <= 3 for the
+-- whole run.  Prints times only; never asserts on them.
+--   dfle bench/laws.lua [repetitions (3)]
+
+local reps = tonumber(arg and arg[1]) or 3
+
+local function lua_eq6()
+  return dfle.law.define{
+    name = "eq6_lua",
+    params = { k_df = 1e-4, alpha = 6, beta = 1 },
+    factor = function(c, p) return c.t_p * c.h ^ p.beta * c.Theta end,
+    rate = function(c, p) return p.k_df * c.S ^ p.alpha * c.F end,
+    integrand = { h = 1 },
+  }
+end
+
+-- The same law as one rate function (no factor): one Lua call per node
+-- per evaluation instead of two.
+local function lua_eq6_rate_only()
+  return dfle.law.define{
+    name = "eq6_lua_rate",
+    params = { k_df = 1e-4, alpha = 6, beta = 1 },
+    rate = function(c, p) return p.k_df * c.S ^ p.alpha * c.t_p * c.h ^ p.beta * c.Theta end,
+    integrand = { h = 1 },
+  }
+end
+
+-- Best of `reps` CPU times of one whole run_to_steady.  A direct run
+-- takes under a millisecond, so each timing covers `batch` runs (on
+-- models built beforehand) and is divided by it.
+local function time_run(make_law, method)
+  local best, z = math.huge, nil
+  local batch = method == "direct" and 50 or 1
+  for _ = 1, reps do
+    local models = {}
+    for k = 1, batch do
+      models[k] = dfle.model{
+        channel = dfle.channel{ dx = 5, A_max = 8e6 },
+        U = 5e-4,
+        fluvial = dfle.fluvial.stochastic_threshold{ k_e = 5e-14 },
+        router = dfle.router.empirical{ M0 = 3000, gamma = 0.5, mu = 500, tau_y = 300 },
+        law = make_law(),
+      }
+    end
+    local t0 = os.clock()
+    for k = 1, batch do
+      local r = models[k]:run_to_steady{ tol = 1e-3, max_time = 2e7, method = method }
+      assert(r.converged, "no steady state")
+    end
+    local dt = (os.clock() - t0) / batch
+    if dt < best then best = dt end
+    z = models[batch]:get("z")
+  end
+  return best, z
+end
+
+for _, method in ipairs{ "explicit", "direct" } do
+  local tc, zc = time_run(function() return dfle.law.power{ k_df = 1e-4, alpha = 6, beta = 1 } end,
+                          method)
+  for _, v in ipairs{ { "factor + rate", lua_eq6 }, { "rate only", lua_eq6_rate_only } } do
+    local tl, zl = time_run(v[2], method)
+    local d = 0
+    for i = 1, #zc do
+      if zc[i] ~= 0 then d = math.max(d, math.abs(zl[i] - zc[i]) / math.abs(zc[i])) end
+    end
+    print(("Lua-written Eq. (6) (%s), %s method: built-in %.2f ms, Lua %.2f ms, ratio %.2f "
+           .. "(best of %d; max rel. difference in z %.1e)")
+          :format(v[1], method, 1e3 * tc, 1e3 * tl, tl / tc, reps, d))
+  end
+end

@@ -1,0 +1,117 @@
+-- ensemble_alpha_beta.lua - the paper's alpha-beta experiments (Sect.
+-- 2.5.1, Figs. 2-4): Latin hypercube ensembles over the exponents of the
+-- debris-flow incision law, Eq. (6), and the other parameters of Table
+-- G2 (process-based router, 500 samples) and Table G3 (empirical router,
+-- 4000 samples), scored by R^2 of the Eq. (2) fit and S_max - S_ch.
+--
+--   dfle examples/ensemble_alpha_beta.lua [--quick] [--router empirical|process] [output-directory]
+--
+-- Writes, per router, alpha_beta_<router>.csv (one row per sample, see
+-- doc/ensembles.md; resumable: run again after an interruption) and
+-- plots of S_max - S_ch and R^2 against alpha, colored by beta (four
+-- classes of beta, one color each).  --quick: 24 samples per router on
+-- a coarse channel (dx = 20 m).  Uses all cores (-j N to choose);
+-- `dfle --shard i/n` and build/dfle-mpi work too (doc/ensembles.md).
+
+local quick, outdir, only = false, ".", nil
+local i = 1
+while i <= #arg do
+  local a = arg[i]
+  if a == "--quick" then quick = true
+  elseif a == "--router" then i = i + 1; only = arg[i]
+  else outdir = a end
+  i = i + 1
+end
+assert(only == nil or only == "empirical" or only == "process",
+       "--router must be empirical or process")
+
+local dx = quick and 20 or 5
+local experiments = {
+  empirical = {                               -- Table G3
+    n = quick and 24 or 4000,
+    params = {
+      M0 = { 500, 3000 }, gamma = { 0, 1 }, mu = { 100, 500 }, tau_y = { 100, 600 },
+      alpha = { 2, 8 }, beta = { 0.5, 3 }, k_df = { 8e-5, 2e-4 },
+    },
+    router = function(p)
+      return dfle.router.empirical{ M0 = p.M0, gamma = p.gamma, mu = p.mu, tau_y = p.tau_y }
+    end,
+    k_e = function() return 4.5e-14 end,
+  },
+  process = {                                 -- Table G2
+    n = quick and 24 or 500,
+    params = {
+      alpha = { 2, 8 }, beta = { 0.5, 3 }, k_e = { 4e-14, 6e-14 }, mu2 = { 0.625, 0.781 },
+      D = { 1e-6, 5e-6 }, eta = { 40, 80 }, k_df = { 4e-5, 6e-5 },
+    },
+    router = function(p)
+      return dfle.router.process{ M0 = 200, gamma = 0, mu2 = p.mu2, D = p.D, eta = p.eta }
+    end,
+    k_e = function(p) return p.k_e end,
+  },
+}
+
+local results = {}
+for _, name in ipairs{ "empirical", "process" } do
+  if only == nil or only == name then
+    local e = experiments[name]
+    local ens = dfle.ensemble{
+      params = e.params, n = e.n, seed = 1,
+      out = outdir .. "/alpha_beta_" .. name .. ".csv",
+      build = function(p)
+        return dfle.model{
+          channel = dfle.channel{ dx = dx }, U = 5e-4,
+          fluvial = dfle.fluvial.stochastic_threshold{ k_e = e.k_e(p) },
+          router = e.router(p),
+          law = dfle.law.power{ k_df = p.k_df, alpha = p.alpha, beta = p.beta },
+        }
+      end,
+      outputs = { "S_df", "A_df", "r2", "S_max_minus_S_ch" },
+    }
+    results[name] = ens
+  end
+end
+
+-- Scatter of y against x, one series per class of `color` (quartiles).
+local function colored(ens, x, y, color)
+  local d = ens.data
+  local vals = {}
+  for r = 1, ens.count do
+    if d.status[r] == "ok" then vals[#vals + 1] = d[color][r] end
+  end
+  table.sort(vals)
+  if #vals == 0 then return {} end
+  local edges = {}
+  for k = 0, 4 do edges[k] = vals[math.max(1, math.ceil(k / 4 * #vals))] end
+  local series = {}
+  for k = 1, 4 do
+    local s = { x = {}, y = {}, label = ("%s %.3g-%.3g"):format(color, edges[k - 1], edges[k]) }
+    for r = 1, ens.count do
+      local c = d[color][r]
+      if d.status[r] == "ok" and c >= edges[k - 1] and (c < edges[k] or (k == 4 and c <= edges[k])) then
+        s.x[#s.x + 1], s.y[#s.y + 1] = d[x][r], d[y][r]
+      end
+    end
+    if #s.x > 0 then series[#series + 1] = s end
+  end
+  return series
+end
+
+for name, ens in pairs(results) do
+  print(("%s router: %d samples, %d ok, %d failed -> %s"):format(name, ens.count, ens.ok,
+        ens.failed, ens.file))
+  if ens.ok > 0 then
+    dfle.plot.xy{
+      path = outdir .. "/alpha_beta_" .. name .. "_smax.png",
+      title = "S_{max} - S_{ch} against {/Symbol a} (" .. name .. " router), colored by {/Symbol b}",
+      xlabel = "{/Symbol a}", ylabel = "S_{max} - S_{ch}",
+      series = colored(ens, "alpha", "S_max_minus_S_ch", "beta"),
+    }
+    dfle.plot.xy{
+      path = outdir .. "/alpha_beta_" .. name .. "_r2.png",
+      title = "R^2 of the Eq. (2) fit (" .. name .. " router), colored by {/Symbol b}",
+      xlabel = "{/Symbol a}", ylabel = "R^2",
+      series = colored(ens, "alpha", "r2", "beta"),
+    }
+  end
+end

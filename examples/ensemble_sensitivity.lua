@@ -1,0 +1,185 @@
+-- ensemble_sensitivity.lua - the paper's global sensitivity analyses
+-- (Sect. 2.5.2, Tables G4-G5, Figs. 5-10): Latin hypercube ensembles
+-- with the process-based router (Table G4, 1500 samples) and the
+-- empirical router (Table G5, 4000 samples), alpha = 6, beta = 1; PAWN
+-- indices of every input for A_df and S_df; scatter plots.
+--
+--   dfle examples/ensemble_sensitivity.lua [--quick] [--router empirical|process] [output-directory]
+--
+-- Writes, per router:
+--   sensitivity_<router>.csv       one row per sample (doc/ensembles.md;
+--                                  resumable: run again after an interruption)
+--   pawn_<router>.csv              PAWN indices (S = 10) of each input for
+--                                  A_df and S_df, with 95% bootstrap intervals
+--   sens_<router>_<param>_A_df.png, ..._S_df.png
+--                                  the parameter against A_df and S_df,
+--                                  colored by U (four classes of U)
+--   sens_<router>_U_A_df.png, ..._S_df.png
+--                                  U against A_df and S_df with power-law fits
+-- --quick: 32 samples per router on a coarse channel (dx = 20 m), 50
+-- bootstrap replicates.  Uses all cores (-j N); `dfle --shard i/n` and
+-- build/dfle-mpi work too.
+
+local quick, outdir, only = false, ".", nil
+local i = 1
+while i <= #arg do
+  local a = arg[i]
+  if a == "--quick" then quick = true
+  elseif a == "--router" then i = i + 1; only = arg[i]
+  else outdir = a end
+  i = i + 1
+end
+assert(only == nil or only == "empirical" or only == "process",
+       "--router must be empirical or process")
+
+local dx = quick and 20 or 5
+local experiments = {
+  empirical = {                                    -- Table G5
+    n = quick and 32 or 4000,
+    params = {
+      M0 = { 1000, 5000 }, gamma = { 0, 1 }, mu = { 100, 1000 }, tau_y = { 100, 600 },
+      k_df = { 5e-5, 1e-3 }, k_e = { 2e-14, 8e-14 }, U = { 1e-4, 1e-3 },
+    },
+    router = function(p)
+      return dfle.router.empirical{ M0 = p.M0, gamma = p.gamma, mu = p.mu, tau_y = p.tau_y }
+    end,
+  },
+  process = {                                      -- Table G4
+    n = quick and 32 or 1500,
+    params = {
+      k_e = { 2e-14, 8e-14 }, U = { 2e-4, 1e-3 }, mu2 = { 0.532, 0.869 }, D = { 1e-6, 1e-5 },
+      eta = { 30, 90 }, k_df = { 3e-5, 1.2e-4 },
+    },
+    router = function(p)
+      return dfle.router.process{ M0 = 200, gamma = 0, mu2 = p.mu2, D = p.D, eta = p.eta }
+    end,
+  },
+}
+
+local results = {}
+for _, name in ipairs{ "empirical", "process" } do
+  if only == nil or only == name then
+    local e = experiments[name]
+    results[name] = dfle.ensemble{
+      params = e.params, n = e.n, seed = 1,
+      out = outdir .. "/sensitivity_" .. name .. ".csv",
+      build = function(p)
+        return dfle.model{
+          channel = dfle.channel{ dx = dx }, U = p.U,
+          fluvial = dfle.fluvial.stochastic_threshold{ k_e = p.k_e },
+          router = e.router(p),
+          law = dfle.law.power{ k_df = p.k_df, alpha = 6, beta = 1 },
+        }
+      end,
+      outputs = { "S_df", "A_df", "r2", "S_max_minus_S_ch" },
+    }
+  end
+end
+
+-- Least squares of log y on log x: y = c x^k.
+local function power_fit(xs, ys)
+  local n, sx, sy, sxx, sxy = 0, 0, 0, 0, 0
+  for j = 1, #xs do
+    if xs[j] > 0 and ys[j] > 0 then
+      local lx, ly = math.log(xs[j]), math.log(ys[j])
+      n, sx, sy, sxx, sxy = n + 1, sx + lx, sy + ly, sxx + lx * lx, sxy + lx * ly
+    end
+  end
+  if n < 2 or n * sxx - sx * sx == 0 then return nil end
+  local k = (n * sxy - sx * sy) / (n * sxx - sx * sx)
+  return math.exp((sy - k * sx) / n), k
+end
+
+-- The ok rows of an ensemble column.
+local function column(ens, name)
+  local v = {}
+  for r = 1, ens.count do
+    if ens.data.status[r] == "ok" then v[#v + 1] = ens.data[name][r] end
+  end
+  return v
+end
+
+-- Series of y against x in four classes of `color` (quartiles).
+local function colored(ens, x, y, color, suffix)
+  local xs, ys, cs = column(ens, x), column(ens, y), column(ens, color)
+  local sorted = { table.unpack(cs) }
+  table.sort(sorted)
+  local series = {}
+  if #sorted == 0 then return series end
+  local edges = {}
+  for k = 0, 4 do edges[k] = sorted[math.max(1, math.ceil(k / 4 * #sorted))] end
+  for k = 1, 4 do
+    local s = { x = {}, y = {}, label = ("%s%s %.3g-%.3g"):format(suffix, color, edges[k - 1], edges[k]) }
+    for j = 1, #cs do
+      if cs[j] >= edges[k - 1] and (cs[j] < edges[k] or (k == 4 and cs[j] <= edges[k])) then
+        s.x[#s.x + 1], s.y[#s.y + 1] = xs[j], ys[j]
+      end
+    end
+    if #s.x > 0 then series[#series + 1] = s end
+  end
+  return series
+end
+
+local STATS = { "minimum", "mean", "median", "maximum", "CV", "stdev" }
+for _, name in ipairs{ "empirical", "process" } do
+  local ens = results[name]
+  if ens then
+    print(("%s router: %d samples, %d ok, %d failed -> %s"):format(name, ens.count, ens.ok,
+          ens.failed, ens.file))
+    if ens.ok >= 10 then
+      local si = dfle.pawn(ens, { outputs = { "A_df", "S_df" }, S = 10,
+                                  bootstrap = quick and 50 or 1000 })
+      local f = assert(io.open(outdir .. "/pawn_" .. name .. ".csv", "w"))
+      f:write("output,input," .. table.concat(STATS, ",") .. ",median_lo,median_hi\n")
+      print(("  PAWN median index (S = 10), %s router:"):format(name))
+      print(("  %-8s %8s %8s"):format("input", "A_df", "S_df"))
+      for _, x in ipairs(ens.inputs) do
+        for _, o in ipairs{ "A_df", "S_df" } do
+          local r = si[o][x]
+          local row = { o, x }
+          for _, st in ipairs(STATS) do row[#row + 1] = ("%.6g"):format(r[st]) end
+          row[#row + 1] = ("%.6g"):format(r.ci.median.lo)
+          row[#row + 1] = ("%.6g"):format(r.ci.median.hi)
+          f:write(table.concat(row, ","), "\n")
+        end
+        print(("  %-8s %8.3f %8.3f"):format(x, si.A_df[x].median, si.S_df[x].median))
+      end
+      f:close()
+      -- Parameter against A_df and S_df, colored by U (Figs. 5-8).
+      for _, x in ipairs(ens.inputs) do
+        if x ~= "U" then
+          for _, o in ipairs{ { "A_df", "A_{df} (m^2)" }, { "S_df", "S_{df}" } } do
+            dfle.plot.xy{
+              path = ("%s/sens_%s_%s_%s.png"):format(outdir, name, x, o[1]), logy = true,
+              title = ("%s against %s (%s router), colored by U"):format(x, o[2], name),
+              xlabel = x, ylabel = o[2], series = colored(ens, x, o[1], "U", ""),
+            }
+          end
+        end
+      end
+      -- U against A_df and S_df with power-law fits (Figs. 9-10).
+      local U = column(ens, "U")
+      for _, o in ipairs{ { "A_df", "A_{df}", " (m^2)" }, { "S_df", "S_{df}", "" } } do
+        local y = column(ens, o[1])
+        local series = { { x = U, y = y, label = o[2] } }
+        local c, k = power_fit(U, y)
+        if c then
+          local lo, hi = math.huge, -math.huge
+          for _, u in ipairs(U) do lo, hi = math.min(lo, u), math.max(hi, u) end
+          local xs, ys = {}, {}
+          for j = 0, 20 do
+            xs[j + 1] = lo * (hi / lo) ^ (j / 20)
+            ys[j + 1] = c * xs[j + 1] ^ k
+          end
+          series[2] = { x = xs, y = ys, lines = true, label = ("%s = %.3g U^{%.3g}"):format(o[2], c, k) }
+          print(("  power-law fit: %s = %.4g U^%.4g"):format(o[1], c, k))
+        end
+        dfle.plot.xy{
+          path = ("%s/sens_%s_U_%s.png"):format(outdir, name, o[1]), logx = true, logy = true,
+          title = ("Uplift rate against %s (%s router)"):format(o[2], name),
+          xlabel = "U (m/yr)", ylabel = o[2] .. o[3], series = series,
+        }
+      end
+    end
+  end
+end

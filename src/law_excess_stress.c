@@ -1,0 +1,86 @@
+/*
+ * law_excess_stress.c - the excess-shear-stress threshold law
+ * E_df = k max(tau - tau_c, 0)^p; equations and sources in
+ * dfle/law_excess_stress.h.
+ *
+ * tau comes from the router, so the whole law is the flow factor; the
+ * rate only scales it by k (and honours S <= 0: no erosion).
+ */
+#include "dfle/law_excess_stress.h"
+
+#include <math.h>
+#include <stdlib.h>
+
+typedef struct excess_law {
+    dfle_excess_stress_law_opts opts;
+} excess_law;
+
+void dfle_excess_stress_law_opts_default(dfle_excess_stress_law_opts *o)
+{
+    o->k = 1e-9;
+    o->tau_c = 500.0;
+    o->p = 1.5;
+}
+
+static int excess_flow_factor(void *state, const dfle_law_ctx *ctx, double *F, dfle_error *err)
+{
+    const excess_law *el = state;
+    const dfle_flow *fl = ctx->flow;
+    if (fl->time_resolved)
+        return dfle_error_set(err, DFLE_EINVAL,
+                              "law.excess_stress: needs a bulk router that reports tau "
+                              "(not a time-resolved one)");
+    for (size_t i = 0; i < ctx->n; i++) {
+        double excess = fl->tau[i] - el->opts.tau_c;
+        /* Theta <= 0: the flow stops here and erodes nothing. */
+        F[i] = excess > 0 && fl->Theta[i] > 0 ? pow(excess, el->opts.p) : 0.0;
+    }
+    return DFLE_OK;
+}
+
+static int excess_rate(void *state, const dfle_law_ctx *ctx, const double *F, double *E,
+                       dfle_error *err)
+{
+    const excess_law *el = state;
+    (void)err;
+    for (size_t i = 0; i < ctx->n; i++)
+        E[i] = ctx->S[i] > 0 ? el->opts.k * F[i] : 0.0;
+    return DFLE_OK;
+}
+
+static void excess_destroy(void *state) { free(state); }
+
+static const dfle_law_ops excess_ops = {
+    .name = "excess_stress",
+    .flow_factor = excess_flow_factor,
+    .rate = excess_rate,
+    .integrand = NULL, /* tau is not a function of (h, v, lambda) alone */
+    .destroy = excess_destroy,
+};
+
+int dfle_law_new_excess_stress(const dfle_excess_stress_law_opts *o, dfle_law **out,
+                               dfle_error *err)
+{
+    excess_law *el;
+
+    *out = NULL;
+    if (!(isfinite(o->k) && o->k > 0))
+        return dfle_error_set(err, DFLE_EINVAL, "law.excess_stress: k must be > 0 (got %g)", o->k);
+    if (!(isfinite(o->tau_c) && o->tau_c >= 0))
+        return dfle_error_set(err, DFLE_EINVAL, "law.excess_stress: tau_c must be >= 0 Pa (got %g)",
+                              o->tau_c);
+    if (!(isfinite(o->p) && o->p > 0))
+        return dfle_error_set(err, DFLE_EINVAL, "law.excess_stress: p must be > 0 (got %g)", o->p);
+    el = malloc(sizeof *el);
+    if (el == NULL)
+        return dfle_error_set(err, DFLE_ENOMEM, "law.excess_stress: out of memory");
+    el->opts = *o;
+    return dfle_law_new(&excess_ops, el, out, err);
+}
+
+const dfle_excess_stress_law_opts *dfle_law_excess_stress_opts(const dfle_law *law)
+{
+    if (law == NULL || dfle_law_get_ops(law) != &excess_ops)
+        return NULL;
+    return &((const excess_law *)dfle_law_state(law))->opts;
+}

@@ -1,0 +1,251 @@
+/*
+ * test_ensemble.c - the ensemble file layer (dfle/ensemble.h): streamed
+ * rows, resume over a truncated last line, the sorted rewrite, gather of
+ * shards, and the index queue (shards, done samples, limit, threads).
+ */
+#include "dfle_test.h"
+
+#include <pthread.h>
+#include <stdlib.h>
+#include <string.h>
+#include <unistd.h>
+
+#include "dfle/ensemble.h"
+
+#define META "# dfle.ensemble v1 n=6 test"
+#define HEADER "index,x,status,reason"
+
+static char dir[64];
+
+static int setup(void **state)
+{
+    (void)state;
+    snprintf(dir, sizeof dir, "/tmp/dfle-test-ens-XXXXXX");
+    return mkdtemp(dir) == NULL;
+}
+
+static int teardown(void **state)
+{
+    char cmd[128];
+    (void)state;
+    snprintf(cmd, sizeof cmd, "rm -rf '%s'", dir);
+    return system(cmd) != 0;
+}
+
+static void path(char *buf, size_t len, const char *name)
+{
+    snprintf(buf, len, "%s/%s", dir, name);
+}
+
+static char *slurp(const char *p)
+{
+    FILE *fp = fopen(p, "rb");
+    char *s;
+    long n;
+    assert_non_null(fp);
+    fseek(fp, 0, SEEK_END);
+    n = ftell(fp);
+    rewind(fp);
+    s = calloc((size_t)n + 1, 1);
+    assert_int_equal(fread(s, 1, (size_t)n, fp), (size_t)n);
+    fclose(fp);
+    return s;
+}
+
+static void row(char *buf, size_t len, size_t i)
+{
+    snprintf(buf, len, "%zu,%g,ok,\"\"", i, 0.5 * (double)i);
+}
+
+static const char *expected =
+    META "\n" HEADER "\n1,0.5,ok,\"\"\n2,1,ok,\"\"\n3,1.5,ok,\"\"\n4,2,ok,\"\"\n5,2.5,ok,\"\"\n"
+         "6,3,ok,\"\"\n";
+
+static void test_stream_sort_resume(void **state)
+{
+    char p[128], r[64];
+    dfle_ens_file *f;
+    dfle_error err;
+    FILE *fp;
+    char *text;
+    static const size_t order[] = {4, 2, 6};
+    (void)state;
+
+    path(p, sizeof p, "a.csv");
+    assert_ok(dfle_ens_file_open(p, META, HEADER, 6, 1, &f, &err), &err);
+    for (size_t k = 0; k < 3; k++) {
+        row(r, sizeof r, order[k]);
+        assert_ok(dfle_ens_file_append(f, order[k], r, &err), &err);
+    }
+    /* a repeated or out-of-range sample is refused */
+    row(r, sizeof r, 4);
+    assert_int_equal(dfle_ens_file_append(f, 4, r, &err), DFLE_EINVAL);
+    row(r, sizeof r, 7);
+    assert_int_equal(dfle_ens_file_append(f, 7, r, &err), DFLE_EINVAL);
+    /* rows are on disk, in finishing order, before closing */
+    text = slurp(p);
+    assert_string_equal(text, META "\n" HEADER "\n4,2,ok,\"\"\n2,1,ok,\"\"\n6,3,ok,\"\"\n");
+    free(text);
+    assert_ok(dfle_ens_file_close(f, 0, &err), &err);
+
+    /* a killed writer left half a row */
+    fp = fopen(p, "ab");
+    fputs("5,2.", fp);
+    fclose(fp);
+    assert_ok(dfle_ens_file_open(p, META, HEADER, 6, 1, &f, &err), &err);
+    assert_int_equal(dfle_ens_file_ndone(f), 3);
+    assert_true(dfle_ens_file_done(f, 2));
+    assert_false(dfle_ens_file_done(f, 5));
+    for (size_t i = 1; i <= 6; i++)
+        if (!dfle_ens_file_done(f, i)) {
+            row(r, sizeof r, i);
+            assert_ok(dfle_ens_file_append(f, i, r, &err), &err);
+        }
+    assert_ok(dfle_ens_file_close(f, 1, &err), &err);
+    text = slurp(p);
+    assert_string_equal(text, expected);
+    free(text);
+
+    /* another ensemble's file is refused; resume = 0 replaces it */
+    assert_int_equal(dfle_ens_file_open(p, "# other", HEADER, 6, 1, &f, &err), DFLE_EINVAL);
+    assert_non_null(strstr(err.msg, "different ensemble"));
+    assert_ok(dfle_ens_file_open(p, "# other", HEADER, 6, 0, &f, &err), &err);
+    assert_int_equal(dfle_ens_file_ndone(f), 0);
+    assert_ok(dfle_ens_file_close(f, 1, &err), &err);
+    text = slurp(p);
+    assert_string_equal(text, "# other\n" HEADER "\n");
+    free(text);
+}
+
+static void test_gather_shards(void **state)
+{
+    char p[3][128], out[128], r[64];
+    const char *files[3];
+    dfle_ens_file *f;
+    dfle_ens_queue *q;
+    dfle_error err;
+    size_t i, nrows;
+    char *text;
+    (void)state;
+
+    for (size_t s = 1; s <= 3; s++) {
+        char name[32];
+        snprintf(name, sizeof name, "s%zu.csv", s);
+        path(p[s - 1], sizeof p[s - 1], name);
+        files[3 - s] = p[s - 1];
+        assert_ok(dfle_ens_file_open(p[s - 1], META, HEADER, 6, 1, &f, &err), &err);
+        assert_ok(dfle_ens_queue_new(6, s, 3, f, 0, &q, &err), &err);
+        assert_int_equal(dfle_ens_queue_total(q), 2);
+        while (dfle_ens_queue_next(q, &i)) {
+            assert_int_equal((i - 1) % 3, s - 1);
+            row(r, sizeof r, i);
+            assert_ok(dfle_ens_file_append(f, i, r, &err), &err);
+        }
+        dfle_ens_queue_free(q);
+        assert_ok(dfle_ens_file_close(f, 1, &err), &err);
+    }
+    path(out, sizeof out, "all.csv");
+    assert_ok(dfle_ens_gather(files, 3, out, &nrows, &err), &err);
+    assert_int_equal(nrows, 6);
+    text = slurp(out);
+    assert_string_equal(text, expected);
+    free(text);
+    /* the same file twice: identical rows are merged */
+    files[1] = out;
+    assert_ok(dfle_ens_gather(files, 3, out, &nrows, &err), &err);
+    assert_int_equal(nrows, 6);
+    /* a conflicting row is an error naming both files */
+    {
+        FILE *fp = fopen(p[0], "ab");
+        fputs("2,9,ok,\"\"\n", fp);
+        fclose(fp);
+    }
+    files[0] = p[0];
+    files[1] = p[1];
+    assert_int_equal(dfle_ens_gather(files, 2, out, &nrows, &err), DFLE_EINVAL);
+    assert_non_null(strstr(err.msg, "sample 2 differs"));
+    /* shard queue rule */
+    assert_true(dfle_ens_in_shard(7, 1, 3));
+    assert_false(dfle_ens_in_shard(7, 2, 3));
+    assert_true(dfle_ens_in_shard(7, 0, 0));
+}
+
+typedef struct shared {
+    dfle_ens_queue *q;
+    size_t count[101];
+} shared;
+
+static void *drain(void *arg)
+{
+    shared *s = arg;
+    size_t i;
+    while (dfle_ens_queue_next(s->q, &i))
+        s->count[i]++; /* each index is handed out once: no two threads write one slot */
+    return NULL;
+}
+
+static void test_queue_threads_limit(void **state)
+{
+    shared s;
+    pthread_t t[4];
+    dfle_error err;
+    dfle_ens_queue *q;
+    size_t i, got = 0;
+    (void)state;
+
+    memset(&s, 0, sizeof s);
+    assert_ok(dfle_ens_queue_new(100, 0, 0, NULL, 0, &s.q, &err), &err);
+    for (int k = 0; k < 4; k++)
+        assert_int_equal(pthread_create(&t[k], NULL, drain, &s), 0);
+    for (int k = 0; k < 4; k++)
+        pthread_join(t[k], NULL);
+    for (size_t k = 1; k <= 100; k++)
+        assert_int_equal(s.count[k], 1);
+    dfle_ens_queue_free(s.q);
+
+    assert_ok(dfle_ens_queue_new(100, 2, 4, NULL, 5, &q, &err), &err);
+    assert_int_equal(dfle_ens_queue_total(q), 5);
+    while (dfle_ens_queue_next(q, &i))
+        got++;
+    assert_int_equal(got, 5);
+    dfle_ens_queue_free(q);
+    assert_int_equal(dfle_ens_queue_new(10, 5, 4, NULL, 0, &q, &err), DFLE_EINVAL);
+}
+
+static void test_malformed_files(void **state)
+{
+    char p[128];
+    dfle_ens_table *t;
+    dfle_error err;
+    FILE *fp;
+    (void)state;
+
+    path(p, sizeof p, "bad.csv");
+    fp = fopen(p, "wb");
+    fputs(META "\n" HEADER "\n1,a\nx,b\n", fp);
+    fclose(fp);
+    assert_int_equal(dfle_ens_table_read(p, &t, &err), DFLE_EINVAL);
+    assert_non_null(strstr(err.msg, ":4:"));
+    fp = fopen(p, "wb");
+    fputs(META "\n" HEADER "\n1,a\n1,b\n", fp);
+    fclose(fp);
+    assert_int_equal(dfle_ens_table_read(p, &t, &err), DFLE_EINVAL);
+    assert_non_null(strstr(err.msg, "appears twice"));
+    fp = fopen(p, "wb");
+    fputs("a,b\n", fp);
+    fclose(fp);
+    assert_int_equal(dfle_ens_table_read(p, &t, &err), DFLE_EINVAL);
+    path(p, sizeof p, "missing.csv");
+    assert_int_equal(dfle_ens_table_read(p, &t, &err), DFLE_EIO);
+}
+
+int main(void)
+{
+    const struct CMUnitTest tests[] = {
+        cmocka_unit_test(test_stream_sort_resume),
+        cmocka_unit_test(test_gather_shards),
+        cmocka_unit_test(test_queue_threads_limit),
+        cmocka_unit_test(test_malformed_files),
+    };
+    return cmocka_run_group_tests(tests, setup, teardown);
+}
