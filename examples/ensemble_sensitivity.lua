@@ -77,6 +77,12 @@ for _, name in ipairs{ "empirical", "process" } do
 end
 
 -- Least squares of log y on log x: y = c x^k.
+-- A parameter name as gnuplot enhanced text: "k_df" -> "k_{df}" (a bare
+-- "_" would subscript only the next letter).
+local function label(name)
+  return (name:gsub("_(%w+)", "_{%1}"))
+end
+
 local function power_fit(xs, ys)
   local n, sx, sy, sxx, sxy = 0, 0, 0, 0, 0
   for j = 1, #xs do
@@ -151,8 +157,8 @@ for _, name in ipairs{ "empirical", "process" } do
           for _, o in ipairs{ { "A_df", "A_{df} (m^2)" }, { "S_df", "S_{df}" } } do
             dfle.plot.xy{
               path = ("%s/sens_%s_%s_%s.png"):format(outdir, name, x, o[1]), logy = true,
-              title = ("%s against %s (%s router), colored by U"):format(x, o[2], name),
-              xlabel = x, ylabel = o[2], series = colored(ens, x, o[1], "U", ""),
+              title = ("%s against %s (%s router), colored by U"):format(label(x), o[2], name),
+              xlabel = label(x), ylabel = o[2], series = colored(ens, x, o[1], "U", ""),
             }
           end
         end
