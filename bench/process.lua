@@ -25,6 +25,6 @@ print(("process router, one routing: %.4f s CPU (best of %d), %d cells x %d step
 
 local sm = model(dfle.router.process{ M0 = 200, eta = 60, mu2 = 0.62, D = 5e-6 })
 local t0 = os.clock()
-local run = sm:run_to_steady{ tol = 1e-3, max_time = 2e7 }
-print(("process router, steady state: %.2f s CPU, %d routings, %d landscape steps, %.4g simulated years, converged = %s")
+local run = sm:run_to_steady{ tol = 1e-3, max_time = 2e7, method = "explicit" }
+print(("process router, explicit steady state: %.2f s CPU, %d routings, %d landscape steps, %.4g simulated years, converged = %s")
       :format(os.clock() - t0, run.routings, run.steps, run.time, tostring(run.converged)))
