@@ -137,7 +137,7 @@ install: all
 	install -m 644 $(LIB_CORE) $(DESTDIR)$(PREFIX)/lib/libdfle.a
 	install -m 644 $(LIB_LUA) $(DESTDIR)$(PREFIX)/lib/libdfle_lua.a
 	install -d $(DESTDIR)$(PREFIX)/lib/pkgconfig
-	printf 'prefix=%s\nincludedir=$${prefix}/include\nlibdir=$${prefix}/lib\n\nName: dfle\nDescription: debris-flow and fluvial channel-profile model (C library)\nVersion: %s\nRequires.private: gsl gdal\nLibs: -L$${libdir} -ldfle -lm\nCflags: -I$${includedir}\n' \
+	printf 'prefix=%s\nincludedir=$${prefix}/include\nlibdir=$${prefix}/lib\n\nName: dfle\nDescription: debris-flow and fluvial channel-profile model (C library)\nVersion: %s\nRequires: gsl gdal\nLibs: -L$${libdir} -ldfle -lm -pthread\nCflags: -I$${includedir}\n' \
 	    '$(PREFIX)' '$(VERSION)' > $(DESTDIR)$(PREFIX)/lib/pkgconfig/dfle.pc
 	install -m 644 include/dfle/*.h $(DESTDIR)$(PREFIX)/include/dfle/
 	install -m 644 README.md doc/*.md $(DESTDIR)$(PREFIX)/share/doc/dfle/
