@@ -8,8 +8,8 @@
 --
 -- Writes, per router, alpha_beta_<router>.csv (one row per sample, see
 -- doc/ensembles.md; resumable: run again after an interruption) and
--- plots of S_max - S_ch and R^2 against alpha, colored by beta (four
--- classes of beta, one color each).  --quick: 24 samples per router on
+-- plots of S_max - S_ch and R^2 against alpha, colored by beta on a
+-- continuous scale.  --quick: 24 samples per router on
 -- a coarse channel (dx = 20 m).  Uses all cores (-j N to choose);
 -- `dfle --shard i/n` and build/dfle-mpi work too (doc/ensembles.md).
 
@@ -72,29 +72,16 @@ for _, name in ipairs{ "empirical", "process" } do
   end
 end
 
--- Scatter of y against x, one series per class of `color` (quartiles).
+-- Scatter of y against x over the successful runs, each point coloured
+-- by `color` on a continuous scale (dfle.plot.xy draws the colour box).
 local function colored(ens, x, y, color)
-  local d = ens.data
-  local vals = {}
+  local d, s = ens.data, { x = {}, y = {}, color = {} }
   for r = 1, ens.count do
-    if d.status[r] == "ok" then vals[#vals + 1] = d[color][r] end
-  end
-  table.sort(vals)
-  if #vals == 0 then return {} end
-  local edges = {}
-  for k = 0, 4 do edges[k] = vals[math.max(1, math.ceil(k / 4 * #vals))] end
-  local series = {}
-  for k = 1, 4 do
-    local s = { x = {}, y = {}, label = ("%s %.3g-%.3g"):format(color, edges[k - 1], edges[k]) }
-    for r = 1, ens.count do
-      local c = d[color][r]
-      if d.status[r] == "ok" and c >= edges[k - 1] and (c < edges[k] or (k == 4 and c <= edges[k])) then
-        s.x[#s.x + 1], s.y[#s.y + 1] = d[x][r], d[y][r]
-      end
+    if d.status[r] == "ok" then
+      s.x[#s.x + 1], s.y[#s.y + 1], s.color[#s.color + 1] = d[x][r], d[y][r], d[color][r]
     end
-    if #s.x > 0 then series[#series + 1] = s end
   end
-  return series
+  return { s }
 end
 
 for name, ens in pairs(results) do
@@ -105,13 +92,13 @@ for name, ens in pairs(results) do
       path = outdir .. "/alpha_beta_" .. name .. "_smax.png",
       title = "S_{max} - S_{ch} against {/Symbol a} (" .. name .. " router), colored by {/Symbol b}",
       xlabel = "{/Symbol a}", ylabel = "S_{max} - S_{ch}",
-      series = colored(ens, "alpha", "S_max_minus_S_ch", "beta"),
+      series = colored(ens, "alpha", "S_max_minus_S_ch", "beta"), clabel = "{/Symbol b}",
     }
     dfle.plot.xy{
       path = outdir .. "/alpha_beta_" .. name .. "_r2.png",
       title = "R^2 of the Eq. (2) fit (" .. name .. " router), colored by {/Symbol b}",
       xlabel = "{/Symbol a}", ylabel = "R^2",
-      series = colored(ens, "alpha", "r2", "beta"),
+      series = colored(ens, "alpha", "r2", "beta"), clabel = "{/Symbol b}",
     }
   end
 end

@@ -106,24 +106,10 @@ local function column(ens, name)
 end
 
 -- Series of y against x in four classes of `color` (quartiles).
-local function colored(ens, x, y, color, suffix)
-  local xs, ys, cs = column(ens, x), column(ens, y), column(ens, color)
-  local sorted = { table.unpack(cs) }
-  table.sort(sorted)
-  local series = {}
-  if #sorted == 0 then return series end
-  local edges = {}
-  for k = 0, 4 do edges[k] = sorted[math.max(1, math.ceil(k / 4 * #sorted))] end
-  for k = 1, 4 do
-    local s = { x = {}, y = {}, label = ("%s%s %.3g-%.3g"):format(suffix, color, edges[k - 1], edges[k]) }
-    for j = 1, #cs do
-      if cs[j] >= edges[k - 1] and (cs[j] < edges[k] or (k == 4 and cs[j] <= edges[k])) then
-        s.x[#s.x + 1], s.y[#s.y + 1] = xs[j], ys[j]
-      end
-    end
-    if #s.x > 0 then series[#series + 1] = s end
-  end
-  return series
+-- Scatter of y against x, each point coloured by `color` on a continuous
+-- scale (dfle.plot.xy draws the colour box).
+local function colored(ens, x, y, color)
+  return { { x = column(ens, x), y = column(ens, y), color = column(ens, color) } }
 end
 
 local STATS = { "minimum", "mean", "median", "maximum", "CV", "stdev" }
@@ -158,7 +144,8 @@ for _, name in ipairs{ "empirical", "process" } do
             dfle.plot.xy{
               path = ("%s/sens_%s_%s_%s.png"):format(outdir, name, x, o[1]), logy = true,
               title = ("%s against %s (%s router), colored by U"):format(label(x), o[2], name),
-              xlabel = label(x), ylabel = o[2], series = colored(ens, x, o[1], "U", ""),
+              xlabel = label(x), ylabel = o[2], series = colored(ens, x, o[1], "U"),
+              clabel = "U (m/yr)",
             }
           end
         end

@@ -249,6 +249,8 @@ typedef struct layer {
     const char *with, *color; /* gnuplot "with" clause, "#rrggbb" */
     const char *title;        /* legend text; NULL: none */
     size_t used;              /* usable rows, set by ext_scan */
+    const double *c;          /* colour value per row, or NULL */
+    int logc;                 /* colour scale is logarithmic */
 } layer;
 
 /* Extent of the layers in axis units (log10 on log axes) and how many
@@ -281,6 +283,14 @@ static void nice_log(double *lo, double *hi)
     if (*hi < *lo + 0.1) { *lo -= l2; *hi += l2; } /* one value: 0.5x..2x */
 }
 
+/* A row is drawn when its x, y (and colour, if any) can be placed. */
+static int row_ok(const layer *l, size_t i, int logx, int logy)
+{
+    if (!usable(l->x[i], l->y[i], logx, logy))
+        return 0;
+    return l->c == NULL || (isfinite(l->c[i]) && (!l->logc || l->c[i] > 0));
+}
+
 static void ext_scan(extent *e, layer *L, size_t nl, int logx, int logy,
                      double keyw)
 {
@@ -294,7 +304,7 @@ static void ext_scan(extent *e, layer *L, size_t nl, int logx, int logy,
         ntitles += L[k].title != NULL;
         L[k].used = 0;
         for (size_t i = 0; i < L[k].n; i++) {
-            if (!usable(L[k].x[i], L[k].y[i], logx, logy)) continue;
+            if (!row_ok(&L[k], i, logx, logy)) continue;
             double u = ax(L[k].x[i], logx), v = ax(L[k].y[i], logy);
             e->x0 = fmin(e->x0, u); e->x1 = fmax(e->x1, u);
             e->y0 = fmin(e->y0, v); e->y1 = fmax(e->y1, v);
@@ -324,7 +334,7 @@ static void put_blocks(FILE *f, const char *name, const layer *L, size_t nl,
         fprintf(f, "$%s%zu << EOD\n", name, k);
         for (size_t i = 0; i < L[k].n; i++) {
             double x = L[k].x[i], y = L[k].y[i];
-            if (!usable(x, y, e->logx, e->logy)) {
+            if (!row_ok(&L[k], i, e->logx, e->logy)) {
                 if (gap) fputs("\n", f); /* a blank line breaks a line */
                 gap = 0;
                 continue;
@@ -344,6 +354,8 @@ static void put_blocks(FILE *f, const char *name, const layer *L, size_t nl,
                 fprintf(f, " %.17g %.17g", usable(x, lo, 0, e->logy) ? lo : y,
                         usable(x, hi, 0, e->logy) ? hi : y);
             }
+            if (L[k].c != NULL)
+                fprintf(f, " %.17g", L[k].c[i]);
             fputs("\n", f);
         }
         fputs("EOD\n", f);
@@ -410,8 +422,12 @@ static void put_plot(FILE *f, const char *name, const layer *L, size_t nl,
     fputs("plot", f);
     for (size_t k = 0; k < nl; k++) {
         if (L[k].used == 0) continue; /* gnuplot refuses an empty block */
-        fprintf(f, "%s $%s%zu using 1:2%s with %s lc rgb '%s'", first ? "" :
-                ",", name, k, L[k].lo ? ":3:4" : "", L[k].with, L[k].color);
+        if (L[k].c != NULL) /* colour from the palette, by the third column */
+            fprintf(f, "%s $%s%zu using 1:2:3 with %s lc palette", first ? "" : ",", name, k,
+                    L[k].with);
+        else
+            fprintf(f, "%s $%s%zu using 1:2%s with %s lc rgb '%s'", first ? "" :
+                    ",", name, k, L[k].lo ? ":3:4" : "", L[k].with, L[k].color);
         if (L[k].title != NULL) { fputs(" title ", f); gp_str(f, L[k].title); }
         else fputs(" notitle", f);
         first = 0;
@@ -419,9 +435,26 @@ static void put_plot(FILE *f, const char *name, const layer *L, size_t nl,
     fputs("\n", f);
 }
 
+/* Series with a colour value per point share one perceptually uniform
+ * scale (viridis-like) with a labelled colour box. */
+static void put_colour(FILE *f, const layer *L, size_t nl, const char *label)
+{
+    int any = 0, logc = 0;
+    for (size_t k = 0; k < nl; k++)
+        if (L[k].c != NULL) {
+            any = 1;
+            logc |= L[k].logc;
+        }
+    if (!any) return;
+    fputs("set palette defined (0 '#440154', 0.25 '#3b528b', 0.5 '#21918c', "
+          "0.75 '#5ec962', 1 '#fde725')\nset colorbox\n", f);
+    if (logc) fputs("set logscale cb 10\nset format cb '%g'\n", f);
+    put_label(f, "cblabel", label);
+}
+
 /* A whole single-panel figure; `extra` goes in just before "plot". */
 static int figure(const char *path, int fmt, int w, int h, const char *title,
-                  const char *xl, const char *yl, extent *e,
+                  const char *xl, const char *yl, const char *cl, extent *e,
                   const layer *L, size_t nl, const char *extra,
                   dfle_error *err)
 {
@@ -433,6 +466,7 @@ static int figure(const char *path, int fmt, int w, int h, const char *title,
     put_label(r.f, "xlabel", xl);
     put_label(r.f, "ylabel", yl);
     put_axes(r.f, e);
+    put_colour(r.f, L, nl, cl);
     if (extra != NULL) fputs(extra, r.f);
     put_plot(r.f, "d", L, nl, e);
     return gp_end(&r, err);
@@ -463,7 +497,8 @@ int dfle_plot_xy(const char *path, const dfle_plot_opts *opts,
     for (size_t k = 0; k < nseries; k++) {
         const dfle_plot_series *s = &series[k];
         L[k] = (layer){s->n, s->x, s->y, NULL, NULL, s->lines ? "lines lw 2" :
-                       "points pt 7 ps 0.6", palette[k % NPAL], s->label, 0};
+                       "points pt 7 ps 0.6", palette[k % NPAL], s->label, 0, s->c,
+                       o->logc != 0};
     }
     extent e;
     int rc;
@@ -473,7 +508,7 @@ int dfle_plot_xy(const char *path, const dfle_plot_opts *opts,
                             "plot in '%s'", e.logx || e.logy ?
                             " (positive on log axes)" : "", path);
     else
-        rc = figure(path, fmt, w, h, o->title, o->xlabel, o->ylabel, &e, L,
+        rc = figure(path, fmt, w, h, o->title, o->xlabel, o->ylabel, o->clabel, &e, L,
                     nseries, NULL, err);
     free(L);
     return rc;
@@ -536,14 +571,14 @@ int dfle_plot_slope_area(const char *path, const char *title, size_t n,
     layer L[4];
     size_t nl = 0;
     L[nl++] = (layer){n, A, S, NULL, NULL, "points pt 7 ps 0.35", "#a8a8a8",
-                      "Data", 0};
+                      "Data", 0, NULL, 0};
     if (bins != NULL && bins->n > 0) {
         int bars = bins->S_q25 != NULL && bins->S_q75 != NULL;
         L[nl++] = (layer){bins->n, bins->A, bins->S_mean,
                           bars ? bins->S_q25 : NULL, bars ? bins->S_q75 : NULL,
                           bars ? "yerrorbars pt 7 ps 1 lw 1" : "points pt 7 ps 1",
                           "#000000", bars ? "Binned mean (quartiles)"
-                          : "Binned mean", 0};
+                          : "Binned mean", 0, NULL, 0};
     }
     /* The curve spans the data's areas; A_df is marked only inside it. */
     double fa[FIT_SAMPLES], fs[FIT_SAMPLES], mark_a = 0, mark_s = 0;
@@ -565,14 +600,14 @@ int dfle_plot_slope_area(const char *path, const char *title, size_t n,
                  mark ? "" : ", {/:Italic A}_{df} = ", mark ? "" : adf,
                  mark ? "" : " m^2");
         L[nl++] = (layer){FIT_SAMPLES, fa, fs, NULL, NULL, "lines lw 2.5",
-                          "#d01c1c", ftitle, 0};
+                          "#d01c1c", ftitle, 0, NULL, 0};
         if (mark) { /* as in the paper's Fig. 1: open circle at (A_df,
                      * S_df/2) on the curve and a dashed line at A_df */
             mark_a = fit->A_df;
             mark_s = eq2(fit, fit->A_df);
             snprintf(mtitle, sizeof mtitle, "{/:Italic A}_{df} = %s m^2", adf);
             L[nl++] = (layer){1, &mark_a, &mark_s, NULL, NULL,
-                              "points pt 6 ps 2.2 lw 2", "#d01c1c", mtitle, 0};
+                              "points pt 6 ps 2.2 lw 2", "#d01c1c", mtitle, 0, NULL, 0};
             snprintf(extra, sizeof extra, "set arrow from %.17g, graph 0 to "
                      "%.17g, graph 1 nohead dt 2 lw 1 lc rgb '#d01c1c' back\n",
                      mark_a, mark_a);
@@ -581,7 +616,7 @@ int dfle_plot_slope_area(const char *path, const char *title, size_t n,
     extent e;
     ext_scan(&e, L, nl, 1, 1, 0.55);
     return figure(path, fmt, 900, 650, title,
-                  "Drainage area, {/:Italic A} (m^2)", "Slope, {/:Italic S}",
+                  "Drainage area, {/:Italic A} (m^2)", "Slope, {/:Italic S}", NULL,
                   &e, L, nl, extra, err);
 }
 
@@ -594,8 +629,8 @@ int dfle_plot_profile(const char *path, const char *title, size_t n,
     if (n == 0 || x == NULL || z == NULL)
         return dfle_error_set(err, DFLE_EINVAL, "plot: profile data missing "
                               "(n = %zu, x or z NULL)", n);
-    layer top = {n, x, z, NULL, NULL, "lines lw 2", "#1f3b73", NULL, 0};
-    layer bot = {n, x, S, NULL, NULL, "lines lw 1.6", "#D55E00", NULL, 0};
+    layer top = {n, x, z, NULL, NULL, "lines lw 2", "#1f3b73", NULL, 0, NULL, 0};
+    layer bot = {n, x, S, NULL, NULL, "lines lw 1.6", "#D55E00", NULL, 0, NULL, 0};
     extent et, eb;
     ext_scan(&et, &top, 1, 0, 0, 0);
     if (et.n == 0)
@@ -604,7 +639,7 @@ int dfle_plot_profile(const char *path, const char *title, size_t n,
     const char *xl = "Distance from channel head, {/:Italic x} (m)";
     if (S == NULL)
         return figure(path, fmt, 900, 500, title, xl,
-                      "Elevation, {/:Italic z} (m)", &et, &top, 1, NULL, err);
+                      "Elevation, {/:Italic z} (m)", NULL, &et, &top, 1, NULL, err);
     int logS = 1; /* log slope axis unless some finite slope is <= 0 */
     for (size_t i = 0; i < n; i++)
         if (isfinite(x[i]) && isfinite(S[i]) && S[i] <= 0) logS = 0;

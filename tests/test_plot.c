@@ -155,8 +155,8 @@ static void test_xy_png(void **state)
         y2[i] = 0.1 * i;
     }
     y1[10] = NAN; /* a gap, not a failure */
-    dfle_plot_series s[2] = {{"sqrt", 50, x, y1, 1}, {NULL, 50, x, y2, 0}};
-    dfle_plot_opts o = {"Title", "x (m)", "y", 0, 0, 640, 480};
+    dfle_plot_series s[2] = {{"sqrt", 50, x, y1, 1, NULL}, {NULL, 50, x, y2, 0, NULL}};
+    dfle_plot_opts o = {"Title", "x (m)", "y", 0, 0, 640, 480, NULL, 0};
     dfle_error err = {0};
     assert_ok(dfle_plot_xy(in_dir(fx, "xy.png"), &o, s, 2, &err), &err);
     assert_png(fx->path);
@@ -165,12 +165,36 @@ static void test_xy_png(void **state)
     assert_png(fx->path);
 }
 
+/* A colour value per point: a third column drawn on a palette with a
+ * colour box; points whose colour cannot be placed are left out. */
+static void test_xy_colour(void **state)
+{
+    fixture *fx = *state;
+    double x[40], y[40], c[40];
+    for (int i = 0; i < 40; i++) {
+        x[i] = i;
+        y[i] = 0.5 * i;
+        c[i] = 1.0 + i;
+    }
+    c[3] = NAN; /* left out, not a failure */
+    dfle_plot_series s = {"coloured", 40, x, y, 0, c};
+    dfle_plot_opts o = {"colour", "x", "y", 0, 0, 0, 0, "U (m/yr)", 1};
+    dfle_error err = {0};
+    assert_ok(dfle_plot_xy(in_dir(fx, "colour.png"), &o, &s, 1, &err), &err);
+    assert_png(fx->path);
+    /* On a log colour scale no point with a colour <= 0 can be placed. */
+    for (int i = 0; i < 40; i++)
+        c[i] = -1.0;
+    assert_int_equal(dfle_plot_xy(in_dir(fx, "colour2.png"), &o, &s, 1, &err), DFLE_EINVAL);
+    assert_msg_contains(err.msg, "no finite points");
+}
+
 static void test_xy_log_svg(void **state)
 {
     fixture *fx = *state;
     double x[5] = {-1, 1, 10, 100, 1000}, y[5] = {1, 0, 2, 3, 4};
-    dfle_plot_series s = {"log", 5, x, y, 1};
-    dfle_plot_opts o = {NULL, NULL, NULL, 1, 1, 0, 0};
+    dfle_plot_series s = {"log", 5, x, y, 1, NULL};
+    dfle_plot_opts o = {NULL, NULL, NULL, 1, 1, 0, 0, NULL, 0};
     dfle_error err = {0};
     /* The points with x <= 0 or y <= 0 are dropped from the log plot. */
     assert_ok(dfle_plot_xy(in_dir(fx, "xy.svg"), &o, &s, 1, &err), &err);
@@ -232,8 +256,8 @@ static void test_hostile_path(void **state)
         "|touch INJ2.png", "~x.svg"};
     double x[3] = {1, 2, 3}, y[3] = {3, 1, 2};
     dfle_plot_series s = {"a 'label' with `touch INJ3`\nand a new line", 3,
-                          x, y, 1};
-    dfle_plot_opts o = {"it's \"fine\"", "x\\", "`touch INJ4`", 0, 0, 0, 0};
+                          x, y, 1, NULL};
+    dfle_plot_opts o = {"it's \"fine\"", "x\\", "`touch INJ4`", 0, 0, 0, 0, NULL, 0};
     dfle_error err = {0};
     char cwd[4096];
     assert_non_null(getcwd(cwd, sizeof cwd));
@@ -256,7 +280,7 @@ static void test_bad_extension(void **state)
     static const char *const bad[] = {"plot.pdf", "plot", "dir.png/plot",
                                       "plot.png.txt"};
     double x[2] = {1, 2}, y[2] = {1, 2};
-    dfle_plot_series s = {NULL, 2, x, y, 1};
+    dfle_plot_series s = {NULL, 2, x, y, 1, NULL};
     dfle_error err = {0};
     for (size_t k = 0; k < 4; k++) {
         assert_int_equal(dfle_plot_xy(in_dir(fx, bad[k]), NULL, &s, 1, &err),
@@ -277,9 +301,9 @@ static void test_bad_arguments(void **state)
 {
     fixture *fx = *state;
     double x[2] = {1, 2}, y[2] = {1, 2};
-    dfle_plot_series s = {NULL, 2, x, y, 1}, empty = {NULL, 0, NULL, NULL, 1};
-    dfle_plot_series nox = {NULL, 2, NULL, y, 1};
-    dfle_plot_opts tiny = {NULL, NULL, NULL, 0, 0, 10, 10};
+    dfle_plot_series s = {NULL, 2, x, y, 1, NULL}, empty = {NULL, 0, NULL, NULL, 1, NULL};
+    dfle_plot_series nox = {NULL, 2, NULL, y, 1, NULL};
+    dfle_plot_opts tiny = {NULL, NULL, NULL, 0, 0, 10, 10, NULL, 0};
     dfle_eq2_fit fit = {0};
     dfle_error err = {0};
     const char *p = in_dir(fx, "a.png");
@@ -311,8 +335,8 @@ static void test_nothing_finite(void **state)
 {
     fixture *fx = *state;
     double nan3[3] = {NAN, NAN, NAN}, x[3] = {1, 2, 3}, neg[3] = {-1, 0, -2};
-    dfle_plot_series s = {"nan", 3, x, nan3, 1}, sn = {"neg", 3, x, neg, 0};
-    dfle_plot_opts logy = {NULL, NULL, NULL, 0, 1, 0, 0};
+    dfle_plot_series s = {"nan", 3, x, nan3, 1, NULL}, sn = {"neg", 3, x, neg, 0, NULL};
+    dfle_plot_opts logy = {NULL, NULL, NULL, 0, 1, 0, 0, NULL, 0};
     dfle_error err = {0};
     const char *p = in_dir(fx, "a.png");
     assert_int_equal(dfle_plot_xy(p, NULL, &s, 1, &err), DFLE_EINVAL);
@@ -333,7 +357,7 @@ static void test_unwritable(void **state)
 {
     fixture *fx = *state;
     double x[2] = {1, 2}, y[2] = {1, 2};
-    dfle_plot_series s = {NULL, 2, x, y, 1};
+    dfle_plot_series s = {NULL, 2, x, y, 1, NULL};
     dfle_error err = {0};
     /* A regular file as a directory fails even for root. */
     int fd = open(in_dir(fx, "file"), O_WRONLY | O_CREAT, 0644);
@@ -417,7 +441,7 @@ static void test_gnuplot_missing(void **state)
 static int plot_small(fixture *fx, dfle_error *err)
 {
     double x[3] = {1, 2, 3};
-    dfle_plot_series s = {"s", 3, x, x, 1};
+    dfle_plot_series s = {"s", 3, x, x, 1, NULL};
     return dfle_plot_xy(in_dir(fx, "small.png"), NULL, &s, 1, err);
 }
 
@@ -448,6 +472,7 @@ int main(void)
 {
     const struct CMUnitTest tests[] = {
         cmocka_unit_test_setup_teardown(test_xy_png, setup, teardown),
+        cmocka_unit_test_setup_teardown(test_xy_colour, setup, teardown),
         cmocka_unit_test_setup_teardown(test_xy_log_svg, setup, teardown),
         cmocka_unit_test_setup_teardown(test_slope_area_png, setup, teardown),
         cmocka_unit_test_setup_teardown(test_profile_png, setup, teardown),

@@ -25,6 +25,8 @@ typedef struct dfle_plot_series {
     size_t n;
     const double *x, *y;
     int lines;         /* 1: lines, 0: points                 */
+    const double *c;   /* optional: a value per point, drawn as a colour
+                        * on a continuous scale with a colour box   */
 } dfle_plot_series;
 
 typedef struct dfle_plot_opts {
@@ -33,6 +35,8 @@ typedef struct dfle_plot_opts {
     const char *ylabel;  /* may be NULL */
     int logx, logy;      /* logarithmic axes                    */
     int width, height;   /* pixels; 0 = 900 x 600               */
+    const char *clabel;  /* label of the colour box (series with c) */
+    int logc;            /* logarithmic colour scale               */
 } dfle_plot_opts;
 
 /* Generic x-y plot of several series. */

@@ -200,8 +200,8 @@ static int l_plot_flow(lua_State *L)
 static int l_plot_xy(lua_State *L)
 {
     static const char *const keys[] = {"path", "series", "title", "xlabel", "ylabel",
-                                       "logx", "logy", NULL};
-    static const char *const series_keys[] = {"x", "y", "label", "lines", NULL};
+                                       "logx", "logy", "clabel", "logc", NULL};
+    static const char *const series_keys[] = {"x", "y", "label", "lines", "color", NULL};
     dfle_plot_opts o;
     dfle_plot_series *series;
     const char *path;
@@ -220,6 +220,8 @@ static int l_plot_xy(lua_State *L)
     o.ylabel = opt_string(L, 1, "ylabel", "plot.xy");
     o.logx = opt_bool(L, 1, "logx", "plot.xy");
     o.logy = opt_bool(L, 1, "logy", "plot.xy");
+    o.clabel = opt_string(L, 1, "clabel", "plot.xy");
+    o.logc = opt_bool(L, 1, "logc", "plot.xy");
     if (lua_getfield(L, 1, "series") != LUA_TTABLE)
         luaL_error(L, "dfle.plot.xy: parameter 'series' must be an array of {x =, y =}");
     list = lua_gettop(L);
@@ -230,7 +232,7 @@ static int l_plot_xy(lua_State *L)
     for (size_t k = 0; k < ns; k++) {
         int s_idx;
         size_t ny;
-        luaL_checkstack(L, 4, "too many plot series");
+        luaL_checkstack(L, 6, "too many plot series");
         lua_rawgeti(L, list, (lua_Integer)k + 1);
         s_idx = lua_gettop(L);
         if (!lua_istable(L, s_idx))
@@ -245,6 +247,15 @@ static int l_plot_xy(lua_State *L)
         if (ny != series[k].n)
             luaL_error(L, "dfle.plot.xy: series[%d] has %d x but %d y values", (int)k + 1,
                        (int)series[k].n, (int)ny);
+        series[k].c = NULL;
+        if (lua_getfield(L, s_idx, "color") != LUA_TNIL) {
+            size_t nc;
+            /* a value per point, coloured on a continuous scale */
+            series[k].c = dfle_lua_check_array(L, -1, "plot.xy: series.color", &nc);
+            if (nc != series[k].n)
+                luaL_error(L, "dfle.plot.xy: series[%d] has %d points but %d colour values",
+                           (int)k + 1, (int)series[k].n, (int)nc);
+        }
         /* The series table and its two scratch arrays stay on the stack,
          * which keeps them alive until the plot is written. */
     }

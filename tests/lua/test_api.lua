@@ -459,4 +459,16 @@ tests["plot.profile and slope_area: options table accepted"] = function()
     T.eq(assert(T.read_file(p2)):sub(1, 4), "\137PNG")
 end
 
+tests["plot.xy: a colour value per point, checked against the points"] = function()
+    local x, y, c = {}, {}, {}
+    for i = 1, 30 do x[i], y[i], c[i] = i, i * i, 10 ^ (i / 10) end
+    local png = T.tmpname(".png")
+    dfle.plot.xy{ path = png, series = { { x = x, y = y, color = c } }, clabel = "c", logc = true }
+    T.eq(assert(T.read_file(png)):sub(1, 4), "\137PNG")
+    T.raises_here(function() return dfle.plot.xy{ path = png, series = { { x = x, y = y, color = { 1 } } } } end,
+                  "series[1] has 30 points but 1 colour values")
+    T.raises_here(function() return dfle.plot.xy{ path = png, series = { { x = x, y = y } }, logc = 1 } end,
+                  "'logc' must be a boolean")
+end
+
 return tests
