@@ -93,6 +93,7 @@ typedef struct lua_law {
     dfle_law_ops ops;
     lua_State *T; /* the law's own thread (user value 1 of the law object) */
     char name[64];
+    char who[80]; /* "law.<name>": the prefix of its error messages */
     int has_factor, has_frequency;
     int g_kind;             /* G_NONE, G_POWER (h^gh v^gv lambda^gl), G_LUA */
     double gh, gv, gl;
@@ -120,16 +121,6 @@ typedef struct lua_law {
 } lua_law;
 
 static const char *const slot_names[] = {"rate", "factor", "integrand", "frequency"};
-
-/* Message handler: append a traceback to string messages. */
-static int msgh(lua_State *T)
-{
-    const char *msg = lua_tostring(T, 1);
-    if (msg == NULL)
-        msg = lua_pushfstring(T, "(error object is a %s value)", luaL_typename(T, 1));
-    luaL_traceback(T, T, msg, 1);
-    return 1;
-}
 
 /* Push "file:line" where the function at index idx is defined. */
 static const char *where_defined(lua_State *T, int idx)
@@ -448,20 +439,10 @@ static int run_sweep(lua_law *ll, int op, const dfle_law_ctx *ctx, const double 
     ll->ctx = ctx;
     ll->F_in = F_in;
     ll->out = out;
-    lua_settop(T, SLOT_COUNT);
-    lua_pushvalue(T, SLOT_SWEEP);
-    lua_pushlightuserdata(T, ll);
-    st = lua_pcall(T, 1, 0, SLOT_MSGH);
+    st = dfle_lua_shell_sweep(T, SLOT_COUNT, SLOT_SWEEP, SLOT_MSGH, ll, ll->who,
+                              "error in a Lua function", err);
     ll->busy = 0;
-    if (st != LUA_OK) {
-        const char *msg = lua_tostring(T, -1);
-        dfle_error_set(err, DFLE_ECALLBACK, "law.%s: %s", ll->name,
-                       msg != NULL ? msg : "error in a Lua function");
-        lua_settop(T, SLOT_COUNT);
-        return DFLE_ECALLBACK;
-    }
-    lua_settop(T, SLOT_COUNT);
-    return DFLE_OK;
+    return st;
 }
 
 static int ll_flow_factor(void *state, const dfle_law_ctx *ctx, double *F, dfle_error *err)
@@ -638,7 +619,7 @@ static int l_law_define(lua_State *L)
     lua_pushvalue(L, -1);
     lua_setiuservalue(L, 2, 2); /* for law.params and law:params() */
     lua_xmove(L, T, 1);         /* SLOT_PARAMS */
-    lua_pushcfunction(T, msgh); /* SLOT_MSGH */
+    lua_pushcfunction(T, dfle_lua_traceback); /* SLOT_MSGH */
     for (int k = ARR_S; k <= ARR_OUT; k++)
         lua_createtable(T, 0, 0);
     for (int op = 0; op < N_OPS; op++)
@@ -662,6 +643,7 @@ static int l_law_define(lua_State *L)
     memset(ll, 0, sizeof *ll);
     ll->T = T;
     snprintf(ll->name, sizeof ll->name, "%s", name);
+    snprintf(ll->who, sizeof ll->who, "law.%s", ll->name);
     ll->ops = lua_law_ops;
     ll->ops.name = ll->name;
     ll->has_factor = !lua_isnil(T, SLOT_FACTOR);

@@ -50,6 +50,7 @@ typedef struct lua_router {
     dfle_router_ops ops; /* named after the user's router */
     lua_State *T;
     char name[64];
+    char who[80]; /* "router.<name>": the prefix of its error messages */
     /* The call in progress. */
     int busy;
     const dfle_channel *ch;
@@ -63,15 +64,6 @@ typedef struct lua_router {
     int pending;
     char pending_msg[DFLE_ERROR_MSG_MAX];
 } lua_router;
-
-static int msgh(lua_State *T)
-{
-    const char *msg = lua_tostring(T, 1);
-    if (msg == NULL)
-        msg = lua_pushfstring(T, "(error object is a %s value)", luaL_typename(T, 1));
-    luaL_traceback(T, T, msg, 1);
-    return 1;
-}
 
 static int bad_output(lua_State *T, const lua_router *r, size_t i, const char *field,
                       const char *why)
@@ -176,20 +168,10 @@ static int run_sweep(lua_router *r, dfle_error *err)
                               "router.%s: the router was used again from inside its own flow()",
                               r->name);
     r->busy = 1;
-    lua_settop(T, SLOT_COUNT);
-    lua_pushvalue(T, SLOT_SWEEP);
-    lua_pushlightuserdata(T, r);
-    st = lua_pcall(T, 1, 0, SLOT_MSGH);
+    st = dfle_lua_shell_sweep(T, SLOT_COUNT, SLOT_SWEEP, SLOT_MSGH, r, r->who,
+                              "error in flow()", err);
     r->busy = 0;
-    if (st != LUA_OK) {
-        const char *msg = lua_tostring(T, -1);
-        dfle_error_set(err, DFLE_ECALLBACK, "router.%s: %s", r->name,
-                       msg != NULL ? msg : "error in flow()");
-        lua_settop(T, SLOT_COUNT);
-        return DFLE_ECALLBACK;
-    }
-    lua_settop(T, SLOT_COUNT);
-    return DFLE_OK;
+    return st;
 }
 
 static int lr_route(void *state, const dfle_channel *ch, const double *S, dfle_flow *flow,
@@ -295,11 +277,12 @@ static int l_router_define(lua_State *L)
     lua_setiuservalue(L, 2, 2); /* for rt.<param> and rt:params() */
     lua_xmove(L, T, 1);         /* SLOT_PARAMS */
     lua_createtable(T, 0, 12);  /* SLOT_REC */
-    lua_pushcfunction(T, msgh); /* SLOT_MSGH */
+    lua_pushcfunction(T, dfle_lua_traceback); /* SLOT_MSGH */
     r = lua_newuserdatauv(T, sizeof *r, 0); /* SLOT_STATE */
     memset(r, 0, sizeof *r);
     r->T = T;
     snprintf(r->name, sizeof r->name, "%s", name);
+    snprintf(r->who, sizeof r->who, "router.%s", r->name);
     r->ops = lua_router_ops;
     r->ops.name = r->name;
     for (int k = 1; k < SLOT_SWEEP; k++)
