@@ -2,17 +2,20 @@
 -- default steady state (Fig. 9 defaults: empirical router, Eq. (6) with
 -- alpha = 6, beta = 1, Table G1 fluvial law, dx = 5 m, A_max = 8 km^2)
 -- with the built-in dfle.law.power and with the same law written with
--- dfle.law.define (as factor + rate, and as rate alone), by the explicit
--- method and by the default (direct) one; best of several repetitions,
--- and the ratio Lua / built-in.  Target (issue 6): ratio <= 3 for the
--- whole run.  Prints times only; never asserts on them.
+-- dfle.law.define (as factor + rate, and as rate alone; compiled, as
+-- every law that is a formula is by default, and run as Lua with
+-- compile = false), by the explicit method and by the default (direct)
+-- one; best of several repetitions, and the ratio Lua / built-in.
+-- Target (issue 6): ratio <= 3 for the whole run.  Prints times only;
+-- never asserts on them.
 --   dfle bench/laws.lua [repetitions (3)]
 
 local reps = tonumber(arg and arg[1]) or 3
 
-local function lua_eq6()
+local function lua_eq6(compile)
   return dfle.law.define{
     name = "eq6_lua",
+    compile = compile,
     params = { k_df = 1e-4, alpha = 6, beta = 1 },
     factor = function(c, p) return c.t_p * c.h ^ p.beta * c.Theta end,
     rate = function(c, p) return p.k_df * c.S ^ p.alpha * c.F end,
@@ -22,9 +25,10 @@ end
 
 -- The same law as one rate function (no factor): one Lua call per node
 -- per evaluation instead of two.
-local function lua_eq6_rate_only()
+local function lua_eq6_rate_only(compile)
   return dfle.law.define{
     name = "eq6_lua_rate",
+    compile = compile,
     params = { k_df = 1e-4, alpha = 6, beta = 1 },
     rate = function(c, p) return p.k_df * c.S ^ p.alpha * c.t_p * c.h ^ p.beta * c.Theta end,
     integrand = { h = 1 },
@@ -63,7 +67,12 @@ end
 for _, method in ipairs{ "explicit", "direct" } do
   local tc, zc = time_run(function() return dfle.law.power{ k_df = 1e-4, alpha = 6, beta = 1 } end,
                           method)
-  for _, v in ipairs{ { "factor + rate", lua_eq6 }, { "rate only", lua_eq6_rate_only } } do
+  for _, v in ipairs{
+    { "factor + rate", lua_eq6 },
+    { "rate only", lua_eq6_rate_only },
+    { "factor + rate, compile = false", function() return lua_eq6(false) end },
+    { "rate only, compile = false", function() return lua_eq6_rate_only(false) end },
+  } do
     local tl, zl = time_run(v[2], method)
     local d = 0
     for i = 1, #zc do

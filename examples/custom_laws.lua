@@ -40,14 +40,13 @@ local inertial = dfle.law.define{
   rate = function(c, p) return p.k * c.S^p.alpha * c.F end,   -- m/yr
 }
 
--- A threshold law on the flow's basal shear stress tau [Pa].
+-- A threshold law on the flow's basal shear stress tau [Pa].  Written
+-- with math.max rather than `if`, it runs compiled (doc/laws.md); the
+-- inertial law above branches on Theta, so it runs as Lua.
 local excess = dfle.law.define{
   name = "excess stress (Lua)",
   params = { k = 2e-9, tau_c = 400, p = 1.5 },
-  rate = function(c, p)
-    local x = c.tau - p.tau_c
-    return x > 0 and p.k * x^p.p or 0
-  end,
+  rate = function(c, p) return p.k * math.max(c.tau - p.tau_c, 0)^p.p end,
 }
 
 -- Eq. (6) per flow, times a flow frequency [1/yr] that halves for every
@@ -88,6 +87,12 @@ for _, L in ipairs(laws) do
   local fit = dfle.fit_slope_area(m)
   print(("%-28s steady in %.3f s (%s)   %s"):format(L.label, os.clock() - t0, run.method,
         fit and ("S_df = %.3f, A_df = %.3g m^2"):format(fit.S_df, fit.A_df) or "no Eq. (2) fit"))
+  local st = L.law:compiled()  -- nil for a built-in law
+  if st then
+    for _, fn in ipairs{ "factor", "rate" } do
+      if st[fn] ~= nil then print(("%30s%s: %s"):format("", fn, st[fn] == true and "compiled" or st[fn])) end
+    end
+  end
   local A, S = m:get("A"), m:get("S")
   local a, s = {}, {}
   for i = 1, m.n - 1 do

@@ -123,6 +123,13 @@ int dfle_lua_traceback(lua_State *T);
 int dfle_lua_shell_sweep(lua_State *T, int top, int sweep, int msgh, void *ud,
                          const char *who, const char *fallback, dfle_error *err);
 
+/* The Lua epoch: a counter per lua_State that goes up whenever Lua code
+ * may have run (a binding given a model, a callback returned), so a
+ * compiled law (lua_trace.h) re-checks the values it baked in only then.
+ * Created by luaopen_dfle; dfle_lua_touch never allocates after that. */
+unsigned long *dfle_lua_epoch(lua_State *L);
+void dfle_lua_touch(lua_State *L);
+
 /* Each binding file adds its functions to the module table on the stack. */
 void dfle_lua_open_channel(lua_State *L);
 void dfle_lua_open_fluvial(lua_State *L);
@@ -130,6 +137,10 @@ void dfle_lua_open_router(lua_State *L);
 void dfle_lua_open_router_define(lua_State *L); /* dfle.router.define, into the router table */
 void dfle_lua_open_law(lua_State *L);
 void dfle_lua_open_law_define(lua_State *L); /* dfle.law.define, into the law table */
+/* law:compiled() of a dfle.law.define law: push { factor =, rate =,
+ * integrand = } (true: compiled; false: not used yet; a string: why it
+ * runs as Lua) and return 1; return 0 for any other law. */
+int dfle_lua_law_compiled(lua_State *L, dfle_law *law);
 void dfle_lua_open_model(lua_State *L);
 void dfle_lua_open_analysis(lua_State *L);
 void dfle_lua_open_plot(lua_State *L);

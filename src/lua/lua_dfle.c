@@ -26,6 +26,7 @@ void dfle_lua_push_module(lua_State *L)
 int luaopen_dfle(lua_State *L)
 {
     luaL_checkversion(L);
+    dfle_lua_touch(L); /* creates the epoch counter */
     /* A failure inside GSL (only allocation can fail in the fit) must come
      * back as an error status, not abort the host program. */
     gsl_set_error_handler_off();

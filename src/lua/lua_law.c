@@ -103,12 +103,28 @@ static int l_law_params(lua_State *L)
     return 1;
 }
 
+/* law:compiled(): which functions of a dfle.law.define law run compiled
+ * (lua_trace.h); nil for the built-in laws, which are C already. */
+static int l_law_compiled(lua_State *L)
+{
+    dfle_law *law = dfle_lua_check_law(L, 1);
+    if (!dfle_lua_law_compiled(L, law))
+        lua_pushnil(L);
+    return 1;
+}
+
 static int l_law_property(lua_State *L)
 {
     dfle_law *law = dfle_lua_check_law(L, 1);
-    const char *key = lua_tostring(L, 2);
+    const char *key = lua_type(L, 2) == LUA_TSTRING ? lua_tostring(L, 2) : NULL;
+    if (key == NULL)
+        return 0;
     if (strcmp(key, "name") == 0) {
         lua_pushstring(L, dfle_law_name(law));
+        return 1;
+    }
+    if (strcmp(key, "compiled") == 0) {
+        lua_pushcfunction(L, l_law_compiled);
         return 1;
     }
     lua_pushcfunction(L, l_law_params);

@@ -36,8 +36,17 @@
  * router the integrand is a built-in form h^a v^b lambda^c (C speed) or,
  * at a documented cost, a Lua function called once per wet cell per flow
  * step.
+ *
+ * All of the above is the fallback.  By default each function is first
+ * traced (lua_trace.h): a formula becomes a C program, evaluated column
+ * by column over the nodes with no Lua call at all, and checked bit for
+ * bit against the Lua sweep on its first use.  A function the tracer
+ * refuses runs through the sweep, and law:compiled() says why.  The
+ * values a program baked in are re-checked whenever the Lua epoch has
+ * moved (dfle_lua_epoch), i.e. whenever Lua code may have changed them.
  */
 #include "dfle_lua.h"
+#include "lua_trace.h"
 
 #include <math.h>
 #include <stdlib.h>
@@ -63,7 +72,10 @@ enum {
     SLOT_DRV_RATE_TR, /* the same, time-resolved flows    */
     SLOT_STATE,     /* the lua_law (a userdata: collected with the law) */
     SLOT_SWEEP,     /* the sweep closure over the slots above */
-    SLOT_COUNT = SLOT_SWEEP
+    /* Guard tables of the compiled functions (lua_trace.h), per op, and
+     * of the integrand; nil while not compiled. */
+    SLOT_GUARDS_FACTOR, SLOT_GUARDS_RATE, SLOT_GUARDS_RATE_TR, SLOT_GUARDS_G,
+    SLOT_COUNT = SLOT_GUARDS_G
 };
 #define N_IN (ARR_F - ARR_S + 1) /* input arrays, each with a C shadow */
 /* Inside the sweep the slots are its upvalues. */
@@ -113,6 +125,22 @@ typedef struct lua_law {
     /* Rate evaluated ahead for a one-node flow_factor (see sweep()). */
     int spec_valid;
     double spec_S, spec_F, spec_A, spec_w, spec_E;
+    /* Compiled forms (lua_trace.h) of factor and rate per op, and of the
+     * integrand: cstate 0 = not tried yet, 1 = compiled, -1 = runs as Lua
+     * (why[] says why).  seen[] is the epoch at which the program's
+     * guards last held. */
+    int compile;
+    unsigned long *epoch;
+    dfle_trace_prog *prog[N_OPS];
+    int cstate[N_OPS];
+    unsigned long seen[N_OPS];
+    char why[N_OPS][160];
+    dfle_trace_prog *gprog;
+    int gstate, gverify;
+    unsigned long gseen;
+    char gwhy[160];
+    double *scratch; /* a compiled sweep checked against Lua */
+    size_t scratch_cap;
     /* The op in progress, read by the sweep. */
     int busy, op;
     const dfle_law_ctx *ctx;
@@ -283,13 +311,11 @@ static void make_driver(lua_State *T, lua_law *ll, int op)
     ll->dirty[op] = 0;
 }
 
-/* frequency(A) from the memo, calling the user's function on a miss. */
-static double frequency_of(lua_State *T, lua_law *ll, size_t i)
+/* Where drainage area A is, or would go, in the frequency(A) memo; 1 if
+ * it is there. */
+static int memo_find(const lua_law *ll, double A, size_t *at)
 {
-    const double A = ll->ctx->A[i];
     size_t lo = 0, hi = ll->nf;
-    double f;
-
     while (lo < hi) {
         size_t mid = lo + (hi - lo) / 2;
         if (ll->fA[mid] < A)
@@ -297,7 +323,18 @@ static double frequency_of(lua_State *T, lua_law *ll, size_t i)
         else
             hi = mid;
     }
-    if (lo < ll->nf && ll->fA[lo] == A)
+    *at = lo;
+    return lo < ll->nf && ll->fA[lo] == A;
+}
+
+/* frequency(A) from the memo, calling the user's function on a miss. */
+static double frequency_of(lua_State *T, lua_law *ll, size_t i)
+{
+    const double A = ll->ctx->A[i];
+    size_t lo;
+    double f;
+
+    if (memo_find(ll, A, &lo))
         return ll->fv[lo];
     lua_pushvalue(T, UP(SLOT_FREQUENCY));
     lua_pushnumber(T, A);
@@ -379,7 +416,8 @@ static int sweep(lua_State *T)
      * call rate right after flow_factor for the same node and slope:
      * evaluate it now, inside the same protected call, and keep it for
      * that rate call (run_sweep), which then costs no lua_pcall. */
-    if (ll->op == OP_FACTOR && ctx->n == 1 && !ll->time_resolved) {
+    if (ll->op == OP_FACTOR && ctx->n == 1 && !ll->time_resolved &&
+        !(ll->compile && ll->cstate[OP_RATE] >= 0)) {
         ll->op = OP_RATE;
         ll->F_in = F;
         ll->out = &ll->spec_E;
@@ -411,13 +449,132 @@ static int reserve(lua_law *ll, size_t n, dfle_error *err)
     return DFLE_OK;
 }
 
-/* Run one op as a protected sweep; convert a failure to a dfle_error. */
+/* Run one op as a protected sweep of the user's Lua function; convert a
+ * failure to a dfle_error. */
+static int interpreted_sweep(lua_law *ll, int op, const dfle_law_ctx *ctx, const double *F_in,
+                             double *out, dfle_error *err)
+{
+    int st;
+    if ((st = reserve(ll, ctx->n, err)) != DFLE_OK)
+        return st;
+    ll->busy = 1;
+    ll->op = op;
+    ll->ctx = ctx;
+    ll->F_in = F_in;
+    ll->out = out;
+    st = dfle_lua_shell_sweep(ll->T, SLOT_COUNT, SLOT_SWEEP, SLOT_MSGH, ll, ll->who,
+                              "error in a Lua function", err);
+    ll->busy = 0;
+    return st;
+}
+
+/* The fields the function of `op` may read (bit F_x), as fetch() allows. */
+static unsigned op_fields(const lua_law *ll, int op)
+{
+    if (op == OP_FACTOR)
+        return ((1u << N_IN) - 1) & ~(1u << F_F);
+    if (ll->has_factor || op == OP_RATE_TR)
+        return SPLIT_RATE_FIELDS;
+    return (1u << N_IN) - 1;
+}
+
+enum { TRY_LUA = 1 };
+
+/* Run `op` through its compiled form, compiling it first if need be.
+ * Returns TRY_LUA when the Lua sweep must do it instead: the function
+ * cannot be compiled, a value is not finite (so that Lua reports it the
+ * usual way), or a frequency(A) is not memoised yet.  A program is
+ * checked against the Lua sweep, bit for bit, on its first use. */
+static int compiled_sweep(lua_law *ll, int op, const dfle_law_ctx *ctx, const double *F_in,
+                          double *out, dfle_error *err)
+{
+    lua_State *T = ll->T;
+    const size_t n = ctx->n;
+    const double *src[N_IN];
+    const double *val;
+    double *dst = out;
+    dfle_trace_prog *p;
+    unsigned used;
+    int verify = 0;
+
+    ll->op = op, ll->ctx = ctx, ll->F_in = F_in; /* for field_source() */
+    if (ll->prog[op] != NULL && ll->seen[op] != *ll->epoch) {
+        lua_settop(T, SLOT_COUNT);
+        if (!dfle_trace_guards_hold(T, SLOT_GUARDS_FACTOR + op, ll->prog[op])) {
+            dfle_trace_free(ll->prog[op]); /* something it read has changed */
+            ll->prog[op] = NULL;
+        }
+        ll->seen[op] = *ll->epoch;
+    }
+    if (ll->prog[op] == NULL) {
+        const dfle_trace_spec spec = {N_IN, field_names, op_fields(ll, op), 0};
+        lua_settop(T, SLOT_COUNT);
+        ll->prog[op] = dfle_trace_compile(T, op == OP_FACTOR ? SLOT_FACTOR : SLOT_RATE,
+                                          SLOT_PARAMS, &spec, ll->why[op], sizeof ll->why[op]);
+        lua_replace(T, SLOT_GUARDS_FACTOR + op);
+        if (ll->prog[op] == NULL) {
+            ll->cstate[op] = -1;
+            return TRY_LUA;
+        }
+        ll->cstate[op] = 1;
+        ll->seen[op] = *ll->epoch;
+        verify = 1;
+    }
+    p = ll->prog[op];
+    if (verify) {
+        if (n > ll->scratch_cap) {
+            double *s = realloc(ll->scratch, n * sizeof *s);
+            if (s == NULL)
+                return TRY_LUA;
+            ll->scratch = s;
+            ll->scratch_cap = n;
+        }
+        dst = ll->scratch;
+    }
+    used = dfle_trace_inputs(p);
+    for (int f = 0; f < N_IN; f++)
+        src[f] = used & (1u << f) ? field_source(ll, f) : NULL;
+    if ((val = dfle_trace_eval_n(p, n, src)) == NULL)
+        return TRY_LUA;
+    for (size_t i = 0; i < n; i++) {
+        double e = val[i];
+        size_t at;
+        /* No erosion up a reverse slope or without flow: as the driver. */
+        if (op != OP_FACTOR && !(ctx->S[i] > 0 && F_in[i] != 0)) {
+            dst[i] = 0.0;
+            continue;
+        }
+        if (!isfinite(e))
+            return TRY_LUA;
+        if (op != OP_FACTOR && ll->has_frequency && e != 0) {
+            if (!memo_find(ll, ctx->A[i], &at))
+                return TRY_LUA;
+            e *= ll->fv[at];
+        }
+        dst[i] = e;
+    }
+    if (verify) {
+        int st = interpreted_sweep(ll, op, ctx, F_in, out, err);
+        if (st != DFLE_OK)
+            return st;
+        for (size_t i = 0; i < n; i++) {
+            if (memcmp(&out[i], &dst[i], sizeof *dst) != 0) {
+                snprintf(ll->why[op], sizeof ll->why[op],
+                         "its compiled form gave %.17g where Lua gives %.17g (node %zu)", dst[i],
+                         out[i], i + 1);
+                dfle_trace_free(p);
+                ll->prog[op] = NULL;
+                ll->cstate[op] = -1;
+                break;
+            }
+        }
+    }
+    return DFLE_OK;
+}
+
 static int run_sweep(lua_law *ll, int op, const dfle_law_ctx *ctx, const double *F_in,
                      double *out, dfle_error *err)
 {
-    lua_State *T = ll->T;
-    int st;
-
     if (ctx->n == 0)
         return DFLE_OK;
     if (ll->spec_valid && !ll->busy) {
@@ -432,17 +589,12 @@ static int run_sweep(lua_law *ll, int op, const dfle_law_ctx *ctx, const double 
         return dfle_error_set(err, DFLE_ECALLBACK,
                               "law.%s: the law was used again from inside its own functions",
                               ll->name);
-    if ((st = reserve(ll, ctx->n, err)) != DFLE_OK)
-        return st;
-    ll->busy = 1;
-    ll->op = op;
-    ll->ctx = ctx;
-    ll->F_in = F_in;
-    ll->out = out;
-    st = dfle_lua_shell_sweep(T, SLOT_COUNT, SLOT_SWEEP, SLOT_MSGH, ll, ll->who,
-                              "error in a Lua function", err);
-    ll->busy = 0;
-    return st;
+    if (ll->compile && ll->cstate[op] >= 0) {
+        int st = compiled_sweep(ll, op, ctx, F_in, out, err);
+        if (st != TRY_LUA)
+            return st;
+    }
+    return interpreted_sweep(ll, op, ctx, F_in, out, err);
 }
 
 static int ll_flow_factor(void *state, const dfle_law_ctx *ctx, double *F, dfle_error *err)
@@ -472,39 +624,23 @@ static int ll_rate(void *state, const dfle_law_ctx *ctx, const double *F, double
     return run_sweep(ll, ll->time_resolved ? OP_RATE_TR : OP_RATE, ctx, F, E, err);
 }
 
-/* The Eq. (11) integrand.  The router calls it once per wet cell and flow
- * step with no way to report an error, so a failure is remembered (the
- * first message) and returned by the next flow_factor; NaN marks the sum. */
-static double ll_integrand(void *state, double h, double v, double lambda)
+/* The integrand through the user's Lua function: one protected call.  A
+ * failure is remembered (the first message) for the next flow_factor. */
+static double lua_integrand(lua_law *ll, double h, double v, double lambda)
 {
-    lua_law *ll = state;
     lua_State *T = ll->T;
     double g;
+    int st;
 
-    if (ll->g_kind == G_POWER) {
-        g = ll->gh != 0 ? pow(h, ll->gh) : 1.0;
-        if (ll->gv != 0)
-            g *= pow(v, ll->gv);
-        if (ll->gl != 0)
-            g *= pow(lambda, ll->gl);
-        return g;
-    }
-    if (ll->g_failed)
-        return NAN;
-    if (ll->g_kind == G_NONE) {
-        ll->g_failed = 1;
-        snprintf(ll->g_msg, sizeof ll->g_msg,
-                 "the law has no integrand, which a time-resolved router needs: give "
-                 "integrand = { h = beta } (h^beta, as the power law) or a function");
-        return NAN;
-    }
     lua_settop(T, SLOT_COUNT);
     lua_pushvalue(T, SLOT_INTEGRAND);
     lua_pushnumber(T, h);
     lua_pushnumber(T, v);
     lua_pushnumber(T, lambda);
     lua_pushvalue(T, SLOT_PARAMS);
-    if (lua_pcall(T, 4, 1, SLOT_MSGH) != LUA_OK) {
+    st = lua_pcall(T, 4, 1, SLOT_MSGH);
+    dfle_lua_touch(T);
+    if (st != LUA_OK) {
         const char *msg = lua_tostring(T, -1);
         snprintf(ll->g_msg, sizeof ll->g_msg, "%s", msg != NULL ? msg : "error in integrand");
         ll->g_failed = 1;
@@ -525,6 +661,89 @@ static double ll_integrand(void *state, double h, double v, double lambda)
     return g;
 }
 
+/* Calls of a newly compiled integrand checked against Lua. */
+#define G_VERIFY_CALLS 64
+
+/* The integrand through its compiled form; NaN asks for the Lua call
+ * (not compilable, or a value that is not finite, which Lua reports). */
+static double compiled_integrand(lua_law *ll, double h, double v, double lambda)
+{
+    static const char *const names[] = {"h", "v", "lambda"};
+    lua_State *T = ll->T;
+    const double in[3] = {h, v, lambda};
+    double g, gl;
+
+    if (ll->gprog != NULL && ll->gseen != *ll->epoch) {
+        lua_settop(T, SLOT_COUNT);
+        if (!dfle_trace_guards_hold(T, SLOT_GUARDS_G, ll->gprog)) {
+            dfle_trace_free(ll->gprog);
+            ll->gprog = NULL;
+        }
+        ll->gseen = *ll->epoch;
+    }
+    if (ll->gprog == NULL) {
+        const dfle_trace_spec spec = {3, names, 7u, 1};
+        lua_settop(T, SLOT_COUNT);
+        ll->gprog = dfle_trace_compile(T, SLOT_INTEGRAND, SLOT_PARAMS, &spec, ll->gwhy,
+                                       sizeof ll->gwhy);
+        lua_replace(T, SLOT_GUARDS_G);
+        if (ll->gprog == NULL) {
+            ll->gstate = -1;
+            return NAN;
+        }
+        ll->gstate = 1;
+        ll->gseen = *ll->epoch;
+        ll->gverify = G_VERIFY_CALLS;
+    }
+    g = dfle_trace_eval(ll->gprog, in);
+    if (ll->gverify == 0 || !isfinite(g))
+        return g;
+    ll->gverify--;
+    gl = lua_integrand(ll, h, v, lambda);
+    if (isfinite(gl) && memcmp(&g, &gl, sizeof g) != 0) {
+        snprintf(ll->gwhy, sizeof ll->gwhy,
+                 "its compiled form gave %.17g where Lua gives %.17g (h = %g, v = %g, "
+                 "lambda = %g)", g, gl, h, v, lambda);
+        dfle_trace_free(ll->gprog);
+        ll->gprog = NULL;
+        ll->gstate = -1;
+    }
+    return gl;
+}
+
+/* The Eq. (11) integrand.  The router calls it once per wet cell and flow
+ * step with no way to report an error, so a failure is remembered (the
+ * first message) and returned by the next flow_factor; NaN marks the sum. */
+static double ll_integrand(void *state, double h, double v, double lambda)
+{
+    lua_law *ll = state;
+    double g;
+
+    if (ll->g_kind == G_POWER) {
+        g = ll->gh != 0 ? pow(h, ll->gh) : 1.0;
+        if (ll->gv != 0)
+            g *= pow(v, ll->gv);
+        if (ll->gl != 0)
+            g *= pow(lambda, ll->gl);
+        return g;
+    }
+    if (ll->g_failed)
+        return NAN;
+    if (ll->g_kind == G_NONE) {
+        ll->g_failed = 1;
+        snprintf(ll->g_msg, sizeof ll->g_msg,
+                 "the law has no integrand, which a time-resolved router needs: give "
+                 "integrand = { h = beta } (h^beta, as the power law) or a function");
+        return NAN;
+    }
+    if (ll->compile && ll->gstate >= 0) {
+        g = compiled_integrand(ll, h, v, lambda);
+        if (isfinite(g) || ll->g_failed)
+            return g;
+    }
+    return lua_integrand(ll, h, v, lambda);
+}
+
 static void ll_destroy(void *state)
 {
     lua_law *ll = state;
@@ -533,7 +752,14 @@ static void ll_destroy(void *state)
     free(ll->shadow);
     free(ll->fA);
     free(ll->fv);
-    ll->shadow = ll->fA = ll->fv = NULL;
+    free(ll->scratch);
+    ll->shadow = ll->fA = ll->fv = ll->scratch = NULL;
+    for (int op = 0; op < N_OPS; op++) {
+        dfle_trace_free(ll->prog[op]);
+        ll->prog[op] = NULL;
+    }
+    dfle_trace_free(ll->gprog);
+    ll->gprog = NULL;
 }
 
 static const dfle_law_ops lua_law_ops = {
@@ -561,14 +787,14 @@ static void move_function(lua_State *L, lua_State *T, const char *key, int requi
 static int l_law_define(lua_State *L)
 {
     static const char *const keys[] = {"name", "params", "rate", "factor", "integrand",
-                                       "frequency", NULL};
+                                       "frequency", "compile", NULL};
     dfle_lua_law *u;
     lua_law *ll;
     lua_State *T;
     dfle_error err;
     const char *name = "lua";
     double g[3] = {0, 0, 0};
-    int t, g_kind;
+    int t, g_kind, compile = 1;
 
     luaL_checktype(L, 1, LUA_TTABLE);
     lua_settop(L, 1);
@@ -578,6 +804,13 @@ static int l_law_define(lua_State *L)
             luaL_error(L, "dfle.law.define: 'name' must be a string, got %s",
                        dfle_lua_typename(L, -1));
         name = lua_tostring(L, -1);
+    }
+    lua_pop(L, 1);
+    if ((t = lua_getfield(L, 1, "compile")) != LUA_TNIL) {
+        if (t != LUA_TBOOLEAN)
+            luaL_error(L, "dfle.law.define: 'compile' must be a boolean, got %s",
+                       dfle_lua_typename(L, -1));
+        compile = lua_toboolean(L, -1);
     }
     lua_pop(L, 1);
 
@@ -647,6 +880,8 @@ static int l_law_define(lua_State *L)
     ll->ops = lua_law_ops;
     ll->ops.name = ll->name;
     ll->has_factor = !lua_isnil(T, SLOT_FACTOR);
+    ll->compile = compile;
+    ll->epoch = dfle_lua_epoch(L);
     ll->has_frequency = !lua_isnil(T, SLOT_FREQUENCY);
     ll->g_kind = g_kind;
     ll->gh = g[0], ll->gv = g[1], ll->gl = g[2];
@@ -665,6 +900,8 @@ static int l_law_define(lua_State *L)
     for (int k = 1; k < SLOT_SWEEP; k++)
         lua_pushvalue(T, k);
     lua_pushcclosure(T, sweep, SLOT_SWEEP - 1); /* SLOT_SWEEP */
+    for (int k = SLOT_GUARDS_FACTOR; k <= SLOT_GUARDS_G; k++)
+        lua_pushnil(T);
     if (dfle_law_new(&ll->ops, ll, &u->law, &err) != DFLE_OK)
         return dfle_lua_raise(L, &err);
     lua_settop(L, 2);
@@ -675,4 +912,45 @@ void dfle_lua_open_law_define(lua_State *L)
 {
     lua_pushcfunction(L, l_law_define);
     lua_setfield(L, -2, "define");
+}
+
+static void push_status(lua_State *L, const lua_law *ll, int state, const char *why)
+{
+    if (!ll->compile)
+        lua_pushliteral(L, "not compiled: compile = false");
+    else if (state > 0)
+        lua_pushboolean(L, 1);
+    else if (state < 0)
+        lua_pushfstring(L, "runs as Lua: %s", why);
+    else
+        lua_pushboolean(L, 0);
+}
+
+int dfle_lua_law_compiled(lua_State *L, dfle_law *law)
+{
+    const lua_law *ll;
+    int r;
+    if (dfle_law_get_ops(law)->flow_factor != ll_flow_factor)
+        return 0;
+    ll = dfle_law_state(law);
+    lua_createtable(L, 0, 3);
+    if (ll->has_factor) {
+        push_status(L, ll, ll->cstate[OP_FACTOR], ll->why[OP_FACTOR]);
+        lua_setfield(L, -2, "factor");
+    }
+    /* rate runs as two ops (bulk and time-resolved flows): a refusal of
+     * either is what the user needs to see. */
+    r = ll->cstate[OP_RATE] < 0 || (ll->cstate[OP_RATE] > 0 && ll->cstate[OP_RATE_TR] >= 0)
+            ? OP_RATE
+            : OP_RATE_TR;
+    push_status(L, ll, ll->cstate[r], ll->why[r]);
+    lua_setfield(L, -2, "rate");
+    if (ll->g_kind == G_POWER) {
+        lua_pushboolean(L, 1);
+        lua_setfield(L, -2, "integrand");
+    } else if (ll->g_kind == G_LUA) {
+        push_status(L, ll, ll->gstate, ll->gwhy);
+        lua_setfield(L, -2, "integrand");
+    }
+    return 1;
 }

@@ -215,6 +215,7 @@ static int lua_uplift(void *ud, double t, double *U, dfle_error *err)
     lua_pushcfunction(L, uplift_msgh);
     lua_pushvalue(L, c->fidx);
     lua_pushnumber(L, t);
+    dfle_lua_touch(L); /* U(t) may change what a compiled law read */
     if (lua_pcall(L, 1, 1, top + 1) != LUA_OK) {
         dfle_error_set(err, DFLE_ECALLBACK, "model: U(t) failed at t = %g yr: %s", t,
                        lua_tostring(L, -1) != NULL ? lua_tostring(L, -1) : "?");

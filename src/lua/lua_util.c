@@ -159,6 +159,7 @@ dfle_law *dfle_lua_check_law(lua_State *L, int arg)
 }
 dfle_model *dfle_lua_check_model(lua_State *L, int arg)
 {
+    dfle_lua_touch(L); /* the script may have changed what a compiled law read */
     return check_object(L, arg, DFLE_LUA_MODEL);
 }
 
@@ -293,6 +294,7 @@ int dfle_lua_shell_sweep(lua_State *T, int top, int sweep, int msgh, void *ud,
     lua_pushvalue(T, sweep);
     lua_pushlightuserdata(T, ud);
     st = lua_pcall(T, 1, 0, msgh);
+    dfle_lua_touch(T);
     if (st != LUA_OK) {
         const char *msg = lua_tostring(T, -1);
         dfle_error_set(err, DFLE_ECALLBACK, "%s: %s", who, msg != NULL ? msg : fallback);
@@ -302,3 +304,22 @@ int dfle_lua_shell_sweep(lua_State *T, int top, int sweep, int msgh, void *ud,
     lua_settop(T, top);
     return DFLE_OK;
 }
+
+static const char epoch_key = 0;
+
+unsigned long *dfle_lua_epoch(lua_State *L)
+{
+    unsigned long *e;
+    if (lua_rawgetp(L, LUA_REGISTRYINDEX, &epoch_key) == LUA_TUSERDATA) {
+        e = lua_touserdata(L, -1);
+        lua_pop(L, 1);
+        return e;
+    }
+    lua_pop(L, 1);
+    e = lua_newuserdatauv(L, sizeof *e, 0);
+    *e = 1;
+    lua_rawsetp(L, LUA_REGISTRYINDEX, &epoch_key);
+    return e;
+}
+
+void dfle_lua_touch(lua_State *L) { ++*dfle_lua_epoch(L); }
