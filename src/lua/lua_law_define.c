@@ -38,115 +38,25 @@
  * step.
  *
  * All of the above is the fallback.  By default each function is first
- * traced (lua_trace.h): a formula becomes a C program, evaluated column
+ * traced (lua_trace.h, lua_law_compiled.c): a formula becomes a C program, evaluated column
  * by column over the nodes with no Lua call at all, and checked bit for
  * bit against the Lua sweep on its first use.  A function the tracer
  * refuses runs through the sweep, and law:compiled() says why.  The
  * values a program baked in are re-checked whenever the Lua epoch has
  * moved (dfle_lua_epoch), i.e. whenever Lua code may have changed them.
  */
-#include "dfle_lua.h"
-#include "lua_trace.h"
+#include "lua_law_define.h"
 
 #include <math.h>
 #include <stdlib.h>
 #include <string.h>
 
-/* Fixed slots on the law thread's stack. */
-enum {
-    SLOT_RATE = 1,  /* rate(c, p)                         */
-    SLOT_FACTOR,    /* factor(c, p) or nil                */
-    SLOT_INTEGRAND, /* integrand(h, v, lambda, p) or nil  */
-    SLOT_FREQUENCY, /* frequency(A, p) or nil             */
-    SLOT_PARAMS,    /* p: the law's own copy of params    */
-    SLOT_MSGH,      /* message handler (traceback)        */
-    /* Lua arrays the drivers read (and `out`, which they write). */
-    ARR_S, ARR_A, ARR_W, ARR_H, ARR_V, ARR_T_P, ARR_TAU, ARR_THETA, ARR_Q, ARR_M, ARR_I, ARR_F,
-    ARR_OUT,
-    SLOT_REC_FACTOR, /* c for factor (fields on demand, see fetch()) */
-    SLOT_REC_RATE,  /* c for rate                         */
-    SLOT_REC_RATE_TR, /* c for rate after a time-resolved routing */
-    SLOT_POS,       /* {i}: the node the drivers are at   */
-    SLOT_DRV_FACTOR, /* Lua loop calling factor per node  */
-    SLOT_DRV_RATE,  /* Lua loop calling rate per node     */
-    SLOT_DRV_RATE_TR, /* the same, time-resolved flows    */
-    SLOT_STATE,     /* the lua_law (a userdata: collected with the law) */
-    SLOT_SWEEP,     /* the sweep closure over the slots above */
-    /* Guard tables of the compiled functions (lua_trace.h), per op, and
-     * of the integrand; nil while not compiled. */
-    SLOT_GUARDS_FACTOR, SLOT_GUARDS_RATE, SLOT_GUARDS_RATE_TR, SLOT_GUARDS_G,
-    SLOT_COUNT = SLOT_GUARDS_G
-};
-#define N_IN (ARR_F - ARR_S + 1) /* input arrays, each with a C shadow */
-/* Inside the sweep the slots are its upvalues. */
-#define UP(slot) lua_upvalueindex(slot)
-
 /* Field names, in the order of the ARR_ slots (valid Lua names: the
  * generated drivers use them as local variables). */
-static const char *const field_names[N_IN] = {"S", "A", "w", "h", "v", "t_p", "tau", "Theta",
-                                              "Q", "M", "I", "F"};
-enum { F_S, F_A, F_W, F_H, F_V, F_T_P, F_TAU, F_THETA, F_Q, F_M, F_I, F_F };
-/* Fields rate() sees when the law has a factor: the slope part only. */
-#define SPLIT_RATE_FIELDS ((1u << F_S) | (1u << F_A) | (1u << F_W) | (1u << F_F))
-
-/* The three kinds of sweep, each with its own record, driver and set of
- * fields read.  Rate after a time-resolved routing sees the slope part
- * only (S, A, w, F): the model's node solver then calls rate on a cached
- * factor without a valid flow view (model_node.c), so the flow must not
- * be read; the law knows which case it is in from its last flow_factor. */
-enum { OP_FACTOR, OP_RATE, OP_RATE_TR, N_OPS };
+const char *const ll_field_names[N_IN] = {"S", "A", "w", "h", "v", "t_p", "tau", "Theta",
+                                          "Q", "M", "I", "F"};
 static const int op_rec[N_OPS] = {SLOT_REC_FACTOR, SLOT_REC_RATE, SLOT_REC_RATE_TR};
 static const int op_drv[N_OPS] = {SLOT_DRV_FACTOR, SLOT_DRV_RATE, SLOT_DRV_RATE_TR};
-enum { G_NONE, G_POWER, G_LUA };
-
-typedef struct lua_law {
-    /* A copy of lua_law_ops named after the user's law, so dfle_law_name()
-     * and error messages say "inertial", not "lua". */
-    dfle_law_ops ops;
-    lua_State *T; /* the law's own thread (user value 1 of the law object) */
-    char name[64];
-    char who[80]; /* "law.<name>": the prefix of its error messages */
-    int has_factor, has_frequency;
-    int g_kind;             /* G_NONE, G_POWER (h^gh v^gv lambda^gl), G_LUA */
-    double gh, gv, gl;
-    char g_msg[DFLE_ERROR_MSG_MAX]; /* first integrand failure of a routing */
-    int g_failed;
-    /* C shadows of the input arrays: what each Lua array holds now. */
-    size_t cap;
-    double *shadow; /* N_IN blocks of cap values */
-    /* frequency(A) memo, sorted by A. */
-    size_t nf, capf;
-    double *fA, *fv;
-    /* Fields each op's function has read (bit F_x), and whether its
-     * driver must be generated again to copy a newly read one. */
-    unsigned used[N_OPS];
-    int dirty[N_OPS];
-    int time_resolved; /* the last flow_factor saw a time-resolved flow */
-    /* Rate evaluated ahead for a one-node flow_factor (see sweep()). */
-    int spec_valid;
-    double spec_S, spec_F, spec_A, spec_w, spec_E;
-    /* Compiled forms (lua_trace.h) of factor and rate per op, and of the
-     * integrand: cstate 0 = not tried yet, 1 = compiled, -1 = runs as Lua
-     * (why[] says why).  seen[] is the epoch at which the program's
-     * guards last held. */
-    int compile;
-    unsigned long *epoch;
-    dfle_trace_prog *prog[N_OPS];
-    int cstate[N_OPS];
-    unsigned long seen[N_OPS];
-    char why[N_OPS][160];
-    dfle_trace_prog *gprog;
-    int gstate, gverify;
-    unsigned long gseen;
-    char gwhy[160];
-    double *scratch; /* a compiled sweep checked against Lua */
-    size_t scratch_cap;
-    /* The op in progress, read by the sweep. */
-    int busy, op;
-    const dfle_law_ctx *ctx;
-    const double *F_in;
-    double *out;
-} lua_law;
 
 static const char *const slot_names[] = {"rate", "factor", "integrand", "frequency"};
 
@@ -196,7 +106,7 @@ static void fill(lua_State *T, lua_law *ll, int arr, const double *v, size_t n)
 }
 
 /* The C array behind field f for the op in progress (NULL: zeros). */
-static const double *field_source(const lua_law *ll, int f)
+const double *ll_field_source(const lua_law *ll, int f)
 {
     const dfle_law_ctx *ctx = ll->ctx;
     const dfle_flow *fl = ctx->flow;
@@ -233,7 +143,7 @@ static int fetch(lua_State *T)
     if (!ll->busy || ll->op != op || key == NULL || lua_type(T, 2) != LUA_TSTRING)
         return 0;
     for (f = 0; f < N_IN; f++)
-        if (strcmp(key, field_names[f]) == 0)
+        if (strcmp(key, ll_field_names[f]) == 0)
             break;
     if (f == N_IN || (f == F_F && op == OP_FACTOR) ||
         (op != OP_FACTOR && (ll->has_factor || op == OP_RATE_TR) &&
@@ -248,7 +158,7 @@ static int fetch(lua_State *T)
         ll->dirty[op] = 1;
     }
     {
-        const double *v = field_source(ll, f);
+        const double *v = ll_field_source(ll, f);
         lua_pushnumber(T, v != NULL ? v[i] : 0.0);
     }
     return 1;
@@ -266,7 +176,7 @@ static void make_driver(lua_State *T, lua_law *ll, int op)
     luaL_addstring(&b, "local fn, p, c, out, pos");
     for (int f = 0; f < N_IN; f++) {
         luaL_addstring(&b, ", ");
-        luaL_addstring(&b, field_names[f]);
+        luaL_addstring(&b, ll_field_names[f]);
     }
     luaL_addstring(&b, " = ...\nreturn function(n)\n  for i = 1, n do\n");
     if (op != OP_FACTOR)
@@ -278,12 +188,12 @@ static void make_driver(lua_State *T, lua_law *ll, int op)
         if (!(ll->used[op] & (1u << f)))
             continue;
         luaL_addstring(&b, "      c.");
-        luaL_addstring(&b, field_names[f]);
+        luaL_addstring(&b, ll_field_names[f]);
         luaL_addstring(&b, " = ");
         if (op != OP_FACTOR && (f == F_S || f == F_F)) {
             luaL_addstring(&b, f == F_S ? "s" : "f");
         } else {
-            luaL_addstring(&b, field_names[f]);
+            luaL_addstring(&b, ll_field_names[f]);
             luaL_addstring(&b, "[i]");
         }
         luaL_addstring(&b, "\n");
@@ -313,7 +223,7 @@ static void make_driver(lua_State *T, lua_law *ll, int op)
 
 /* Where drainage area A is, or would go, in the frequency(A) memo; 1 if
  * it is there. */
-static int memo_find(const lua_law *ll, double A, size_t *at)
+int ll_memo_find(const lua_law *ll, double A, size_t *at)
 {
     size_t lo = 0, hi = ll->nf;
     while (lo < hi) {
@@ -334,7 +244,7 @@ static double frequency_of(lua_State *T, lua_law *ll, size_t i)
     size_t lo;
     double f;
 
-    if (memo_find(ll, A, &lo))
+    if (ll_memo_find(ll, A, &lo))
         return ll->fv[lo];
     lua_pushvalue(T, UP(SLOT_FREQUENCY));
     lua_pushnumber(T, A);
@@ -384,7 +294,7 @@ static void sweep_op(lua_State *T, lua_law *ll, int op)
         need |= (1u << F_S) | (1u << F_F); /* the driver's guard reads them */
     for (int f = 0; f < N_IN; f++)
         if (need & (1u << f))
-            fill(T, ll, ARR_S + f, field_source(ll, f), n);
+            fill(T, ll, ARR_S + f, ll_field_source(ll, f), n);
     lua_pushvalue(T, UP(op_drv[op]));
     lua_pushinteger(T, (lua_Integer)n);
     lua_call(T, 1, 0);
@@ -451,7 +361,7 @@ static int reserve(lua_law *ll, size_t n, dfle_error *err)
 
 /* Run one op as a protected sweep of the user's Lua function; convert a
  * failure to a dfle_error. */
-static int interpreted_sweep(lua_law *ll, int op, const dfle_law_ctx *ctx, const double *F_in,
+int ll_interpreted_sweep(lua_law *ll, int op, const dfle_law_ctx *ctx, const double *F_in,
                              double *out, dfle_error *err)
 {
     int st;
@@ -466,110 +376,6 @@ static int interpreted_sweep(lua_law *ll, int op, const dfle_law_ctx *ctx, const
                               "error in a Lua function", err);
     ll->busy = 0;
     return st;
-}
-
-/* The fields the function of `op` may read (bit F_x), as fetch() allows. */
-static unsigned op_fields(const lua_law *ll, int op)
-{
-    if (op == OP_FACTOR)
-        return ((1u << N_IN) - 1) & ~(1u << F_F);
-    if (ll->has_factor || op == OP_RATE_TR)
-        return SPLIT_RATE_FIELDS;
-    return (1u << N_IN) - 1;
-}
-
-enum { TRY_LUA = 1 };
-
-/* Run `op` through its compiled form, compiling it first if need be.
- * Returns TRY_LUA when the Lua sweep must do it instead: the function
- * cannot be compiled, a value is not finite (so that Lua reports it the
- * usual way), or a frequency(A) is not memoised yet.  A program is
- * checked against the Lua sweep, bit for bit, on its first use. */
-static int compiled_sweep(lua_law *ll, int op, const dfle_law_ctx *ctx, const double *F_in,
-                          double *out, dfle_error *err)
-{
-    lua_State *T = ll->T;
-    const size_t n = ctx->n;
-    const double *src[N_IN];
-    const double *val;
-    double *dst = out;
-    dfle_trace_prog *p;
-    unsigned used;
-    int verify = 0;
-
-    ll->op = op, ll->ctx = ctx, ll->F_in = F_in; /* for field_source() */
-    if (ll->prog[op] != NULL && ll->seen[op] != *ll->epoch) {
-        lua_settop(T, SLOT_COUNT);
-        if (!dfle_trace_guards_hold(T, SLOT_GUARDS_FACTOR + op, ll->prog[op])) {
-            dfle_trace_free(ll->prog[op]); /* something it read has changed */
-            ll->prog[op] = NULL;
-        }
-        ll->seen[op] = *ll->epoch;
-    }
-    if (ll->prog[op] == NULL) {
-        const dfle_trace_spec spec = {N_IN, field_names, op_fields(ll, op), 0};
-        lua_settop(T, SLOT_COUNT);
-        ll->prog[op] = dfle_trace_compile(T, op == OP_FACTOR ? SLOT_FACTOR : SLOT_RATE,
-                                          SLOT_PARAMS, &spec, ll->why[op], sizeof ll->why[op]);
-        lua_replace(T, SLOT_GUARDS_FACTOR + op);
-        if (ll->prog[op] == NULL) {
-            ll->cstate[op] = -1;
-            return TRY_LUA;
-        }
-        ll->cstate[op] = 1;
-        ll->seen[op] = *ll->epoch;
-        verify = 1;
-    }
-    p = ll->prog[op];
-    if (verify) {
-        if (n > ll->scratch_cap) {
-            double *s = realloc(ll->scratch, n * sizeof *s);
-            if (s == NULL)
-                return TRY_LUA;
-            ll->scratch = s;
-            ll->scratch_cap = n;
-        }
-        dst = ll->scratch;
-    }
-    used = dfle_trace_inputs(p);
-    for (int f = 0; f < N_IN; f++)
-        src[f] = used & (1u << f) ? field_source(ll, f) : NULL;
-    if ((val = dfle_trace_eval_n(p, n, src)) == NULL)
-        return TRY_LUA;
-    for (size_t i = 0; i < n; i++) {
-        double e = val[i];
-        size_t at;
-        /* No erosion up a reverse slope or without flow: as the driver. */
-        if (op != OP_FACTOR && !(ctx->S[i] > 0 && F_in[i] != 0)) {
-            dst[i] = 0.0;
-            continue;
-        }
-        if (!isfinite(e))
-            return TRY_LUA;
-        if (op != OP_FACTOR && ll->has_frequency && e != 0) {
-            if (!memo_find(ll, ctx->A[i], &at))
-                return TRY_LUA;
-            e *= ll->fv[at];
-        }
-        dst[i] = e;
-    }
-    if (verify) {
-        int st = interpreted_sweep(ll, op, ctx, F_in, out, err);
-        if (st != DFLE_OK)
-            return st;
-        for (size_t i = 0; i < n; i++) {
-            if (memcmp(&out[i], &dst[i], sizeof *dst) != 0) {
-                snprintf(ll->why[op], sizeof ll->why[op],
-                         "its compiled form gave %.17g where Lua gives %.17g (node %zu)", dst[i],
-                         out[i], i + 1);
-                dfle_trace_free(p);
-                ll->prog[op] = NULL;
-                ll->cstate[op] = -1;
-                break;
-            }
-        }
-    }
-    return DFLE_OK;
 }
 
 static int run_sweep(lua_law *ll, int op, const dfle_law_ctx *ctx, const double *F_in,
@@ -590,11 +396,11 @@ static int run_sweep(lua_law *ll, int op, const dfle_law_ctx *ctx, const double 
                               "law.%s: the law was used again from inside its own functions",
                               ll->name);
     if (ll->compile && ll->cstate[op] >= 0) {
-        int st = compiled_sweep(ll, op, ctx, F_in, out, err);
+        int st = ll_compiled_sweep(ll, op, ctx, F_in, out, err);
         if (st != TRY_LUA)
             return st;
     }
-    return interpreted_sweep(ll, op, ctx, F_in, out, err);
+    return ll_interpreted_sweep(ll, op, ctx, F_in, out, err);
 }
 
 static int ll_flow_factor(void *state, const dfle_law_ctx *ctx, double *F, dfle_error *err)
@@ -626,7 +432,7 @@ static int ll_rate(void *state, const dfle_law_ctx *ctx, const double *F, double
 
 /* The integrand through the user's Lua function: one protected call.  A
  * failure is remembered (the first message) for the next flow_factor. */
-static double lua_integrand(lua_law *ll, double h, double v, double lambda)
+double ll_lua_integrand(lua_law *ll, double h, double v, double lambda)
 {
     lua_State *T = ll->T;
     double g;
@@ -661,56 +467,6 @@ static double lua_integrand(lua_law *ll, double h, double v, double lambda)
     return g;
 }
 
-/* Calls of a newly compiled integrand checked against Lua. */
-#define G_VERIFY_CALLS 64
-
-/* The integrand through its compiled form; NaN asks for the Lua call
- * (not compilable, or a value that is not finite, which Lua reports). */
-static double compiled_integrand(lua_law *ll, double h, double v, double lambda)
-{
-    static const char *const names[] = {"h", "v", "lambda"};
-    lua_State *T = ll->T;
-    const double in[3] = {h, v, lambda};
-    double g, gl;
-
-    if (ll->gprog != NULL && ll->gseen != *ll->epoch) {
-        lua_settop(T, SLOT_COUNT);
-        if (!dfle_trace_guards_hold(T, SLOT_GUARDS_G, ll->gprog)) {
-            dfle_trace_free(ll->gprog);
-            ll->gprog = NULL;
-        }
-        ll->gseen = *ll->epoch;
-    }
-    if (ll->gprog == NULL) {
-        const dfle_trace_spec spec = {3, names, 7u, 1};
-        lua_settop(T, SLOT_COUNT);
-        ll->gprog = dfle_trace_compile(T, SLOT_INTEGRAND, SLOT_PARAMS, &spec, ll->gwhy,
-                                       sizeof ll->gwhy);
-        lua_replace(T, SLOT_GUARDS_G);
-        if (ll->gprog == NULL) {
-            ll->gstate = -1;
-            return NAN;
-        }
-        ll->gstate = 1;
-        ll->gseen = *ll->epoch;
-        ll->gverify = G_VERIFY_CALLS;
-    }
-    g = dfle_trace_eval(ll->gprog, in);
-    if (ll->gverify == 0 || !isfinite(g))
-        return g;
-    ll->gverify--;
-    gl = lua_integrand(ll, h, v, lambda);
-    if (isfinite(gl) && memcmp(&g, &gl, sizeof g) != 0) {
-        snprintf(ll->gwhy, sizeof ll->gwhy,
-                 "its compiled form gave %.17g where Lua gives %.17g (h = %g, v = %g, "
-                 "lambda = %g)", g, gl, h, v, lambda);
-        dfle_trace_free(ll->gprog);
-        ll->gprog = NULL;
-        ll->gstate = -1;
-    }
-    return gl;
-}
-
 /* The Eq. (11) integrand.  The router calls it once per wet cell and flow
  * step with no way to report an error, so a failure is remembered (the
  * first message) and returned by the next flow_factor; NaN marks the sum. */
@@ -737,11 +493,11 @@ static double ll_integrand(void *state, double h, double v, double lambda)
         return NAN;
     }
     if (ll->compile && ll->gstate >= 0) {
-        g = compiled_integrand(ll, h, v, lambda);
+        g = ll_compiled_integrand(ll, h, v, lambda);
         if (isfinite(g) || ll->g_failed)
             return g;
     }
-    return lua_integrand(ll, h, v, lambda);
+    return ll_lua_integrand(ll, h, v, lambda);
 }
 
 static void ll_destroy(void *state)
@@ -914,43 +670,7 @@ void dfle_lua_open_law_define(lua_State *L)
     lua_setfield(L, -2, "define");
 }
 
-static void push_status(lua_State *L, const lua_law *ll, int state, const char *why)
+const lua_law *ll_of(const dfle_law *law)
 {
-    if (!ll->compile)
-        lua_pushliteral(L, "not compiled: compile = false");
-    else if (state > 0)
-        lua_pushboolean(L, 1);
-    else if (state < 0)
-        lua_pushfstring(L, "runs as Lua: %s", why);
-    else
-        lua_pushboolean(L, 0);
-}
-
-int dfle_lua_law_compiled(lua_State *L, dfle_law *law)
-{
-    const lua_law *ll;
-    int r;
-    if (dfle_law_get_ops(law)->flow_factor != ll_flow_factor)
-        return 0;
-    ll = dfle_law_state(law);
-    lua_createtable(L, 0, 3);
-    if (ll->has_factor) {
-        push_status(L, ll, ll->cstate[OP_FACTOR], ll->why[OP_FACTOR]);
-        lua_setfield(L, -2, "factor");
-    }
-    /* rate runs as two ops (bulk and time-resolved flows): a refusal of
-     * either is what the user needs to see. */
-    r = ll->cstate[OP_RATE] < 0 || (ll->cstate[OP_RATE] > 0 && ll->cstate[OP_RATE_TR] >= 0)
-            ? OP_RATE
-            : OP_RATE_TR;
-    push_status(L, ll, ll->cstate[r], ll->why[r]);
-    lua_setfield(L, -2, "rate");
-    if (ll->g_kind == G_POWER) {
-        lua_pushboolean(L, 1);
-        lua_setfield(L, -2, "integrand");
-    } else if (ll->g_kind == G_LUA) {
-        push_status(L, ll, ll->gstate, ll->gwhy);
-        lua_setfield(L, -2, "integrand");
-    }
-    return 1;
+    return dfle_law_get_ops(law)->flow_factor == ll_flow_factor ? dfle_law_state(law) : NULL;
 }

@@ -34,8 +34,11 @@
  * userdata), so a raise leaks nothing; upvalues swapped for proxies
  * during the trace are listed before they are swapped and restored by
  * dfle_trace_compile after the protected call, whatever happened.
+ *
+ * lua_trace_eval.c runs a record and checks its guards;
+ * lua_trace_bytecode.c does the bytecode scan.
  */
-#include "lua_trace.h"
+#include "lua_trace_internal.h"
 
 #include <lauxlib.h>
 #include <lualib.h>
@@ -49,32 +52,6 @@
 #define MAX_NODES 1024 /* operations a compiled function may record    */
 #define MAX_GUARDS 256 /* outside values it may read                   */
 #define MAX_DEPTH 8    /* helper functions calling helper functions    */
-
-/* Node operations.  T_IN and T_K hold values set before evaluation. */
-enum {
-    T_IN, T_K,
-    T_ADD, T_SUB, T_MUL, T_DIV, T_MOD, T_IDIV, T_POW, T_UNM,
-    T_SQRT, T_EXP, T_LOG, T_LOGB, T_ABS, T_FLOOR, T_CEIL, T_FMOD, T_MAX, T_MIN,
-    T_SIN, T_COS, T_TAN, T_ASIN, T_ACOS, T_ATAN, T_DEG, T_RAD
-};
-
-typedef struct tnode {
-    unsigned char op;
-    unsigned char maybe_int; /* may hold a Lua integer (see above) */
-    int a, b;                /* operand nodes; for T_IN, a is the input */
-    double k;                /* T_K's value */
-} tnode;
-
-struct dfle_trace_prog {
-    int n, result, n_guards;
-    unsigned inputs;
-    int in_node[DFLE_TRACE_MAX_INPUTS];
-    tnode *node;
-    double *val;          /* dfle_trace_eval's values, one per node    */
-    const double **col;   /* dfle_trace_eval_n's columns, one per node */
-    double *work;         /* their storage: (n + 1) x cap              */
-    size_t cap;
-};
 
 /* The trace in progress: a userdata with user values 1 = guards table,
  * 2 = swaps table, 3 = cache (vetted functions, proxies), 4 = the original
@@ -91,12 +68,10 @@ typedef struct tracer {
 } tracer;
 
 enum { UV_GUARDS = 1, UV_SWAPS, UV_CACHE, UV_ORIG, N_UV = UV_ORIG };
-enum { G_FIELD = 1, G_UPVALUE = 2 };
 
 typedef struct { tracer *t; int idx; } node_ud;
 
 static const char NODE_MT[] = "dfle.trace.node";
-static const char nil_marker = 0; /* a guard's nil value, by address */
 static const char mathfn_key = 0; /* registry: C address -> T_ op     */
 
 /* The math functions a compiled law may call. */
@@ -107,165 +82,6 @@ static const struct { const char *name; int op; } math_fns[] = {
     {"deg", T_DEG}, {"rad", T_RAD},
 };
 #define N_MATH_FNS (sizeof math_fns / sizeof math_fns[0])
-
-/* lmathlib's PI, so deg/rad scale exactly as Lua does. */
-#define LUA_PI 3.141592653589793238462643383279502884
-
-/* ---- evaluation -------------------------------------------------------- */
-
-static double apply(int op, double a, double b)
-{
-    double m;
-    switch (op) {
-    case T_ADD: return a + b;
-    case T_SUB: return a - b;
-    case T_MUL: return a * b;
-    case T_DIV: return a / b;
-    case T_MOD: /* luai_nummod: the result takes the divisor's sign */
-        m = fmod(a, b);
-        if ((m > 0) ? b < 0 : (m < 0 && b != m))
-            m += b;
-        return m;
-    case T_IDIV: return floor(a / b);
-    case T_POW: /* luai_numpow; x^1 is x exactly in any pow within an ulp */
-        return b == 2 ? a * a : b == 1 ? a : pow(a, b);
-    case T_UNM: return -a;
-    case T_SQRT: return sqrt(a);
-    case T_EXP: return exp(a);
-    case T_LOG: return log(a);
-    case T_LOGB: return b == 2.0 ? log2(a) : b == 10.0 ? log10(a) : log(a) / log(b);
-    case T_ABS: return fabs(a);
-    case T_FLOOR: return floor(a);
-    case T_CEIL: return ceil(a);
-    case T_FMOD: return fmod(a, b);
-    case T_MAX: return a < b ? b : a; /* math.max keeps the first of equals */
-    case T_MIN: return b < a ? b : a;
-    case T_SIN: return sin(a);
-    case T_COS: return cos(a);
-    case T_TAN: return tan(a);
-    case T_ASIN: return asin(a);
-    case T_ACOS: return acos(a);
-    case T_ATAN: return atan2(a, b);
-    case T_DEG: return a * (180.0 / LUA_PI);
-    case T_RAD: return a * (LUA_PI / 180.0);
-    default: return NAN;
-    }
-}
-
-double dfle_trace_eval(dfle_trace_prog *p, const double *in)
-{
-    double *v = p->val;
-    for (int f = 0; f < DFLE_TRACE_MAX_INPUTS; f++)
-        if (p->in_node[f] >= 0)
-            v[p->in_node[f]] = in[f];
-    for (int k = 0; k < p->n; k++) {
-        const tnode *t = &p->node[k];
-        if (t->op > T_K)
-            v[k] = apply(t->op, v[t->a], v[t->b]);
-    }
-    return v[p->result];
-}
-
-/* Column by column: each operation runs as one tight loop over the
- * points, which is what makes a whole sweep cost about what a built-in
- * law costs.  K columns are filled when the workspace grows. */
-const double *dfle_trace_eval_n(dfle_trace_prog *p, size_t n, const double *const *in)
-{
-    const double **col = p->col;
-    if (n > p->cap) {
-        size_t cap = n > 2 * p->cap ? n : 2 * p->cap;
-        double *w = malloc((size_t)(p->n + 1) * cap * sizeof *w);
-        if (w == NULL)
-            return NULL;
-        free(p->work);
-        p->work = w;
-        p->cap = cap;
-        for (int k = 0; k < p->n; k++)
-            if (p->node[k].op == T_K)
-                for (size_t i = 0; i < cap; i++)
-                    w[(size_t)k * cap + i] = p->node[k].k;
-        for (size_t i = 0; i < cap; i++)
-            w[(size_t)p->n * cap + i] = 0.0; /* the column of an absent input */
-    }
-    for (int k = 0; k < p->n; k++) {
-        const tnode *t = &p->node[k];
-        double *r = p->work + (size_t)k * p->cap;
-        const double *a, *b;
-        if (t->op == T_IN) {
-            col[k] = in[t->a] != NULL ? in[t->a] : p->work + (size_t)p->n * p->cap;
-            continue;
-        }
-        col[k] = r;
-        if (t->op == T_K)
-            continue;
-        a = col[t->a], b = col[t->b];
-        switch (t->op) {
-        case T_ADD: for (size_t i = 0; i < n; i++) r[i] = a[i] + b[i]; break;
-        case T_SUB: for (size_t i = 0; i < n; i++) r[i] = a[i] - b[i]; break;
-        case T_MUL: for (size_t i = 0; i < n; i++) r[i] = a[i] * b[i]; break;
-        case T_DIV: for (size_t i = 0; i < n; i++) r[i] = a[i] / b[i]; break;
-        default: for (size_t i = 0; i < n; i++) r[i] = apply(t->op, a[i], b[i]); break;
-        }
-    }
-    return col[p->result];
-}
-
-unsigned dfle_trace_inputs(const dfle_trace_prog *p) { return p->inputs; }
-
-void dfle_trace_free(dfle_trace_prog *p)
-{
-    if (p == NULL)
-        return;
-    free(p->node);
-    free(p->val);
-    free(p->col);
-    free(p->work);
-    free(p);
-}
-
-/* ---- guards ------------------------------------------------------------ */
-
-/* Same value, as a compiled program sees it: numbers must agree in
- * subtype and bits (NaN equals itself), others must be the same object. */
-static int same_value(lua_State *L, int a, int b)
-{
-    if (lua_type(L, a) == LUA_TNUMBER && lua_type(L, b) == LUA_TNUMBER) {
-        double x, y;
-        if (lua_isinteger(L, a) != lua_isinteger(L, b))
-            return 0;
-        if (lua_isinteger(L, a))
-            return lua_tointeger(L, a) == lua_tointeger(L, b);
-        x = lua_tonumber(L, a), y = lua_tonumber(L, b);
-        return memcmp(&x, &y, sizeof x) == 0;
-    }
-    if (lua_touserdata(L, b) == (void *)&nil_marker)
-        return lua_isnil(L, a);
-    return lua_rawequal(L, a, b);
-}
-
-int dfle_trace_guards_hold(lua_State *L, int gidx, const dfle_trace_prog *p)
-{
-    int ok = 1;
-    gidx = lua_absindex(L, gidx);
-    if (!lua_checkstack(L, 8) || !lua_istable(L, gidx))
-        return 0;
-    for (int j = 0; ok && j < p->n_guards; j++) {
-        int top = lua_gettop(L);
-        lua_rawgeti(L, gidx, 4 * j + 1); /* kind      top+1 */
-        lua_rawgeti(L, gidx, 4 * j + 2); /* container top+2 */
-        lua_rawgeti(L, gidx, 4 * j + 3); /* key       top+3 */
-        lua_rawgeti(L, gidx, 4 * j + 4); /* value     top+4 */
-        if (lua_tointeger(L, top + 1) == G_FIELD) {
-            lua_pushvalue(L, top + 3);
-            lua_rawget(L, top + 2);
-        } else if (lua_getupvalue(L, top + 2, (int)lua_tointeger(L, top + 3)) == NULL) {
-            lua_pushnil(L);
-        }
-        ok = same_value(L, top + 5, top + 4);
-        lua_settop(L, top);
-    }
-    return ok;
-}
 
 /* ---- recording --------------------------------------------------------- */
 
@@ -549,7 +365,7 @@ static void add_guard(lua_State *L, tracer *t, int tidx, int kind, int container
     lua_pushvalue(L, key);
     lua_rawseti(L, -2, 4 * n + 3);
     if (lua_isnil(L, value))
-        lua_pushlightuserdata(L, (void *)&nil_marker);
+        lua_pushlightuserdata(L, (void *)&dfle_trace_nil);
     else
         lua_pushvalue(L, value);
     lua_rawseti(L, -2, 4 * n + 4);
@@ -698,146 +514,6 @@ static void push_table_proxy(lua_State *L, int tidx, int real, int is_math)
     remember_original(L, tidx, -1, real);
 }
 
-/* ---- bytecode ---------------------------------------------------------- */
-
-/* Lua 5.4 opcodes the scan refuses (lopcodes.h order, stable in 5.4). */
-enum { OP_SETUPVAL = 10, OP_EQ = 57, OP_EQK = 60, OP_EQI = 61 };
-enum { FOUND_EQ = 1, FOUND_SETUPVAL = 2, FOUND_BAD = 4 };
-
-typedef struct { const unsigned char *p, *end; int bad; } reader;
-
-static size_t rd_size(reader *r)
-{
-    size_t x = 0;
-    for (int i = 0; i < 10; i++) {
-        unsigned b;
-        if (r->p >= r->end)
-            break;
-        b = *r->p++;
-        x = (x << 7) | (b & 0x7f);
-        if (b & 0x80)
-            return x;
-    }
-    r->bad = 1;
-    return 0;
-}
-
-static void rd_skip(reader *r, size_t n)
-{
-    if ((size_t)(r->end - r->p) < n) {
-        r->bad = 1;
-        r->p = r->end;
-    } else {
-        r->p += n;
-    }
-}
-
-static void rd_string(reader *r)
-{
-    size_t n = rd_size(r);
-    if (n > 0)
-        rd_skip(r, n - 1);
-}
-
-/* One function of a binary chunk (ldump.c's layout) and its nested ones. */
-static unsigned scan_function(reader *r, int depth)
-{
-    unsigned found = 0;
-    size_t n;
-    if (depth > 64)
-        return FOUND_BAD;
-    rd_string(r); /* source */
-    rd_size(r);   /* linedefined */
-    rd_size(r);   /* lastlinedefined */
-    rd_skip(r, 3); /* numparams, is_vararg, maxstacksize */
-    n = rd_size(r);
-    for (size_t i = 0; i < n && !r->bad; i++) {
-        uint32_t ins;
-        if (r->end - r->p < 4) {
-            r->bad = 1;
-            break;
-        }
-        memcpy(&ins, r->p, 4);
-        r->p += 4;
-        switch (ins & 0x7f) {
-        case OP_EQ: case OP_EQK: case OP_EQI: found |= FOUND_EQ; break;
-        case OP_SETUPVAL: found |= FOUND_SETUPVAL; break;
-        default: break;
-        }
-    }
-    n = rd_size(r); /* constants */
-    for (size_t i = 0; i < n && !r->bad; i++) {
-        unsigned tag = r->p < r->end ? *r->p++ : (r->bad = 1, 0u);
-        if (tag == 0x03 || tag == 0x13)
-            rd_skip(r, 8);
-        else if (tag == 0x04 || tag == 0x14)
-            rd_string(r);
-        else if (tag != 0x00 && tag != 0x01 && tag != 0x11)
-            r->bad = 1;
-    }
-    rd_skip(r, 3 * rd_size(r)); /* upvalue descriptions */
-    n = rd_size(r);             /* nested functions */
-    for (size_t i = 0; i < n && !r->bad; i++)
-        found |= scan_function(r, depth + 1);
-    rd_skip(r, rd_size(r)); /* line info */
-    n = rd_size(r);         /* absolute line info */
-    for (size_t i = 0; i < n && !r->bad; i++)
-        rd_size(r), rd_size(r);
-    n = rd_size(r); /* local variables */
-    for (size_t i = 0; i < n && !r->bad; i++)
-        rd_string(r), rd_size(r), rd_size(r);
-    n = rd_size(r); /* upvalue names */
-    for (size_t i = 0; i < n && !r->bad; i++)
-        rd_string(r);
-    return r->bad ? found | FOUND_BAD : found;
-}
-
-typedef struct { luaL_Buffer b; int init; } dump_state;
-
-static int dump_writer(lua_State *L, const void *p, size_t sz, void *ud)
-{
-    dump_state *d = ud;
-    if (!d->init) { /* after lua_dump has the function: the buffer may push */
-        d->init = 1;
-        luaL_buffinit(L, &d->b);
-    }
-    luaL_addlstring(&d->b, p, sz);
-    return 0;
-}
-
-/* Scan the Lua function at fidx. */
-static unsigned scan_bytecode(lua_State *L, int fidx)
-{
-    static const unsigned char header[] = {0x1b, 'L', 'u', 'a', 0x54, 0x00, 0x19, 0x93,
-                                           '\r', '\n', 0x1a, '\n', 4};
-    dump_state d;
-    reader r;
-    size_t len;
-    unsigned found;
-
-    d.init = 0;
-    lua_pushvalue(L, fidx);
-    lua_dump(L, dump_writer, &d, 0);
-    if (!d.init) {
-        lua_pop(L, 1);
-        return FOUND_BAD;
-    }
-    luaL_pushresult(&d.b);
-    r.p = (const unsigned char *)lua_tolstring(L, -1, &len);
-    r.end = r.p + len;
-    r.bad = 0;
-    if (len < sizeof header + 2 || memcmp(r.p, header, sizeof header) != 0) {
-        lua_pop(L, 2);
-        return FOUND_BAD;
-    }
-    r.p += sizeof header;
-    rd_skip(&r, 2);                              /* sizes of lua_Integer, lua_Number */
-    rd_skip(&r, (size_t)r.p[-2] + r.p[-1] + 1); /* LUAC_INT, LUAC_NUM, sizeupvalues */
-    found = scan_function(&r, 0);
-    lua_pop(L, 2);
-    return found;
-}
-
 /* ---- functions --------------------------------------------------------- */
 
 /* Record a swap of upvalue i of the function at fidx to the value on top
@@ -875,7 +551,7 @@ static void vet_function(lua_State *L, tracer *t, int tidx, int fidx, const char
     lua_pop(L, 2);
     if (++t->depth > MAX_DEPTH)
         refuse(L, t, "it calls functions nested more than %d deep", MAX_DEPTH);
-    found = scan_bytecode(L, fidx);
+    found = dfle_trace_scan(L, fidx);
     if (found & FOUND_EQ)
         refuse(L, t, "%s uses '==' or '~=' (an equality test on a flow field cannot be "
                      "recorded)", what);
