@@ -37,10 +37,11 @@ ALL_CFLAGS := -std=c11 -D_POSIX_C_SOURCE=200809L -fPIC -pthread $(WARN) $(CFLAGS
               -Iinclude -DDFLE_VERSION='"$(VERSION)"'
 ALL_LDFLAGS := $(LDFLAGS) $(SANITIZE) -pthread
 
-CORE_SRC  := $(wildcard src/*.c)
-CORE_SRC  := $(filter-out src/main.c src/progress.c,$(CORE_SRC))
-LUA_SRC   := $(wildcard src/lua/*.c)
-CLI_SRC   := src/main.c src/progress.c
+# The tree reads like the architecture (README "Layout"): the C library is
+# every folder of src/ but the Lua binding, the command and the MPI driver.
+CORE_SRC  := $(filter-out src/lua/% src/cli/% src/mpi/%,$(wildcard src/*/*.c))
+LUA_SRC   := $(wildcard src/lua/*/*.c)
+CLI_SRC   := $(wildcard src/cli/*.c)
 TEST_SRC  := $(wildcard tests/test_*.c)
 
 CORE_OBJ  := $(CORE_SRC:%.c=$(BUILD)/obj/%.o)
@@ -58,13 +59,19 @@ MODULE    := $(BUILD)/dfle.so
 .SECONDARY:
 all: $(CLI) $(MODULE)
 
+# The library is compiled without Lua's headers, so nothing in it can
+# depend on Lua; only the binding and the command see them.
 $(BUILD)/obj/src/lua/%.o: src/lua/%.c
 	@mkdir -p $(dir $@)
-	$(CC) $(ALL_CFLAGS) $(LUA_CFLAGS) $(GSL_CFLAGS) -MMD -MP -c $< -o $@
+	$(CC) $(ALL_CFLAGS) -Isrc $(LUA_CFLAGS) $(GSL_CFLAGS) -MMD -MP -c $< -o $@
+
+$(BUILD)/obj/src/cli/%.o: src/cli/%.c
+	@mkdir -p $(dir $@)
+	$(CC) $(ALL_CFLAGS) -Isrc $(LUA_CFLAGS) -MMD -MP -c $< -o $@
 
 $(BUILD)/obj/src/%.o: src/%.c
 	@mkdir -p $(dir $@)
-	$(CC) $(ALL_CFLAGS) $(LUA_CFLAGS) $(GSL_CFLAGS) $(GDAL_CFLAGS) -MMD -MP -c $< -o $@
+	$(CC) $(ALL_CFLAGS) -Isrc $(GSL_CFLAGS) $(GDAL_CFLAGS) -MMD -MP -c $< -o $@
 
 $(BUILD)/obj/tests/%.o: tests/%.c
 	@mkdir -p $(dir $@)
@@ -113,13 +120,13 @@ bench: all
 # --- MPI build (doc/ensembles.md): only these rules need mpicc ---
 
 MPI_CLI   := $(BUILD)/dfle-mpi
-MPI_OBJ   := $(BUILD)/obj-mpi/src/main.o $(BUILD)/obj-mpi/src/mpi/dfle_mpi.o
+MPI_OBJ   := $(BUILD)/obj-mpi/src/cli/main.o $(BUILD)/obj-mpi/src/mpi/dfle_mpi.o
 
 $(BUILD)/obj-mpi/%.o: %.c
 	@mkdir -p $(dir $@)
 	$(MPICC) $(ALL_CFLAGS) -DDFLE_MPI -Isrc $(LUA_CFLAGS) $(GSL_CFLAGS) -MMD -MP -c $< -o $@
 
-$(MPI_CLI): $(MPI_OBJ) $(BUILD)/obj/src/progress.o $(LIB_LUA) $(LIB_CORE)
+$(MPI_CLI): $(MPI_OBJ) $(BUILD)/obj/src/cli/progress.o $(LIB_LUA) $(LIB_CORE)
 	$(MPICC) $(ALL_LDFLAGS) $^ $(LUA_LIBS) $(GSL_LIBS) $(GDAL_LIBS) -lm -o $@
 
 mpi: $(MPI_CLI)

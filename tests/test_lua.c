@@ -19,7 +19,7 @@
 #include <lualib.h>
 
 #include "dfle/lua.h"
-#include "lua/dfle_lua.h"
+#include "lua/core/dfle_lua.h"
 
 #ifndef DFLE_VERSION
 #define DFLE_VERSION "unknown"

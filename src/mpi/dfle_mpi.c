@@ -11,7 +11,7 @@
  * fails mid-way is answered 0 and goes back to waiting for commands.
  * Rank 0 only coordinates and writes; samples run on ranks 1..K-1.
  */
-#include "dfle_mpi.h"
+#include "mpi/dfle_mpi.h"
 
 #include <mpi.h>
 #include <stdio.h>

@@ -10,7 +10,7 @@
 #ifndef DFLE_MPI_H
 #define DFLE_MPI_H
 
-#include "lua/lua_ensemble.h"
+#include "lua/ensemble/lua_ensemble.h"
 
 /* MPI_Init; returns this rank, *size the number of ranks. */
 int dfle_mpi_init(int *size);

@@ -1,0 +1,352 @@
+/*
+ * main.c - the dfle command: run an experiment written in Lua.
+ *
+ *   dfle [options] script.lua [args...]
+ *
+ * Like the `lua` interpreter: the script's arguments are in the global
+ * `arg` (arg[0] is the script) and in `...`; the `dfle` module is
+ * preloaded as a global.  All real work happens in the library and its
+ * binding; this file only parses options, reports errors with a
+ * traceback and owns the terminal (progress bar).
+ */
+#include <stdio.h>
+#include <stdlib.h>
+#include <string.h>
+#include <time.h>
+#include <unistd.h>
+
+#include <lauxlib.h>
+#include <lua.h>
+#include <lualib.h>
+
+#include <gsl/gsl_errno.h>
+
+#include "dfle/lua.h"
+#include "lua/core/dfle_lua.h"
+#include "lua/ensemble/lua_ensemble.h" /* ensembles: -j, --shard, worker states */
+#include "cli/progress.h"
+#ifdef DFLE_MPI /* the MPI build, `make mpi` (doc/ensembles.md) */
+#include "mpi/dfle_mpi.h"
+#endif
+
+#ifndef DFLE_VERSION
+#define DFLE_VERSION "unknown"
+#endif
+
+static const char *progname = "dfle";
+
+static void usage(FILE *out)
+{
+    fprintf(out,
+            "usage: %s [options] script.lua [args...]\n"
+            "Run a dfle experiment script (Lua 5.4 with the dfle module loaded).\n"
+            "\n"
+            "options:\n"
+            "  -q, --quiet    no progress bar\n"
+            "  -j N           dfle.ensemble workers (default: all cores)\n"
+            "  --shard i/n    run shard i of n of each dfle.ensemble (1 <= i <= n);\n"
+            "                 --shard slurm takes i, n from SLURM_ARRAY_TASK_*\n"
+            "  -h, --help     show this help and exit\n"
+            "  -v, --version  show the version and exit\n"
+            "  --             stop handling options\n"
+            "\n"
+            "The script sees its arguments in `arg` (arg[0] = script) and `...`.\n"
+            "Use `-` as the script name to read it from standard input.\n"
+            "Documentation: doc/lua-api.md, doc/tutorial.md\n",
+            progname);
+}
+
+typedef struct cli {
+    int quiet;
+    int load_error; /* the script failed to load (no traceback wanted) */
+    int script; /* index of the script in argv */
+    int argc;
+    char **argv;
+    dfle_progress_bar bar;
+    dfle_lua_progress hooks;
+    dfle_lua_ensemble_host ens; /* --- ensembles (doc/ensembles.md) --- */
+    double ens_last_draw;
+    int ens_drawn;
+} cli;
+
+/* Message handler: append a traceback, as lua.c does. */
+static cli *current_cli;
+
+static int msghandler(lua_State *L)
+{
+    const char *msg = lua_tostring(L, 1);
+    if (current_cli != NULL && current_cli->load_error && msg != NULL)
+        return 1;
+    if (msg == NULL) {
+        if (luaL_callmeta(L, 1, "__tostring") && lua_type(L, -1) == LUA_TSTRING)
+            return 1;
+        msg = lua_pushfstring(L, "(error object is a %s value)", luaL_typename(L, 1));
+    }
+    luaL_traceback(L, L, msg, 1);
+    return 1;
+}
+
+/* --- ensembles (doc/ensembles.md): worker states, -j, --shard, the
+ * ensemble progress line.  A worker's state is made like the main one
+ * (libraries, dfle, `arg`), with the script loaded and its arguments
+ * pushed; dfle.ensemble runs it up to its own call. */
+static void set_arg_table(lua_State *L, const cli *c)
+{
+    lua_createtable(L, c->argc - c->script - 1, c->script + 1);
+    for (int i = 0; i < c->argc; i++) {
+        lua_pushstring(L, c->argv[i]);
+        lua_rawseti(L, -2, i - c->script);
+    }
+    lua_setglobal(L, "arg");
+}
+
+static int open_worker_p(lua_State *L)
+{
+    const cli *c = lua_touserdata(L, 1);
+    const char *script = c->argv[c->script];
+    luaL_openlibs(L);
+    luaL_requiref(L, "dfle", luaopen_dfle, 1);
+    lua_pop(L, 1);
+    set_arg_table(L, c);
+    if (strcmp(script, "-") == 0)
+        return luaL_error(L, "a script read from standard input cannot be rerun by ensemble "
+                             "workers; save it to a file or use -j 1");
+    if (luaL_loadfile(L, script) != LUA_OK)
+        return lua_error(L);
+    luaL_checkstack(L, c->argc, "too many arguments to script");
+    for (int i = c->script + 1; i < c->argc; i++)
+        lua_pushstring(L, c->argv[i]);
+    return c->argc - c->script;
+}
+
+static lua_State *open_worker(void *ud, int *nargs, char *msg, size_t msglen)
+{
+    lua_State *L = luaL_newstate();
+    int n;
+    if (L == NULL) {
+        snprintf(msg, msglen, "cannot create a worker's Lua state: not enough memory");
+        return NULL;
+    }
+    lua_pushcfunction(L, open_worker_p);
+    lua_pushlightuserdata(L, ud);
+    if (lua_pcall(L, 1, LUA_MULTRET, 0) != LUA_OK) {
+        snprintf(msg, msglen, "%s", lua_tostring(L, -1) ? lua_tostring(L, -1) : "worker failed");
+        lua_close(L);
+        return NULL;
+    }
+    n = lua_gettop(L);
+    *nargs = n - 1; /* chunk, then the script's arguments */
+    return L;
+}
+
+static double mono_now(void)
+{
+    struct timespec ts;
+    clock_gettime(CLOCK_MONOTONIC, &ts);
+    return (double)ts.tv_sec + 1e-9 * (double)ts.tv_nsec;
+}
+
+static void ens_progress(void *ud, size_t done, size_t total, size_t failed, double elapsed)
+{
+    cli *c = ud;
+    double t = mono_now(), rate = elapsed > 0 ? (double)done / elapsed : 0;
+    double f = total > 0 ? (double)done / (double)total : 1;
+    int filled = (int)(f * 24 + 0.5);
+    if (c->ens_drawn && t - c->ens_last_draw < 0.1 && done < total)
+        return;
+    c->ens_last_draw = t;
+    fputs("\r[", stderr);
+    for (int i = 0; i < 24; i++)
+        fputc(i < filled ? '#' : '.', stderr);
+    fprintf(stderr, "] %zu/%zu runs  %.1f runs/s", done, total, rate);
+    if (failed > 0)
+        fprintf(stderr, "  %zu failed", failed);
+    if (done > 0 && done < total)
+        fprintf(stderr, "  ETA %.0f s", (double)(total - done) / rate);
+    fputs("\033[K", stderr);
+    fflush(stderr);
+    c->ens_drawn = 1;
+}
+
+static void ens_progress_end(void *ud)
+{
+    cli *c = ud;
+    if (c->ens_drawn) {
+        fputs("\r\033[K", stderr);
+        fflush(stderr);
+    }
+    c->ens_drawn = 0;
+}
+
+/* "i/n" with 1 <= i <= n, or "slurm": SLURM_ARRAY_TASK_ID (from
+ * SLURM_ARRAY_TASK_MIN) of SLURM_ARRAY_TASK_COUNT. */
+static int parse_shard(const char *s, size_t *i, size_t *n)
+{
+    char *end;
+    unsigned long a, b;
+    if (strcmp(s, "slurm") == 0) {
+        const char *id = getenv("SLURM_ARRAY_TASK_ID"), *cnt = getenv("SLURM_ARRAY_TASK_COUNT");
+        const char *min = getenv("SLURM_ARRAY_TASK_MIN");
+        unsigned long m = min != NULL ? strtoul(min, NULL, 10) : 0;
+        if (id == NULL || cnt == NULL)
+            return 0;
+        a = strtoul(id, NULL, 10) - m + 1;
+        b = strtoul(cnt, NULL, 10);
+    } else {
+        a = strtoul(s, &end, 10);
+        if (end == s || *end != '/')
+            return 0;
+        s = end + 1;
+        b = strtoul(s, &end, 10);
+        if (end == s || *end != '\0')
+            return 0;
+    }
+    if (b < 1 || a < 1 || a > b)
+        return 0;
+    *i = a;
+    *n = b;
+    return 1;
+}
+/* --- end ensembles --- */
+
+/* Runs protected: everything that can raise happens here. */
+static int pmain(lua_State *L)
+{
+    cli *c = lua_touserdata(L, 1);
+    const char *script = c->argv[c->script];
+    int nargs = c->argc - c->script - 1;
+
+    luaL_openlibs(L);
+    luaL_requiref(L, "dfle", luaopen_dfle, 1);
+    lua_pop(L, 1);
+    if (!c->quiet && isatty(STDERR_FILENO)) {
+        const char *term = getenv("TERM");
+        if (term == NULL || strcmp(term, "dumb") != 0) {
+            dfle_progress_bar_init(&c->bar, stderr);
+            c->hooks.update = dfle_progress_bar_update;
+            c->hooks.finish = dfle_progress_bar_finish;
+            c->hooks.ud = &c->bar;
+            dfle_lua_set_progress(L, &c->hooks);
+            c->ens.progress = ens_progress; /* ensembles */
+            c->ens.progress_end = ens_progress_end;
+        }
+    }
+    c->ens.open_state = open_worker; /* ensembles */
+    c->ens.ud = c;
+    dfle_lua_set_ensemble_host(L, &c->ens);
+    /* arg table: arg[-k] = options and program, arg[0] = script. */
+    set_arg_table(L, c);
+
+    if (luaL_loadfile(L, strcmp(script, "-") == 0 ? NULL : script) != LUA_OK) {
+        /* A missing file or a syntax error: the message says it all; a
+         * traceback would only point into this program. */
+        c->load_error = 1;
+        return lua_error(L);
+    }
+    luaL_checkstack(L, nargs, "too many arguments to script");
+    for (int i = c->script + 1; i < c->argc; i++)
+        lua_pushstring(L, c->argv[i]);
+    lua_call(L, nargs, 0);
+    return 0;
+}
+
+int main(int argc, char **argv)
+{
+    cli c = {0};
+    lua_State *L;
+    int i, status;
+
+    if (argc > 0 && argv[0] != NULL && argv[0][0] != '\0') {
+        const char *slash = strrchr(argv[0], '/');
+        progname = slash != NULL ? slash + 1 : argv[0];
+    }
+    for (i = 1; i < argc; i++) {
+        const char *a = argv[i];
+        if (strcmp(a, "-q") == 0 || strcmp(a, "--quiet") == 0) {
+            c.quiet = 1;
+        } else if (strcmp(a, "-h") == 0 || strcmp(a, "--help") == 0) {
+            usage(stdout);
+            return EXIT_SUCCESS;
+        } else if (strcmp(a, "-v") == 0 || strcmp(a, "--version") == 0) {
+            printf("dfle %s (%s)\n", DFLE_VERSION, LUA_RELEASE);
+            return EXIT_SUCCESS;
+        } else if (strncmp(a, "-j", 2) == 0) { /* ensembles: -j N or -jN */
+            const char *v = a[2] != '\0' ? a + 2 : (i + 1 < argc ? argv[++i] : "");
+            char *end;
+            long j = strtol(v, &end, 10);
+            if (end == v || *end != '\0' || j < 1 || j > 4096) {
+                fprintf(stderr, "%s: -j needs a number of workers >= 1 (got '%s')\n", progname, v);
+                return 2;
+            }
+            c.ens.workers = (int)j;
+        } else if (strcmp(a, "--shard") == 0) { /* ensembles */
+            const char *v = i + 1 < argc ? argv[++i] : "";
+            if (!parse_shard(v, &c.ens.shard_i, &c.ens.shard_n)) {
+                fprintf(stderr, "%s: --shard needs i/n with 1 <= i <= n, or 'slurm' with "
+                                "SLURM_ARRAY_TASK_ID and SLURM_ARRAY_TASK_COUNT set (got '%s')\n",
+                        progname, v);
+                return 2;
+            }
+        } else if (strcmp(a, "--") == 0) {
+            i++;
+            break;
+        } else if (a[0] == '-' && a[1] != '\0') {
+            fprintf(stderr, "%s: unknown option '%s'\n", progname, a);
+            usage(stderr);
+            return 2;
+        } else {
+            break;
+        }
+    }
+    if (i >= argc) {
+        fprintf(stderr, "%s: no script given\n", progname);
+        usage(stderr);
+        return 2;
+    }
+    c.script = i;
+    c.argc = argc;
+    c.argv = argv;
+    current_cli = &c;
+
+#ifdef DFLE_MPI /* ranks > 0 serve ensembles; rank 0 runs the script */
+    {
+        int size, rank = dfle_mpi_init(&size);
+        c.ens.open_state = open_worker;
+        c.ens.ud = &c;
+        if (rank > 0) {
+            gsl_set_error_handler_off();
+            status = dfle_mpi_worker_loop(&c.ens);
+            dfle_mpi_finish(rank);
+            return status;
+        }
+        c.ens.remote = dfle_mpi_remote;
+        dfle_mpi_set_host(&c.ens);
+    }
+#endif
+    /* GSL aborts on its errors by default; dfle checks every status instead,
+     * so an out-of-memory inside GSL becomes an error message, not a crash. */
+    gsl_set_error_handler_off();
+    L = luaL_newstate();
+    if (L == NULL) {
+        fprintf(stderr, "%s: cannot create Lua state: not enough memory\n", progname);
+#ifdef DFLE_MPI
+        dfle_mpi_finish(0);
+#endif
+        return EXIT_FAILURE;
+    }
+    lua_pushcfunction(L, msghandler);
+    lua_pushcfunction(L, pmain);
+    lua_pushlightuserdata(L, &c);
+    status = lua_pcall(L, 1, 0, 1);
+    if (status != LUA_OK) {
+        const char *msg = lua_tostring(L, -1);
+        if (c.hooks.finish != NULL)
+            c.hooks.finish(c.hooks.ud);
+        fprintf(stderr, "%s: %s\n", progname, msg != NULL ? msg : "(error object is not a string)");
+    }
+    lua_close(L);
+#ifdef DFLE_MPI
+    dfle_mpi_finish(0);
+#endif
+    return status == LUA_OK ? EXIT_SUCCESS : EXIT_FAILURE;
+}

@@ -1,0 +1,325 @@
+/*
+ * lua_util.c - the pieces every binding file uses: checked option
+ * tables, error raising, typed userdata, arrays, progress hooks.
+ */
+#include "lua/core/dfle_lua.h"
+
+#include <math.h>
+#include <stdio.h>
+#include <string.h>
+
+/* Format the list of known keys into the message buffer for an
+ * "unknown parameter" error, so the user sees what was meant. */
+static void push_known_keys(lua_State *L, const dfle_lua_param *params, size_t np,
+                            const char *const *other)
+{
+    luaL_Buffer b;
+    int first = 1;
+
+    luaL_buffinit(L, &b);
+    for (size_t i = 0; i < np; i++) {
+        if (!first)
+            luaL_addstring(&b, ", ");
+        luaL_addstring(&b, params[i].name);
+        first = 0;
+    }
+    for (size_t i = 0; other != NULL && other[i] != NULL; i++) {
+        if (!first)
+            luaL_addstring(&b, ", ");
+        luaL_addstring(&b, other[i]);
+        first = 0;
+    }
+    luaL_pushresult(&b);
+}
+
+static int is_known(const char *key, const dfle_lua_param *params, size_t np,
+                    const char *const *other)
+{
+    for (size_t i = 0; i < np; i++)
+        if (strcmp(key, params[i].name) == 0)
+            return 1;
+    for (size_t i = 0; other != NULL && other[i] != NULL; i++)
+        if (strcmp(key, other[i]) == 0)
+            return 1;
+    return 0;
+}
+
+void dfle_lua_read_params(lua_State *L, int idx, const char *fn,
+                          const dfle_lua_param *params, size_t np,
+                          const char *const *other)
+{
+    idx = lua_absindex(L, idx);
+    if (lua_isnoneornil(L, idx))
+        return;
+    if (!lua_istable(L, idx))
+        luaL_error(L, "dfle.%s: expected a table of named parameters, got %s", fn,
+                   luaL_typename(L, idx));
+    lua_pushnil(L);
+    while (lua_next(L, idx) != 0) {
+        const char *key;
+        if (lua_type(L, -2) != LUA_TSTRING)
+            luaL_error(L, "dfle.%s: parameters are named (key = value); got a %s key", fn,
+                       luaL_typename(L, -2));
+        key = lua_tostring(L, -2);
+        if (!is_known(key, params, np, other)) {
+            push_known_keys(L, params, np, other);
+            luaL_error(L, "dfle.%s: unknown parameter '%s' (known: %s)", fn, key,
+                       lua_tostring(L, -1));
+        }
+        lua_pop(L, 1);
+    }
+    for (size_t i = 0; i < np; i++) {
+        int t = lua_getfield(L, idx, params[i].name);
+        if (t != LUA_TNIL) {
+            double v;
+            if (t != LUA_TNUMBER)
+                luaL_error(L, "dfle.%s: parameter '%s' must be a number, got %s", fn,
+                           params[i].name, dfle_lua_typename(L, -1));
+            v = lua_tonumber(L, -1);
+            if (!isfinite(v))
+                luaL_error(L, "dfle.%s: parameter '%s' must be a finite number, got %s", fn,
+                           params[i].name, dfle_lua_number_text(L, v));
+            *params[i].dst = v;
+        }
+        lua_pop(L, 1);
+    }
+}
+
+int dfle_lua_raise(lua_State *L, const dfle_error *err)
+{
+    return luaL_error(L, "dfle.%s", err->msg);
+}
+
+void *dfle_lua_newobject(lua_State *L, size_t size, const char *tname, int nuv)
+{
+    void *p = lua_newuserdatauv(L, size, nuv);
+    memset(p, 0, size);
+    luaL_setmetatable(L, tname);
+    return p;
+}
+
+/* __index: methods first, then the type's read-only properties. */
+static int object_index(lua_State *L)
+{
+    lua_CFunction property = lua_tocfunction(L, lua_upvalueindex(2));
+    lua_pushvalue(L, 2);
+    if (lua_rawget(L, lua_upvalueindex(1)) != LUA_TNIL)
+        return 1;
+    lua_pop(L, 1);
+    if (property != NULL && lua_type(L, 2) == LUA_TSTRING)
+        return property(L);
+    return 0;
+}
+
+void dfle_lua_register_type(lua_State *L, const char *tname, const luaL_Reg *methods,
+                            const luaL_Reg *meta, lua_CFunction property)
+{
+    if (luaL_newmetatable(L, tname)) {
+        luaL_setfuncs(L, meta, 0);
+        lua_newtable(L);
+        if (methods != NULL)
+            luaL_setfuncs(L, methods, 0);
+        if (property != NULL)
+            lua_pushcfunction(L, property);
+        else
+            lua_pushnil(L);
+        lua_pushcclosure(L, object_index, 2);
+        lua_setfield(L, -2, "__index");
+        /* Scripts must not reach __gc: freeing a component a model still
+         * uses would leave the model reading freed memory. */
+        lua_pushliteral(L, "dfle objects do not share their metatable");
+        lua_setfield(L, -2, "__metatable");
+    }
+    lua_pop(L, 1);
+}
+
+static void *check_object(lua_State *L, int arg, const char *tname)
+{
+    void **p = luaL_checkudata(L, arg, tname);
+    if (*p == NULL)
+        luaL_argerror(L, arg, lua_pushfstring(L, "%s has been closed", tname));
+    return *p;
+}
+
+dfle_channel *dfle_lua_check_channel(lua_State *L, int arg)
+{
+    return check_object(L, arg, DFLE_LUA_CHANNEL);
+}
+dfle_fluvial *dfle_lua_check_fluvial(lua_State *L, int arg)
+{
+    return check_object(L, arg, DFLE_LUA_FLUVIAL);
+}
+dfle_router *dfle_lua_check_router(lua_State *L, int arg)
+{
+    return check_object(L, arg, DFLE_LUA_ROUTER);
+}
+dfle_law *dfle_lua_check_law(lua_State *L, int arg)
+{
+    return check_object(L, arg, DFLE_LUA_LAW);
+}
+dfle_model *dfle_lua_check_model(lua_State *L, int arg)
+{
+    dfle_lua_touch(L); /* the script may have changed what a compiled law read */
+    return check_object(L, arg, DFLE_LUA_MODEL);
+}
+
+void dfle_lua_push_array(lua_State *L, const double *v, size_t n)
+{
+    lua_createtable(L, (int)n, 0);
+    for (size_t i = 0; i < n; i++) {
+        lua_pushnumber(L, v[i]);
+        lua_rawseti(L, -2, (lua_Integer)i + 1);
+    }
+}
+
+double *dfle_lua_check_array(lua_State *L, int idx, const char *what, size_t *n)
+{
+    double *v;
+    lua_Unsigned len;
+
+    idx = lua_absindex(L, idx);
+    if (!lua_istable(L, idx))
+        luaL_error(L, "dfle.%s must be an array of numbers, got %s", what,
+                   luaL_typename(L, idx));
+    len = lua_rawlen(L, idx);
+    v = lua_newuserdatauv(L, (len ? len : 1) * sizeof *v, 0);
+    for (lua_Unsigned i = 0; i < len; i++) {
+        if (lua_rawgeti(L, idx, (lua_Integer)i + 1) != LUA_TNUMBER)
+            luaL_error(L, "dfle.%s[%d] must be a number, got %s", what, (int)i + 1,
+                       luaL_typename(L, -1));
+        v[i] = lua_tonumber(L, -1);
+        lua_pop(L, 1);
+    }
+    *n = (size_t)len;
+    return v;
+}
+
+static const char progress_key = 'p';
+
+void dfle_lua_set_progress(lua_State *L, const dfle_lua_progress *p)
+{
+    lua_pushlightuserdata(L, (void *)p);
+    lua_rawsetp(L, LUA_REGISTRYINDEX, &progress_key);
+}
+
+const dfle_lua_progress *dfle_lua_get_progress(lua_State *L)
+{
+    const dfle_lua_progress *p;
+    lua_rawgetp(L, LUA_REGISTRYINDEX, &progress_key);
+    p = lua_touserdata(L, -1);
+    lua_pop(L, 1);
+    return p;
+}
+
+const char *dfle_lua_typename(lua_State *L, int idx)
+{
+    if (luaL_getmetafield(L, idx, "__name") == LUA_TSTRING)
+        return lua_tostring(L, -1); /* left on the stack, so it stays valid */
+    return luaL_typename(L, idx);
+}
+
+const char *dfle_lua_number_text(lua_State *L, double v)
+{
+    if (isnan(v))
+        return lua_pushliteral(L, "NaN");
+    if (isinf(v))
+        return lua_pushstring(L, v > 0 ? "inf" : "-inf");
+    return lua_pushfstring(L, "%f", v);
+}
+
+lua_Integer dfle_lua_check_whole(lua_State *L, double v, const char *fn, const char *name,
+                                 double lo, double hi)
+{
+    if (!(v >= lo && v <= hi && v == floor(v)))
+        luaL_error(L, "dfle.%s: %s must be a whole number in [%s, %s] (got %s)", fn, name,
+                   dfle_lua_number_text(L, lo), dfle_lua_number_text(L, hi),
+                   dfle_lua_number_text(L, v));
+    return (lua_Integer)v;
+}
+
+size_t dfle_lua_slope_area(lua_State *L, int arg, const char *fn, const double **A,
+                           const double **S)
+{
+    size_t n, nS;
+    char what[80];
+
+    arg = lua_absindex(L, arg);
+    if (luaL_testudata(L, arg, DFLE_LUA_MODEL) != NULL) {
+        dfle_model *m = dfle_lua_check_model(L, arg);
+        dfle_error err;
+        if ((*A = dfle_model_field(m, DFLE_FIELD_A, &err)) == NULL ||
+            (*S = dfle_model_field(m, DFLE_FIELD_S, &err)) == NULL)
+            dfle_lua_raise(L, &err);
+        /* The outlet is held at base level; its slope only repeats its
+         * neighbour's, so it is not a data point. */
+        return dfle_model_size(m) - 1;
+    }
+    /* --- dfle.profile (lua_dem.c): a DEM profile or network gives its
+     * own pairs through p:slope_area(), a table read like a user's. --- */
+    if (luaL_testudata(L, arg, "dfle.profile") != NULL) {
+        lua_getfield(L, arg, "slope_area");
+        lua_pushvalue(L, arg);
+        lua_call(L, 1, 1);
+        arg = lua_gettop(L);
+    }
+    /* --- end dfle.profile --- */
+    if (!lua_istable(L, arg))
+        luaL_error(L, "dfle.%s: expected a dfle.model, a dfle.profile or a table "
+                   "{A = {...}, S = {...}}, got %s", fn, dfle_lua_typename(L, arg));
+    lua_getfield(L, arg, "A");
+    snprintf(what, sizeof what, "%s: A", fn);
+    *A = dfle_lua_check_array(L, -1, what, &n);
+    lua_getfield(L, arg, "S");
+    snprintf(what, sizeof what, "%s: S", fn);
+    *S = dfle_lua_check_array(L, -1, what, &nS);
+    if (n != nS)
+        luaL_error(L, "dfle.%s: A has %d values but S has %d", fn, (int)n, (int)nS);
+    return n;
+}
+
+int dfle_lua_traceback(lua_State *T)
+{
+    const char *msg = lua_tostring(T, 1);
+    if (msg == NULL)
+        msg = lua_pushfstring(T, "(error object is a %s value)", luaL_typename(T, 1));
+    luaL_traceback(T, T, msg, 1);
+    return 1;
+}
+
+int dfle_lua_shell_sweep(lua_State *T, int top, int sweep, int msgh, void *ud,
+                         const char *who, const char *fallback, dfle_error *err)
+{
+    int st;
+    lua_settop(T, top);
+    lua_pushvalue(T, sweep);
+    lua_pushlightuserdata(T, ud);
+    st = lua_pcall(T, 1, 0, msgh);
+    dfle_lua_touch(T);
+    if (st != LUA_OK) {
+        const char *msg = lua_tostring(T, -1);
+        dfle_error_set(err, DFLE_ECALLBACK, "%s: %s", who, msg != NULL ? msg : fallback);
+        lua_settop(T, top);
+        return DFLE_ECALLBACK;
+    }
+    lua_settop(T, top);
+    return DFLE_OK;
+}
+
+static const char epoch_key = 0;
+
+unsigned long *dfle_lua_epoch(lua_State *L)
+{
+    unsigned long *e;
+    if (lua_rawgetp(L, LUA_REGISTRYINDEX, &epoch_key) == LUA_TUSERDATA) {
+        e = lua_touserdata(L, -1);
+        lua_pop(L, 1);
+        return e;
+    }
+    lua_pop(L, 1);
+    e = lua_newuserdatauv(L, sizeof *e, 0);
+    *e = 1;
+    lua_rawsetp(L, LUA_REGISTRYINDEX, &epoch_key);
+    return e;
+}
+
+void dfle_lua_touch(lua_State *L) { ++*dfle_lua_epoch(L); }

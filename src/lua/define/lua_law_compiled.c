@@ -1,0 +1,209 @@
+/*
+ * lua_law_compiled.c - dfle.law.define laws run as compiled programs.
+ *
+ * lua_law_define.c asks here first for every op call: each of the law's
+ * functions is traced once (lua_trace.h) and, if the tracer accepts it,
+ * evaluated in C over all the nodes of the call; the program is checked
+ * bit for bit against the Lua sweep on its first use.  Whatever this file
+ * cannot do (a refused function, a non-finite value, an area not in the
+ * frequency memo yet) it hands back with TRY_LUA, and the Lua sweep does
+ * it, with its own error messages.  law:compiled() reports the state.
+ */
+#include "lua/define/lua_law_define.h"
+
+#include <math.h>
+#include <stdio.h>
+#include <stdlib.h>
+#include <string.h>
+
+/* The fields the function of `op` may read (bit F_x), as fetch() allows. */
+static unsigned op_fields(const lua_law *ll, int op)
+{
+    if (op == OP_FACTOR)
+        return ((1u << N_IN) - 1) & ~(1u << F_F);
+    if (ll->has_factor || op == OP_RATE_TR)
+        return SPLIT_RATE_FIELDS;
+    return (1u << N_IN) - 1;
+}
+
+/* Run `op` through its compiled form, compiling it first if need be.
+ * Returns TRY_LUA when the Lua sweep must do it instead: the function
+ * cannot be compiled, a value is not finite (so that Lua reports it the
+ * usual way), or a frequency(A) is not memoised yet.  A program is
+ * checked against the Lua sweep, bit for bit, on its first use. */
+int ll_compiled_sweep(lua_law *ll, int op, const dfle_law_ctx *ctx, const double *F_in,
+                          double *out, dfle_error *err)
+{
+    lua_State *T = ll->T;
+    const size_t n = ctx->n;
+    const double *src[N_IN];
+    const double *val;
+    double *dst = out;
+    dfle_trace_prog *p;
+    unsigned used;
+    int verify = 0;
+
+    ll->op = op, ll->ctx = ctx, ll->F_in = F_in; /* for ll_field_source() */
+    if (ll->prog[op] != NULL && ll->seen[op] != *ll->epoch) {
+        lua_settop(T, SLOT_COUNT);
+        if (!dfle_trace_guards_hold(T, SLOT_GUARDS_FACTOR + op, ll->prog[op])) {
+            dfle_trace_free(ll->prog[op]); /* something it read has changed */
+            ll->prog[op] = NULL;
+        }
+        ll->seen[op] = *ll->epoch;
+    }
+    if (ll->prog[op] == NULL) {
+        const dfle_trace_spec spec = {N_IN, ll_field_names, op_fields(ll, op), 0};
+        lua_settop(T, SLOT_COUNT);
+        ll->prog[op] = dfle_trace_compile(T, op == OP_FACTOR ? SLOT_FACTOR : SLOT_RATE,
+                                          SLOT_PARAMS, &spec, ll->why[op], sizeof ll->why[op]);
+        lua_replace(T, SLOT_GUARDS_FACTOR + op);
+        if (ll->prog[op] == NULL) {
+            ll->cstate[op] = -1;
+            return TRY_LUA;
+        }
+        ll->cstate[op] = 1;
+        ll->seen[op] = *ll->epoch;
+        verify = 1;
+    }
+    p = ll->prog[op];
+    if (verify) {
+        if (n > ll->scratch_cap) {
+            double *s = realloc(ll->scratch, n * sizeof *s);
+            if (s == NULL)
+                return TRY_LUA;
+            ll->scratch = s;
+            ll->scratch_cap = n;
+        }
+        dst = ll->scratch;
+    }
+    used = dfle_trace_inputs(p);
+    for (int f = 0; f < N_IN; f++)
+        src[f] = used & (1u << f) ? ll_field_source(ll, f) : NULL;
+    if ((val = dfle_trace_eval_n(p, n, src)) == NULL)
+        return TRY_LUA;
+    for (size_t i = 0; i < n; i++) {
+        double e = val[i];
+        size_t at;
+        /* No erosion up a reverse slope or without flow: as the driver. */
+        if (op != OP_FACTOR && !(ctx->S[i] > 0 && F_in[i] != 0)) {
+            dst[i] = 0.0;
+            continue;
+        }
+        if (!isfinite(e))
+            return TRY_LUA;
+        if (op != OP_FACTOR && ll->has_frequency && e != 0) {
+            if (!ll_memo_find(ll, ctx->A[i], &at))
+                return TRY_LUA;
+            e *= ll->fv[at];
+        }
+        dst[i] = e;
+    }
+    if (verify) {
+        int st = ll_interpreted_sweep(ll, op, ctx, F_in, out, err);
+        if (st != DFLE_OK)
+            return st;
+        for (size_t i = 0; i < n; i++) {
+            if (memcmp(&out[i], &dst[i], sizeof *dst) != 0) {
+                snprintf(ll->why[op], sizeof ll->why[op],
+                         "its compiled form gave %.17g where Lua gives %.17g (node %zu)", dst[i],
+                         out[i], i + 1);
+                dfle_trace_free(p);
+                ll->prog[op] = NULL;
+                ll->cstate[op] = -1;
+                break;
+            }
+        }
+    }
+    return DFLE_OK;
+}
+
+/* Calls of a newly compiled integrand checked against Lua. */
+#define G_VERIFY_CALLS 64
+
+/* The integrand through its compiled form; NaN asks for the Lua call
+ * (not compilable, or a value that is not finite, which Lua reports). */
+double ll_compiled_integrand(lua_law *ll, double h, double v, double lambda)
+{
+    static const char *const names[] = {"h", "v", "lambda"};
+    lua_State *T = ll->T;
+    const double in[3] = {h, v, lambda};
+    double g, gl;
+
+    if (ll->gprog != NULL && ll->gseen != *ll->epoch) {
+        lua_settop(T, SLOT_COUNT);
+        if (!dfle_trace_guards_hold(T, SLOT_GUARDS_G, ll->gprog)) {
+            dfle_trace_free(ll->gprog);
+            ll->gprog = NULL;
+        }
+        ll->gseen = *ll->epoch;
+    }
+    if (ll->gprog == NULL) {
+        const dfle_trace_spec spec = {3, names, 7u, 1};
+        lua_settop(T, SLOT_COUNT);
+        ll->gprog = dfle_trace_compile(T, SLOT_INTEGRAND, SLOT_PARAMS, &spec, ll->gwhy,
+                                       sizeof ll->gwhy);
+        lua_replace(T, SLOT_GUARDS_G);
+        if (ll->gprog == NULL) {
+            ll->gstate = -1;
+            return NAN;
+        }
+        ll->gstate = 1;
+        ll->gseen = *ll->epoch;
+        ll->gverify = G_VERIFY_CALLS;
+    }
+    g = dfle_trace_eval(ll->gprog, in);
+    if (ll->gverify == 0 || !isfinite(g))
+        return g;
+    ll->gverify--;
+    gl = ll_lua_integrand(ll, h, v, lambda);
+    if (isfinite(gl) && memcmp(&g, &gl, sizeof g) != 0) {
+        snprintf(ll->gwhy, sizeof ll->gwhy,
+                 "its compiled form gave %.17g where Lua gives %.17g (h = %g, v = %g, "
+                 "lambda = %g)", g, gl, h, v, lambda);
+        dfle_trace_free(ll->gprog);
+        ll->gprog = NULL;
+        ll->gstate = -1;
+    }
+    return gl;
+}
+
+static void push_status(lua_State *L, const lua_law *ll, int state, const char *why)
+{
+    if (!ll->compile)
+        lua_pushliteral(L, "not compiled: compile = false");
+    else if (state > 0)
+        lua_pushboolean(L, 1);
+    else if (state < 0)
+        lua_pushfstring(L, "runs as Lua: %s", why);
+    else
+        lua_pushboolean(L, 0);
+}
+
+int dfle_lua_law_compiled(lua_State *L, dfle_law *law)
+{
+    const lua_law *ll;
+    int r;
+    if ((ll = ll_of(law)) == NULL)
+        return 0;
+    lua_createtable(L, 0, 3);
+    if (ll->has_factor) {
+        push_status(L, ll, ll->cstate[OP_FACTOR], ll->why[OP_FACTOR]);
+        lua_setfield(L, -2, "factor");
+    }
+    /* rate runs as two ops (bulk and time-resolved flows): a refusal of
+     * either is what the user needs to see. */
+    r = ll->cstate[OP_RATE] < 0 || (ll->cstate[OP_RATE] > 0 && ll->cstate[OP_RATE_TR] >= 0)
+            ? OP_RATE
+            : OP_RATE_TR;
+    push_status(L, ll, ll->cstate[r], ll->why[r]);
+    lua_setfield(L, -2, "rate");
+    if (ll->g_kind == G_POWER) {
+        lua_pushboolean(L, 1);
+        lua_setfield(L, -2, "integrand");
+    } else if (ll->g_kind == G_LUA) {
+        push_status(L, ll, ll->gstate, ll->gwhy);
+        lua_setfield(L, -2, "integrand");
+    }
+    return 1;
+}

@@ -1,0 +1,301 @@
+/*
+ * lua_router_define.c - dfle.router.define{...}: a bulk debris-flow router
+ * whose flow relations are written in Lua (a user variant of the empirical
+ * router), run by the model through dfle_router_ops like any other.
+ *
+ *   local rt = dfle.router.define{
+ *     name = "mine", params = { ... },
+ *     flow = function(c, p)        -- c.S, c.A, c.w, c.x in; set c.h, c.v, c.t_p, ...
+ *       ...
+ *       return c.Theta > 0         -- does the flow go on past this node?
+ *     end,
+ *   }
+ *
+ * Like the empirical router it is local (routed at every landscape step)
+ * and gives node_flow, so the implicit and direct solvers work with it.
+ * Same shell design as dfle.law.define (lua_law_define.c): a Lua thread
+ * of its own, anchored to the router object, holds the function, the
+ * params and a reused record; the state is a userdata on that thread, so
+ * the collector owns everything; every op is one protected call.
+ *
+ * node_flow has no error channel (router.h: it returns 1, 0, or < 0 for
+ * "out of memory"), so an error there is kept and the node treated as
+ * one where the flow stops; the next route() - which every solver makes
+ * right after its node-by-node pass - returns the user's error.
+ */
+#include "lua/core/dfle_lua.h"
+
+#include <math.h>
+#include <stdio.h>
+#include <string.h>
+
+enum {
+    SLOT_FLOW = 1, /* flow(c, p)                  */
+    SLOT_PARAMS,   /* the router's copy of params */
+    SLOT_REC,      /* the node record c           */
+    SLOT_MSGH,     /* message handler             */
+    SLOT_STATE,    /* the lua_router userdata     */
+    SLOT_SWEEP,    /* sweep closure over the slots */
+    SLOT_COUNT = SLOT_SWEEP
+};
+#define UP(slot) lua_upvalueindex(slot)
+
+/* Outputs read back from c after each call, and whether required. */
+static const struct { const char *name; int required; } outputs[] = {
+    {"h", 1}, {"v", 1}, {"t_p", 1}, {"M", 0}, {"Q", 0}, {"tau", 0}, {"Theta", 0},
+};
+enum { O_H, O_V, O_T_P, O_M, O_Q, O_TAU, O_THETA, N_OUT };
+
+typedef struct lua_router {
+    dfle_router_ops ops; /* named after the user's router */
+    lua_State *T;
+    char name[64];
+    char who[80]; /* "router.<name>": the prefix of its error messages */
+    /* The call in progress. */
+    int busy;
+    const dfle_channel *ch;
+    const double *S;   /* route: n slopes; node_flow: &s */
+    size_t first, n;   /* nodes [first, first + n) */
+    dfle_flow *flow;
+    size_t j0;         /* flow index of node `first` */
+    size_t end;        /* out: first node not reached */
+    int node_goes_on;  /* out (node_flow) */
+    /* An error from node_flow, reported by the next route(). */
+    int pending;
+    char pending_msg[DFLE_ERROR_MSG_MAX];
+} lua_router;
+
+static int bad_output(lua_State *T, const lua_router *r, size_t i, const char *field,
+                      const char *why)
+{
+    lua_Debug ar;
+    const char *what = lua_type(T, -1) == LUA_TNUMBER ? dfle_lua_number_text(T, lua_tonumber(T, -1))
+                                                      : dfle_lua_typename(T, -1);
+    lua_pushvalue(T, UP(SLOT_FLOW));
+    lua_getinfo(T, ">S", &ar);
+    return luaL_error(T, "router '%s': flow (defined at %s:%d) set %s to %s, %s, at node %d "
+                         "(S = %f, A = %f m^2)", r->name, ar.short_src, ar.linedefined, field,
+                      what, why, (int)i + 1, r->S[i - r->first], dfle_channel_A(r->ch)[i]);
+}
+
+static void set_num(lua_State *T, const char *k, double v)
+{
+    lua_pushnumber(T, v);
+    lua_setfield(T, UP(SLOT_REC), k);
+}
+
+/* Call flow() for node i; write its outputs to flow index j.  Returns
+ * whether the flow goes on. */
+static int call_node(lua_State *T, lua_router *r, size_t i, size_t j)
+{
+    const double s = r->S[i - r->first];
+    dfle_flow *fl = r->flow;
+    double out[N_OUT];
+    int goes_on;
+
+    set_num(T, "S", s);
+    set_num(T, "A", dfle_channel_A(r->ch)[i]);
+    set_num(T, "w", dfle_channel_w(r->ch)[i]);
+    set_num(T, "x", dfle_channel_x(r->ch)[i]);
+    for (int k = 0; k < N_OUT; k++) { /* no stale values from the last node */
+        lua_pushnil(T);
+        lua_setfield(T, UP(SLOT_REC), outputs[k].name);
+    }
+    lua_pushvalue(T, UP(SLOT_FLOW));
+    lua_pushvalue(T, UP(SLOT_REC));
+    lua_pushvalue(T, UP(SLOT_PARAMS));
+    lua_call(T, 2, 1);
+    goes_on = lua_toboolean(T, -1);
+    lua_pop(T, 1);
+    for (int k = 0; k < N_OUT; k++) {
+        int t = lua_getfield(T, UP(SLOT_REC), outputs[k].name);
+        if (t == LUA_TNIL && !outputs[k].required) {
+            out[k] = k == O_THETA ? (goes_on ? 1.0 : 0.0) : 0.0;
+        } else {
+            if (t != LUA_TNUMBER)
+                bad_output(T, r, i, outputs[k].name, "expected a number");
+            out[k] = lua_tonumber(T, -1);
+            if (!isfinite(out[k]))
+                bad_output(T, r, i, outputs[k].name, "expected a finite number");
+            if (k != O_THETA && out[k] < 0)
+                bad_output(T, r, i, outputs[k].name, "expected a number >= 0");
+        }
+        lua_pop(T, 1);
+    }
+    fl->h[j] = out[O_H];
+    fl->v[j] = out[O_V];
+    fl->t_p[j] = out[O_T_P];
+    fl->M[j] = out[O_M];
+    fl->Q[j] = out[O_Q];
+    fl->tau[j] = out[O_TAU];
+    fl->Theta[j] = out[O_THETA];
+    return goes_on;
+}
+
+static void zero_node(dfle_flow *fl, size_t j)
+{
+    fl->M[j] = fl->Q[j] = fl->h[j] = fl->v[j] = fl->t_p[j] = fl->tau[j] = fl->Theta[j] = 0.0;
+}
+
+/* The protected sweep: nodes [first, first + n) from the head down,
+ * stopping at a reverse slope or where flow() says the flow stops. */
+static int sweep(lua_State *T)
+{
+    lua_router *r = lua_touserdata(T, 1);
+    size_t i = r->first;
+    r->node_goes_on = 0;
+    for (; i < r->first + r->n; i++) {
+        size_t j = r->j0 + (i - r->first);
+        if (!(r->S[i - r->first] > 0))
+            break;
+        if (!call_node(T, r, i, j)) {
+            /* Arriving here, the flow stops: no erosion at this node. */
+            r->flow->Theta[j] = 0.0;
+            break;
+        }
+        r->node_goes_on = 1;
+    }
+    r->end = i;
+    return 0;
+}
+
+static int run_sweep(lua_router *r, dfle_error *err)
+{
+    lua_State *T = r->T;
+    int st;
+    if (r->busy)
+        return dfle_error_set(err, DFLE_ECALLBACK,
+                              "router.%s: the router was used again from inside its own flow()",
+                              r->name);
+    r->busy = 1;
+    st = dfle_lua_shell_sweep(T, SLOT_COUNT, SLOT_SWEEP, SLOT_MSGH, r, r->who,
+                              "error in flow()", err);
+    r->busy = 0;
+    return st;
+}
+
+static int lr_route(void *state, const dfle_channel *ch, const double *S, dfle_flow *flow,
+                    dfle_error *err)
+{
+    lua_router *r = state;
+    const size_t n = dfle_channel_size(ch);
+    int st;
+
+    if (r->pending) {
+        r->pending = 0;
+        return dfle_error_set(err, DFLE_ECALLBACK, "%s", r->pending_msg);
+    }
+    if (flow->n != n)
+        return dfle_error_set(err, DFLE_EINVAL, "router.%s: flow has %zu nodes, channel %zu",
+                              r->name, flow->n, n);
+    flow->time_resolved = 0;
+    r->ch = ch, r->S = S, r->first = 0, r->n = n, r->flow = flow, r->j0 = 0;
+    if ((st = run_sweep(r, err)) != DFLE_OK)
+        return st;
+    flow->runout_end = r->end;
+    for (size_t i = r->end; i < n; i++)
+        zero_node(flow, i);
+    return DFLE_OK;
+}
+
+static int lr_node_flow(void *state, const dfle_channel *ch, size_t i, double S,
+                        dfle_flow *node)
+{
+    lua_router *r = state;
+    dfle_error err;
+
+    node->time_resolved = 0;
+    zero_node(node, 0);
+    if (r->pending || !(S > 0))
+        return 0;
+    r->ch = ch, r->S = &S, r->first = i, r->n = 1, r->flow = node, r->j0 = 0;
+    if (run_sweep(r, &err) != DFLE_OK) {
+        /* Kept for the next route(); here the flow just stops. */
+        snprintf(r->pending_msg, sizeof r->pending_msg, "%s", err.msg);
+        r->pending = 1;
+        zero_node(node, 0);
+        return 0;
+    }
+    return r->node_goes_on;
+}
+
+static const dfle_router_ops lua_router_ops = {
+    .name = "lua",
+    .route = lr_route,
+    .needs_reroute = NULL, /* local: routed at every landscape step */
+    .node_flow = lr_node_flow,
+    .destroy = NULL,       /* the state is a userdata on the router's thread */
+};
+
+/* dfle.router.define{ name =, params =, flow = } -> dfle.router */
+static int l_router_define(lua_State *L)
+{
+    static const char *const keys[] = {"name", "params", "flow", NULL};
+    dfle_lua_router *u;
+    lua_router *r;
+    lua_State *T;
+    dfle_error err;
+    const char *name = "lua";
+    int t;
+
+    luaL_checktype(L, 1, LUA_TTABLE);
+    lua_settop(L, 1);
+    dfle_lua_read_params(L, 1, "router.define", NULL, 0, keys);
+    if ((t = lua_getfield(L, 1, "name")) != LUA_TNIL) {
+        if (t != LUA_TSTRING)
+            luaL_error(L, "dfle.router.define: 'name' must be a string, got %s",
+                       dfle_lua_typename(L, -1));
+        name = lua_tostring(L, -1);
+    }
+    lua_pop(L, 1);
+    if (lua_getfield(L, 1, "flow") != LUA_TFUNCTION)
+        luaL_error(L, "dfle.router.define: 'flow' (a function of c, p) is required, got %s",
+                   dfle_lua_typename(L, -1));
+    lua_pop(L, 1);
+
+    u = dfle_lua_newobject(L, sizeof *u, DFLE_LUA_ROUTER, 2); /* index 2 */
+    T = lua_newthread(L);
+    lua_setiuservalue(L, 2, 1);
+    if (!lua_checkstack(T, SLOT_COUNT + 8))
+        luaL_error(L, "dfle.router.define: out of memory");
+    lua_getfield(L, 1, "flow");
+    lua_xmove(L, T, 1); /* SLOT_FLOW */
+    lua_newtable(L);
+    if ((t = lua_getfield(L, 1, "params")) != LUA_TNIL) {
+        if (t != LUA_TTABLE)
+            luaL_error(L, "dfle.router.define: 'params' must be a table, got %s",
+                       dfle_lua_typename(L, -1));
+        lua_pushnil(L);
+        while (lua_next(L, -2) != 0) {
+            lua_pushvalue(L, -2);
+            lua_insert(L, -2);
+            lua_settable(L, -5);
+        }
+    }
+    lua_pop(L, 1);
+    lua_pushvalue(L, -1);
+    lua_setiuservalue(L, 2, 2); /* for rt.<param> and rt:params() */
+    lua_xmove(L, T, 1);         /* SLOT_PARAMS */
+    lua_createtable(T, 0, 12);  /* SLOT_REC */
+    lua_pushcfunction(T, dfle_lua_traceback); /* SLOT_MSGH */
+    r = lua_newuserdatauv(T, sizeof *r, 0); /* SLOT_STATE */
+    memset(r, 0, sizeof *r);
+    r->T = T;
+    snprintf(r->name, sizeof r->name, "%s", name);
+    snprintf(r->who, sizeof r->who, "router.%s", r->name);
+    r->ops = lua_router_ops;
+    r->ops.name = r->name;
+    for (int k = 1; k < SLOT_SWEEP; k++)
+        lua_pushvalue(T, k);
+    lua_pushcclosure(T, sweep, SLOT_SWEEP - 1); /* SLOT_SWEEP */
+    if (dfle_router_new(&r->ops, r, &u->rt, &err) != DFLE_OK)
+        return dfle_lua_raise(L, &err);
+    lua_settop(L, 2);
+    return 1;
+}
+
+void dfle_lua_open_router_define(lua_State *L)
+{
+    lua_pushcfunction(L, l_router_define);
+    lua_setfield(L, -2, "define");
+}

@@ -1,0 +1,401 @@
+/*
+ * lua_ensemble.c - dfle.ensemble{...}: run a Latin hypercube ensemble of
+ * steady-state models on all cores, streaming rows to a resumable CSV;
+ * dfle.gather{...} merges shard files; dfle.pawn(ens, {...}) ranks
+ * the inputs of a finished ensemble.
+ *
+ *   local ens = dfle.ensemble{
+ *       params = { k_df = {5e-5, 1e-3, log = true}, U = {1e-4, 1e-3} },
+ *       n = 64, seed = 1, out = "ens.csv",
+ *       build = function(p) return dfle.model{ U = p.U, ... } end,
+ *       outputs = { "S_df", "A_df", "r2", "S_max_minus_S_ch" },
+ *   }
+ *
+ * Parallel workers are threads, each with its own Lua state made by the
+ * host (lua_ensemble.h): the worker runs the same script, and the k-th
+ * call of dfle.ensemble in it, instead of running, hands its table over
+ * and stops the script (earlier calls return their finished results,
+ * read from their files).  So `build`, `measure` and Lua-defined laws
+ * run in every worker with their upvalues, and the script up to the
+ * ensemble call must do the same thing every time it runs (doc/ensembles.md).
+ *
+ * This file holds the Lua entry points; the ensemble's table, one sample
+ * and the rows (the same text whichever state ran the sample) are in
+ * lua_ensemble_sample.c, the worker threads in lua_ensemble_pool.c, and
+ * the file rules (streaming, resume, sorting, gather) in src/ensemble.c.
+ */
+#include <math.h>
+#include <pthread.h>
+#include <stdio.h>
+#include <stdlib.h>
+#include <string.h>
+#include <time.h>
+#include <unistd.h>
+
+#include "lua/ensemble/lua_ensemble_internal.h"
+
+static const char host_key = 'h';
+static const char calls_key = 'c';
+const char dfle_lua_ens_worker_key = 'w';
+const char dfle_lua_ens_spec_key = 's';
+static const char stop_key = 'x'; /* the error value that stops a worker's script */
+
+void dfle_lua_set_ensemble_host(lua_State *L, const dfle_lua_ensemble_host *h)
+{
+    if (h != NULL)
+        lua_pushlightuserdata(L, (void *)h);
+    else
+        lua_pushnil(L);
+    lua_rawsetp(L, LUA_REGISTRYINDEX, &host_key);
+}
+
+static const dfle_lua_ensemble_host *get_host(lua_State *L)
+{
+    const dfle_lua_ensemble_host *h;
+    lua_rawgetp(L, LUA_REGISTRYINDEX, &host_key);
+    h = lua_touserdata(L, -1);
+    lua_pop(L, 1);
+    return h;
+}
+
+double dfle_lua_ens_now(void)
+{
+    struct timespec ts;
+    clock_gettime(CLOCK_MONOTONIC, &ts);
+    return (double)ts.tv_sec + 1e-9 * (double)ts.tv_nsec;
+}
+
+/* ------------------------------------------------------------------ */
+/* dfle.ensemble                                                       */
+
+static int l_ensemble(lua_State *L)
+{
+    const dfle_lua_ensemble_host *host = get_host(L);
+    worker_mode *wm;
+    lua_Integer call;
+    spec s;
+    int ctx, nw;
+    run_box *box;
+    dfle_error err;
+    size_t total, ran = 0;
+    const char *path;
+
+    lua_settop(L, 1);
+    lua_rawgetp(L, LUA_REGISTRYINDEX, &calls_key);
+    call = lua_tointeger(L, -1) + 1;
+    lua_pop(L, 1);
+    lua_pushinteger(L, call);
+    lua_rawsetp(L, LUA_REGISTRYINDEX, &calls_key);
+    lua_rawgetp(L, LUA_REGISTRYINDEX, &dfle_lua_ens_worker_key);
+    wm = lua_touserdata(L, -1);
+    lua_pop(L, 1);
+
+    if (wm != NULL && call >= wm->target) {
+        /* A worker replaying the script: hand the table over and stop. */
+        if (call == wm->target) {
+            lua_pushvalue(L, 1);
+            lua_rawsetp(L, LUA_REGISTRYINDEX, &dfle_lua_ens_spec_key);
+        }
+        lua_pushlightuserdata(L, (void *)&stop_key);
+        return lua_error(L);
+    }
+    dfle_lua_ens_read_spec(L, 1, "ensemble", &s, host);
+    ctx = lua_gettop(L);
+    lua_getfield(L, ctx, "out");
+    path = lua_tostring(L, -1);
+    if (wm != NULL) {
+        /* An earlier ensemble of the script, finished by the main state. */
+        dfle_lua_ens_push_result(L, "ensemble", path, host ? host->shard_i : 0, host ? host->shard_n : 0, 0);
+        return 1;
+    }
+
+    box = dfle_lua_ens_new_box(L);
+    lua_getfield(L, ctx, "meta");
+    lua_getfield(L, ctx, "header");
+    if (dfle_ens_file_open(path, lua_tostring(L, -2), lua_tostring(L, -1), (size_t)s.n, s.resume,
+                           &box->file, &err) != DFLE_OK ||
+        dfle_ens_queue_new((size_t)s.n, host ? host->shard_i : 0, host ? host->shard_n : 0,
+                           box->file, s.limit, &box->queue, &err) != DFLE_OK)
+        return luaL_error(L, "dfle.ensemble: %s", err.msg);
+    total = dfle_ens_queue_total(box->queue);
+
+    nw = host != NULL && host->workers > 0 ? host->workers : s.workers > 0 ? s.workers : dfle_lua_ens_cores();
+    if (host == NULL || host->open_state == NULL)
+        nw = 1;
+    if ((size_t)nw > total)
+        nw = (int)(total > 0 ? total : 1);
+
+    if (host != NULL && host->remote != NULL && total > 0) {
+        char msg[DFLE_ERROR_MSG_MAX];
+        size_t done = 0;
+        int r = host->remote(host->ud, (long long)call, lua_tostring(L, -2), lua_tostring(L, -1),
+                             box->file, box->queue, total, &done, msg, sizeof msg);
+        if (r < 0) {
+            dfle_ens_file_close(box->file, 1, NULL);
+            box->file = NULL;
+            return luaL_error(L, "dfle.ensemble: %s (%d rows written are kept; run again to "
+                                 "resume)", msg, (int)done);
+        }
+        if (r > 0) {
+            ran = done;
+            nw = 0; /* done remotely */
+        }
+    }
+    if (nw == 0) {
+        /* the samples ran remotely */
+    } else if (nw <= 1) {
+        size_t i, failed = 0;
+        double t0 = dfle_lua_ens_now();
+        while (dfle_ens_queue_next(box->queue, &i)) {
+            failed += (size_t)dfle_lua_ens_sample_row(L, ctx, i);
+            if (dfle_ens_file_append(box->file, i, lua_tostring(L, -1), &err) != DFLE_OK)
+                return luaL_error(L, "dfle.ensemble: %s", err.msg);
+            lua_pop(L, 1);
+            ran++;
+            if (host != NULL && host->progress != NULL)
+                host->progress(host->ud, ran, total, failed, dfle_lua_ens_now() - t0);
+        }
+        if (host != NULL && host->progress_end != NULL && total > 0)
+            host->progress_end(host->ud);
+    } else {
+        pool pl;
+        memset(&pl, 0, sizeof pl);
+        pl.host = host;
+        pl.target = call;
+        pl.meta = lua_tostring(L, -2);
+        pl.header = lua_tostring(L, -1);
+        pl.file = box->file;
+        pl.queue = box->queue;
+        dfle_lua_ens_run_threads(L, &pl, nw, total);
+        ran = pl.done;
+        if (pl.error) {
+            dfle_ens_file_close(box->file, 1, NULL);
+            box->file = NULL;
+            return luaL_error(L, "dfle.ensemble: %s (%d rows written are kept; run again to "
+                                 "resume)", pl.msg, (int)pl.done);
+        }
+    }
+    {
+        dfle_ens_file *f = box->file;
+        box->file = NULL;
+        if (dfle_ens_file_close(f, 1, &err) != DFLE_OK)
+            return luaL_error(L, "dfle.ensemble: %s", err.msg);
+    }
+    dfle_lua_ens_push_result(L, "ensemble", path, host ? host->shard_i : 0, host ? host->shard_n : 0,
+                (lua_Integer)ran);
+    return 1;
+}
+
+/* dfle.gather{ files = {...} | shards = k, out = "ens.csv" } */
+static int l_gather(lua_State *L)
+{
+    double shards = 0;
+    const dfle_lua_param nums[] = {{"shards", &shards}};
+    static const char *const other[] = {"files", "out", NULL};
+    const char **files;
+    size_t nf;
+    dfle_error err;
+    const char *out;
+
+    luaL_checktype(L, 1, LUA_TTABLE);
+    dfle_lua_read_params(L, 1, "gather", nums, 1, other);
+    lua_settop(L, 1);
+    if (lua_getfield(L, 1, "out") != LUA_TSTRING)
+        return luaL_error(L, "dfle.gather: parameter 'out' must be a file name, got %s",
+                          luaL_typename(L, -1));
+    out = lua_tostring(L, 2);
+    lua_getfield(L, 1, "files");
+    if ((lua_isnil(L, 3)) == (shards == 0))
+        return luaL_error(L, "dfle.gather: give either 'files' (an array of file names) or "
+                             "'shards' (the n of --shard i/n)");
+    if (shards != 0) {
+        lua_Integer k = dfle_lua_check_whole(L, shards, "gather", "shards", 1, 1e6);
+        lua_createtable(L, (int)k, 0);
+        for (lua_Integer i = 1; i <= k; i++) {
+            dfle_lua_ens_push_shard_path(L, out, (size_t)i, (size_t)k);
+            lua_rawseti(L, -2, i);
+        }
+        lua_replace(L, 3);
+    }
+    if (!lua_istable(L, 3) || lua_rawlen(L, 3) == 0)
+        return luaL_error(L, "dfle.gather: parameter 'files' must be a non-empty array of file "
+                             "names");
+    nf = (size_t)lua_rawlen(L, 3);
+    files = lua_newuserdatauv(L, nf * sizeof *files, 0);
+    for (size_t i = 0; i < nf; i++) {
+        if (lua_geti(L, 3, (lua_Integer)i + 1) != LUA_TSTRING)
+            return luaL_error(L, "dfle.gather: files[%d] must be a file name", (int)i + 1);
+        files[i] = lua_tostring(L, -1);
+        lua_pop(L, 1); /* still referenced by the files table */
+    }
+    if (dfle_ens_gather(files, nf, out, NULL, &err) != DFLE_OK)
+        return luaL_error(L, "dfle.gather: %s", err.msg);
+    dfle_lua_ens_push_result(L, "gather", out, 0, 0, 0);
+    return 1;
+}
+
+/* dfle.pawn(ens, {outputs =, inputs =, S =, ...}): PAWN of each output
+ * on the rows with status "ok"; anything else goes to the plain
+ * dfle.pawn (upvalue 1), whose errors get the script's position here
+ * (called from C, they carry none). */
+static int l_pawn_ensemble(lua_State *L)
+{
+    static const char *const keys[] = {"outputs", "inputs", NULL};
+    double S = 10, boot = 0, conf = 0.95, seed = 1;
+    const dfle_lua_param nums[] = {{"S", &S}, {"bootstrap", &boot}, {"conf", &conf}, {"seed", &seed}};
+    int data, outs, ins, si, info, okrows, is_ens = 0;
+    lua_Integer count, k = 0;
+
+    if (lua_getmetatable(L, 1)) {
+        luaL_getmetatable(L, RESULT_MT);
+        is_ens = lua_rawequal(L, -1, -2);
+        lua_pop(L, 2);
+    }
+    if (!is_ens) {
+        lua_pushvalue(L, lua_upvalueindex(1));
+        lua_insert(L, 1);
+        if (lua_pcall(L, lua_gettop(L) - 1, LUA_MULTRET, 0) != LUA_OK) {
+            if (lua_type(L, -1) == LUA_TSTRING) {
+                luaL_where(L, 1);
+                lua_insert(L, -2);
+                lua_concat(L, 2);
+            }
+            return lua_error(L);
+        }
+        return lua_gettop(L);
+    }
+    lua_settop(L, 2);
+    dfle_lua_read_params(L, 2, "pawn", nums, 4, keys);
+    lua_getfield(L, 1, "data");
+    data = lua_gettop(L);
+    if (!lua_istable(L, 2) || lua_getfield(L, 2, "outputs") == LUA_TNIL) {
+        lua_settop(L, data);
+        lua_getfield(L, 1, "outputs");
+    }
+    outs = lua_gettop(L);
+    if (!lua_istable(L, outs))
+        return luaL_error(L, "dfle.pawn: parameter 'outputs' must be an array of output names");
+    if (!lua_istable(L, 2) || lua_getfield(L, 2, "inputs") == LUA_TNIL) {
+        /* default: the numeric parameters */
+        lua_Integer nin, j = 0;
+        lua_settop(L, outs);
+        lua_getfield(L, 1, "inputs");
+        nin = luaL_len(L, -1);
+        lua_newtable(L);
+        for (lua_Integer c = 1; c <= nin; c++) {
+            int numeric = 1;
+            lua_Integer nr;
+            lua_geti(L, -2, c);
+            lua_pushvalue(L, -1);
+            lua_gettable(L, data);
+            nr = (lua_Integer)lua_rawlen(L, -1);
+            for (lua_Integer r = 1; r <= nr && numeric; r++) {
+                numeric = lua_geti(L, -1, r) == LUA_TNUMBER;
+                lua_pop(L, 1);
+            }
+            lua_pop(L, 1);
+            if (numeric)
+                lua_rawseti(L, -2, ++j);
+            else
+                lua_pop(L, 1);
+        }
+        lua_remove(L, -2);
+    }
+    ins = lua_gettop(L);
+    if (!lua_istable(L, ins))
+        return luaL_error(L, "dfle.pawn: parameter 'inputs' must be an array of parameter names");
+    /* Row numbers with status ok. */
+    lua_newtable(L);
+    okrows = lua_gettop(L);
+    lua_getfield(L, data, "status");
+    count = (lua_Integer)lua_rawlen(L, -1);
+    for (lua_Integer r = 1; r <= count; r++) {
+        lua_geti(L, -1, r);
+        if (strcmp(lua_tostring(L, -1), "ok") == 0) {
+            lua_pushinteger(L, r);
+            lua_rawseti(L, okrows, ++k);
+        }
+        lua_pop(L, 1);
+    }
+    lua_pop(L, 1);
+    lua_newtable(L);
+    si = lua_gettop(L);
+    lua_newtable(L);
+    info = lua_gettop(L);
+    for (lua_Integer o = 1, no = luaL_len(L, outs); o <= no; o++) {
+        int cols, base = lua_gettop(L);
+        lua_pushvalue(L, lua_upvalueindex(1));
+        lua_createtable(L, 0, 8);
+        lua_newtable(L);
+        cols = lua_gettop(L);
+        for (lua_Integer c = 0, nin = luaL_len(L, ins); c <= nin; c++) {
+            if (c == 0)
+                lua_geti(L, outs, o);
+            else
+                lua_geti(L, ins, c);
+            lua_pushvalue(L, -1);
+            if (lua_gettable(L, data) != LUA_TTABLE)
+                return luaL_error(L, "dfle.pawn: the ensemble has no column '%s'",
+                                  lua_tostring(L, -2));
+            lua_createtable(L, (int)k, 0);
+            for (lua_Integer r = 1; r <= k; r++) {
+                lua_geti(L, okrows, r);
+                lua_gettable(L, -3);
+                lua_rawseti(L, -2, r);
+            }
+            lua_remove(L, -2);
+            lua_settable(L, cols);
+        }
+        lua_setfield(L, base + 2, "data");
+        lua_pushvalue(L, ins), lua_setfield(L, base + 2, "inputs");
+        lua_geti(L, outs, o), lua_setfield(L, base + 2, "output");
+        lua_pushnumber(L, S), lua_setfield(L, base + 2, "S");
+        lua_pushnumber(L, boot), lua_setfield(L, base + 2, "bootstrap");
+        lua_pushnumber(L, conf), lua_setfield(L, base + 2, "conf");
+        lua_pushnumber(L, seed), lua_setfield(L, base + 2, "seed");
+        lua_call(L, 1, 2);
+        lua_geti(L, outs, o);
+        lua_insert(L, -2);
+        lua_settable(L, info);
+        lua_geti(L, outs, o);
+        lua_insert(L, -2);
+        lua_settable(L, si);
+        lua_settop(L, base);
+    }
+    lua_pushvalue(L, si);
+    lua_pushvalue(L, info);
+    return 2;
+}
+
+/* dfle.worker(): true while a worker replays the script up to its
+ * dfle.ensemble call (scripts may skip output there). */
+static int l_worker(lua_State *L)
+{
+    lua_rawgetp(L, LUA_REGISTRYINDEX, &dfle_lua_ens_worker_key);
+    lua_pushboolean(L, lua_touserdata(L, -1) != NULL);
+    return 1;
+}
+
+void dfle_lua_open_ensemble(lua_State *L)
+{
+    if (luaL_newmetatable(L, RUN_BOX)) {
+        lua_pushcfunction(L, dfle_lua_ens_box_gc);
+        lua_setfield(L, -2, "__gc");
+    }
+    lua_pop(L, 1);
+    if (luaL_newmetatable(L, RESULT_MT)) {
+        lua_pushliteral(L, RESULT_MT);
+        lua_setfield(L, -2, "__name");
+    }
+    lua_pop(L, 1);
+    lua_pushcfunction(L, l_ensemble);
+    lua_setfield(L, -2, "ensemble");
+    lua_pushcfunction(L, l_gather);
+    lua_setfield(L, -2, "gather");
+    lua_pushcfunction(L, l_worker);
+    lua_setfield(L, -2, "worker");
+    /* dfle.pawn also accepts an ensemble result (after lua_sampling.c). */
+    lua_getfield(L, -1, "pawn");
+    lua_pushcclosure(L, l_pawn_ensemble, 1);
+    lua_setfield(L, -2, "pawn");
+}

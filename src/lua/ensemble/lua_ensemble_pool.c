@@ -1,0 +1,229 @@
+/*
+ * lua_ensemble_pool.c - worker threads, each with a Lua state of its
+ * own made by the host, replaying the script up to its ensemble call and
+ * then running samples from a shared queue (lua_ensemble.c).
+ */
+#include <math.h>
+#include <pthread.h>
+#include <stdio.h>
+#include <stdlib.h>
+#include <string.h>
+#include <time.h>
+#include <unistd.h>
+
+#include "lua/ensemble/lua_ensemble_internal.h"
+
+/* ------------------------------------------------------------------ */
+/* Worker threads.                                                     */
+
+static pthread_mutex_t open_lock = PTHREAD_MUTEX_INITIALIZER;
+
+static void pool_fail(pool *pl, const char *msg)
+{
+    pthread_mutex_lock(&pl->lock);
+    if (!pl->error) {
+        pl->error = 1;
+        snprintf(pl->msg, sizeof pl->msg, "%s", msg);
+    }
+    pthread_mutex_unlock(&pl->lock);
+    dfle_ens_queue_stop(pl->queue);
+}
+
+/* Where a worker gets sample indices and puts rows: the local pool, or
+ * a remote driver (MPI, through dfle_lua_ensemble_serve). */
+typedef struct feed {
+    lua_Integer target;
+    const dfle_lua_ensemble_host *host;
+    const char *meta, *header; /* the main state's, to compare; may be NULL */
+    int (*next)(void *ud, size_t *index);
+    int (*put)(void *ud, size_t index, const char *row, int failed, char *msg, size_t msglen);
+    void *ud;
+} feed;
+
+/* worker_main(feed, chunk, args...): runs protected in the worker's state. */
+static int worker_main(lua_State *L)
+{
+    const feed *fd = lua_touserdata(L, 1);
+    int nargs = lua_gettop(L) - 2, st, ctx;
+    spec s;
+    size_t i;
+    char msg[DFLE_ERROR_MSG_MAX];
+
+    st = lua_pcall(L, nargs, 0, 0);
+    if (lua_rawgetp(L, LUA_REGISTRYINDEX, &dfle_lua_ens_spec_key) != LUA_TTABLE) {
+        if (st != LUA_OK)
+            return luaL_error(L, "worker: the script failed before reaching dfle.ensemble: %s",
+                              lua_tostring(L, -2) ? lua_tostring(L, -2) : "(no message)");
+        return luaL_error(L, "worker: the script ended without reaching the same dfle.ensemble "
+                             "call (the script must do the same thing on every run up to it)");
+    }
+    dfle_lua_ens_read_spec(L, lua_gettop(L), "ensemble", &s, fd->host);
+    ctx = lua_gettop(L);
+    lua_getfield(L, ctx, "meta");
+    lua_getfield(L, ctx, "header");
+    if (fd->meta != NULL &&
+        (strcmp(lua_tostring(L, -2), fd->meta) != 0 || strcmp(lua_tostring(L, -1), fd->header) != 0))
+        return luaL_error(L, "worker: the script built a different ensemble when run again (the "
+                             "script must do the same thing on every run up to dfle.ensemble)");
+    lua_pop(L, 2);
+    while (fd->next(fd->ud, &i)) {
+        int failed = dfle_lua_ens_sample_row(L, ctx, i);
+        if (fd->put(fd->ud, i, lua_tostring(L, -1), failed, msg, sizeof msg) != 0)
+            return luaL_error(L, "%s", msg);
+        lua_pop(L, 1);
+    }
+    return 0;
+}
+
+/* Run a worker in L (chunk and nargs arguments on the stack): replay
+ * the script in worker mode, then serve the feed.  0, or -1 with msg. */
+static int run_worker(lua_State *L, int nargs, const feed *fd, char *msg, size_t msglen)
+{
+    worker_mode wm;
+    wm.target = fd->target;
+    dfle_lua_set_ensemble_host(L, fd->host);
+    lua_pushlightuserdata(L, &wm);
+    lua_rawsetp(L, LUA_REGISTRYINDEX, &dfle_lua_ens_worker_key);
+    /* stack: chunk, args -> worker_main, feed, chunk, args */
+    lua_pushcfunction(L, worker_main);
+    lua_insert(L, 1);
+    lua_pushlightuserdata(L, (void *)fd);
+    lua_insert(L, 2);
+    if (lua_pcall(L, nargs + 2, 0, 0) != LUA_OK) {
+        const char *m = lua_tostring(L, -1);
+        snprintf(msg, msglen, "%s", m ? m : "worker failed");
+        lua_pushnil(L);
+        lua_rawsetp(L, LUA_REGISTRYINDEX, &dfle_lua_ens_worker_key);
+        return -1;
+    }
+    lua_pushnil(L);
+    lua_rawsetp(L, LUA_REGISTRYINDEX, &dfle_lua_ens_worker_key);
+    return 0;
+}
+
+int dfle_lua_ensemble_serve(lua_State *L, int nargs, long long call,
+                            const dfle_lua_ensemble_host *host, const char *meta,
+                            const char *header, int (*next)(void *ud, size_t *index),
+                            int (*put)(void *ud, size_t index, const char *row, int failed,
+                                       char *msg, size_t msglen),
+                            void *ud, char *msg, size_t msglen)
+{
+    feed fd;
+    fd.target = (lua_Integer)call;
+    fd.host = host;
+    fd.meta = meta;
+    fd.header = header;
+    fd.next = next;
+    fd.put = put;
+    fd.ud = ud;
+    return run_worker(L, nargs, &fd, msg, msglen);
+}
+
+static int pool_next(void *ud, size_t *index)
+{
+    pool *pl = ud;
+    return dfle_ens_queue_next(pl->queue, index);
+}
+
+static int pool_put(void *ud, size_t index, const char *row, int failed, char *msg,
+                    size_t msglen)
+{
+    pool *pl = ud;
+    dfle_error err;
+    if (dfle_ens_file_append(pl->file, index, row, &err) != DFLE_OK) {
+        snprintf(msg, msglen, "%s", err.msg);
+        return -1;
+    }
+    pthread_mutex_lock(&pl->lock);
+    pl->done++;
+    pl->failed += (size_t)(failed != 0);
+    pthread_cond_signal(&pl->cond);
+    pthread_mutex_unlock(&pl->lock);
+    return 0;
+}
+
+static void *worker_thread(void *arg)
+{
+    pool *pl = arg;
+    char msg[DFLE_ERROR_MSG_MAX];
+    int nargs = 0;
+    lua_State *L;
+    feed fd;
+
+    msg[0] = '\0';
+    pthread_mutex_lock(&open_lock);
+    L = pl->host->open_state(pl->host->ud, &nargs, msg, sizeof msg);
+    pthread_mutex_unlock(&open_lock);
+    if (L == NULL) {
+        pool_fail(pl, msg[0] ? msg : "cannot create a worker's Lua state");
+    } else {
+        fd.target = pl->target;
+        fd.host = pl->host;
+        fd.meta = pl->meta;
+        fd.header = pl->header;
+        fd.next = pool_next;
+        fd.put = pool_put;
+        fd.ud = pl;
+        if (run_worker(L, nargs, &fd, msg, sizeof msg) != 0)
+            pool_fail(pl, msg);
+        lua_close(L);
+    }
+    pthread_mutex_lock(&pl->lock);
+    pl->active--;
+    pthread_cond_signal(&pl->cond);
+    pthread_mutex_unlock(&pl->lock);
+    return NULL;
+}
+
+int dfle_lua_ens_cores(void)
+{
+    long c = sysconf(_SC_NPROCESSORS_ONLN);
+    return c > 0 ? (int)c : 1;
+}
+
+/* Run the queue on `nw` threads; returns 0 or raises the first error. */
+void dfle_lua_ens_run_threads(lua_State *L, pool *pl, int nw, size_t total)
+{
+    pthread_t *tid = lua_newuserdatauv(L, (size_t)nw * sizeof *tid, 0);
+    const dfle_lua_ensemble_host *h = pl->host;
+    double t0 = dfle_lua_ens_now();
+    int started = 0;
+
+    pthread_mutex_init(&pl->lock, NULL);
+    pthread_cond_init(&pl->cond, NULL);
+    pl->active = nw;
+    for (; started < nw; started++)
+        if (pthread_create(&tid[started], NULL, worker_thread, pl) != 0)
+            break;
+    pthread_mutex_lock(&pl->lock);
+    pl->active -= nw - started;
+    if (started < nw && started == 0) {
+        pl->error = 1;
+        snprintf(pl->msg, sizeof pl->msg, "cannot start worker threads");
+    }
+    while (pl->active > 0) {
+        struct timespec ts;
+        size_t done = pl->done, failed = pl->failed;
+        pthread_mutex_unlock(&pl->lock);
+        if (h->progress != NULL)
+            h->progress(h->ud, done, total, failed, dfle_lua_ens_now() - t0);
+        pthread_mutex_lock(&pl->lock);
+        clock_gettime(CLOCK_REALTIME, &ts);
+        ts.tv_nsec += 100000000L;
+        if (ts.tv_nsec >= 1000000000L) {
+            ts.tv_sec++;
+            ts.tv_nsec -= 1000000000L;
+        }
+        if (pl->active > 0)
+            pthread_cond_timedwait(&pl->cond, &pl->lock, &ts);
+    }
+    pthread_mutex_unlock(&pl->lock);
+    for (int k = 0; k < started; k++)
+        pthread_join(tid[k], NULL);
+    if (h->progress_end != NULL)
+        h->progress_end(h->ud);
+    pthread_cond_destroy(&pl->cond);
+    pthread_mutex_destroy(&pl->lock);
+    lua_pop(L, 1);
+}
+

@@ -1,0 +1,145 @@
+/*
+ * lua_fluvial.c - dfle.fluvial.stochastic_threshold{...} and
+ * dfle.fluvial.stream_power{K =, m =, n =}.
+ *
+ * Both return a dfle.fluvial object with read-only fields K, m_s, n_s
+ * and name, so a script can print the derived law it is running.
+ */
+#include "lua/core/dfle_lua.h"
+
+#include <stdio.h>
+#include <string.h>
+
+static dfle_lua_fluvial *new_fluvial(lua_State *L)
+{
+    return dfle_lua_newobject(L, sizeof(dfle_lua_fluvial), DFLE_LUA_FLUVIAL, 0);
+}
+
+static int l_stochastic_threshold(lua_State *L)
+{
+    dfle_stochastic_threshold_opts o;
+    dfle_lua_fluvial *u;
+    dfle_error err;
+    const dfle_lua_param params[] = {
+        {"k_e", &o.k_e},         {"rho_w", &o.rho_w},     {"rho_s", &o.rho_s},
+        {"D_eff", &o.D_eff},     {"b", &o.b},             {"k_w", &o.k_w},
+        {"a", &o.a},             {"c", &o.c},             {"k", &o.k},
+        {"omega_s", &o.omega_s}, {"alpha_f", &o.alpha_f}, {"beta_f", &o.beta_f},
+        {"R_c", &o.R_c},         {"n_manning", &o.n_manning}, {"g", &o.g},
+        {"tau_c_coef", &o.tau_c_coef}, {"K", &o.K_override},
+        {"m_s", &o.m_override},  {"n_s", &o.n_override},
+    };
+
+    dfle_stochastic_threshold_opts_default(&o);
+    dfle_lua_read_params(L, 1, "fluvial.stochastic_threshold", params,
+                         sizeof params / sizeof params[0], NULL);
+    /* In C a negative override means "derive"; from Lua an override is
+     * only ever a value, so check it like any parameter. */
+    if (!lua_isnoneornil(L, 1)) {
+        static const struct { const char *key; int zero_ok; } overrides[] = {
+            {"K", 1}, {"m_s", 1}, {"n_s", 0}};
+        for (int i = 0; i < 3; i++) {
+            if (lua_getfield(L, 1, overrides[i].key) == LUA_TNUMBER) {
+                double v = lua_tonumber(L, -1);
+                if (v < 0 || (v == 0 && !overrides[i].zero_ok))
+                    luaL_error(L, "dfle.fluvial.stochastic_threshold: %s must be %s 0 (got %s)",
+                               overrides[i].key, overrides[i].zero_ok ? ">=" : ">",
+                               dfle_lua_number_text(L, v));
+            }
+            lua_pop(L, 1);
+        }
+    }
+    u = new_fluvial(L);
+    if (dfle_fluvial_new_stochastic_threshold(&o, &u->fl, &err) != DFLE_OK)
+        return dfle_lua_raise(L, &err);
+    return 1;
+}
+
+static int l_stream_power(lua_State *L)
+{
+    double K = -1, m = -1, n = -1;
+    dfle_lua_fluvial *u;
+    dfle_error err;
+    const dfle_lua_param params[] = {{"K", &K}, {"m", &m}, {"n", &n}};
+
+    luaL_checktype(L, 1, LUA_TTABLE);
+    dfle_lua_read_params(L, 1, "fluvial.stream_power", params, 3, NULL);
+    for (int i = 0; i < 3; i++)
+        if (lua_getfield(L, 1, params[i].name) == LUA_TNIL)
+            luaL_error(L, "dfle.fluvial.stream_power: parameter '%s' is required",
+                       params[i].name);
+    u = new_fluvial(L);
+    if (dfle_fluvial_new_stream_power(K, m, n, &u->fl, &err) != DFLE_OK)
+        return dfle_lua_raise(L, &err);
+    return 1;
+}
+
+static int l_fluvial_property(lua_State *L)
+{
+    dfle_fluvial *fl = dfle_lua_check_fluvial(L, 1);
+    const char *key = lua_tostring(L, 2);
+
+    if (strcmp(key, "K") == 0)
+        lua_pushnumber(L, dfle_fluvial_K(fl));
+    else if (strcmp(key, "m_s") == 0 || strcmp(key, "m") == 0)
+        lua_pushnumber(L, dfle_fluvial_m(fl));
+    else if (strcmp(key, "n_s") == 0 || strcmp(key, "n") == 0)
+        lua_pushnumber(L, dfle_fluvial_n(fl));
+    else if (strcmp(key, "name") == 0)
+        lua_pushstring(L, dfle_fluvial_name(fl));
+    else
+        lua_pushnil(L);
+    return 1;
+}
+
+/* fl:rate(A, S) -> E_f [m/yr]; fl:steady_slope(U, A) -> Eq. (26). */
+static int l_fluvial_rate(lua_State *L)
+{
+    dfle_fluvial *fl = dfle_lua_check_fluvial(L, 1);
+    lua_pushnumber(L, dfle_fluvial_rate(fl, luaL_checknumber(L, 2), luaL_checknumber(L, 3)));
+    return 1;
+}
+
+static int l_fluvial_steady_slope(lua_State *L)
+{
+    dfle_fluvial *fl = dfle_lua_check_fluvial(L, 1);
+    lua_pushnumber(L, dfle_fluvial_steady_slope(fl, luaL_checknumber(L, 2),
+                                                luaL_checknumber(L, 3)));
+    return 1;
+}
+
+static int l_fluvial_tostring(lua_State *L)
+{
+    dfle_fluvial *fl = dfle_lua_check_fluvial(L, 1);
+    char buf[160];
+    snprintf(buf, sizeof buf, "dfle.fluvial.%s(K = %.5g, m_s = %.5g, n_s = %.5g)",
+             dfle_fluvial_name(fl), dfle_fluvial_K(fl), dfle_fluvial_m(fl),
+             dfle_fluvial_n(fl));
+    lua_pushstring(L, buf);
+    return 1;
+}
+
+static int l_fluvial_gc(lua_State *L)
+{
+    dfle_lua_fluvial *u = luaL_checkudata(L, 1, DFLE_LUA_FLUVIAL);
+    dfle_fluvial_free(u->fl);
+    u->fl = NULL;
+    return 0;
+}
+
+void dfle_lua_open_fluvial(lua_State *L)
+{
+    static const luaL_Reg methods[] = {
+        {"rate", l_fluvial_rate}, {"steady_slope", l_fluvial_steady_slope}, {NULL, NULL}};
+    static const luaL_Reg meta[] = {
+        {"__gc", l_fluvial_gc},
+        {"__tostring", l_fluvial_tostring}, {NULL, NULL}};
+    static const luaL_Reg funcs[] = {
+        {"stochastic_threshold", l_stochastic_threshold},
+        {"stream_power", l_stream_power},
+        {NULL, NULL}};
+    dfle_lua_register_type(L, DFLE_LUA_FLUVIAL, methods, meta, l_fluvial_property);
+    lua_newtable(L);
+    luaL_setfuncs(L, funcs, 0);
+    lua_setfield(L, -2, "fluvial");
+}

@@ -1,0 +1,468 @@
+/*
+ * lua_model.c - dfle.model{...}: the channel-profile model from Lua.
+ *
+ *   local m = dfle.model{ channel = ch, U = 5e-4, fluvial = fl,
+ *                         router = rt, law = law }
+ *   m:run_to_steady{ tol = 1e-3, max_time = 2e7 }
+ *   m:get("S"), m:write_csv("profile.csv")
+ *
+ * Every component is optional and defaults to the paper's (Fig. 9);
+ * `fluvial = false` or `router = false` switches that process off.  The
+ * model userdata keeps its components alive through user values, so a
+ * script may drop its own references to them.
+ */
+#include "lua/core/dfle_lua.h"
+
+#include <stdio.h>
+#include <string.h>
+
+enum { UV_CHANNEL = 1, UV_FLUVIAL, UV_ROUTER, UV_LAW,
+       UV_U, /* U(t): the uplift function, or nil */
+       UV_COUNT = UV_U };
+
+/* Push component `key` of the options table, or a default built by
+ * calling dfle.<ctor_path>{}; push nil when the user said `false`. */
+static void push_component(lua_State *L, int opts, const char *key, const char *tname,
+                           lua_CFunction fallback_ctor, int can_be_off)
+{
+    int t = lua_istable(L, opts) ? lua_getfield(L, opts, key) : (lua_pushnil(L), LUA_TNIL);
+    if (can_be_off && t == LUA_TBOOLEAN && !lua_toboolean(L, -1)) {
+        lua_pop(L, 1);
+        lua_pushnil(L);
+        return;
+    }
+    if (t == LUA_TNIL) {
+        lua_pop(L, 1);
+        lua_pushcfunction(L, fallback_ctor);
+        lua_call(L, 0, 1);
+        return;
+    }
+    if (luaL_testudata(L, -1, tname) == NULL)
+        luaL_error(L, "dfle.model: parameter '%s' must be a %s%s, got %s", key, tname,
+                   can_be_off ? " or false" : "", dfle_lua_typename(L, -1));
+}
+
+/* Default constructors, called with no arguments. */
+static int default_channel(lua_State *L);
+static int default_fluvial(lua_State *L);
+static int default_router(lua_State *L);
+static int default_law(lua_State *L);
+
+static int call_module_ctor(lua_State *L, const char *sub, const char *name)
+{
+    dfle_lua_push_module(L);
+    if (sub != NULL)
+        lua_getfield(L, -1, sub);
+    lua_getfield(L, -1, name);
+    lua_call(L, 0, 1);
+    return 1;
+}
+static int default_channel(lua_State *L) { return call_module_ctor(L, NULL, "channel"); }
+static int default_fluvial(lua_State *L)
+{
+    return call_module_ctor(L, "fluvial", "stochastic_threshold");
+}
+static int default_router(lua_State *L) { return call_module_ctor(L, "router", "empirical"); }
+static int default_law(lua_State *L) { return call_module_ctor(L, "law", "power"); }
+
+static void *udata_ptr(lua_State *L, int idx)
+{
+    return lua_isnil(L, idx) ? NULL : *(void **)lua_touserdata(L, idx);
+}
+
+static int l_model_new(lua_State *L)
+{
+    static const char *const component_keys[] = {"channel", "fluvial", "router", "law", NULL};
+    dfle_model_opts o;
+    dfle_lua_model *u;
+    dfle_error err;
+    int base;
+    const dfle_lua_param params[] = {{"U", &o.U}, {"cfl", &o.cfl}, {"dt_max", &o.dt_max}};
+
+    /* U may be a number [m/yr] or a function of model time [yr]. */
+    static const char *const component_keys_U[] = {"channel", "fluvial", "router", "law", "U",
+                                                   NULL};
+    int U_fn;
+
+    dfle_model_opts_default(&o);
+    if (!lua_isnoneornil(L, 1))
+        luaL_checktype(L, 1, LUA_TTABLE);
+    lua_settop(L, 1);
+    U_fn = lua_istable(L, 1) && lua_getfield(L, 1, "U") == LUA_TFUNCTION;
+    lua_settop(L, 1);
+    if (U_fn) {
+        dfle_lua_read_params(L, 1, "model", params + 1, 2, component_keys_U);
+        lua_getfield(L, 1, "U");
+        lua_pushnumber(L, 0.0);
+        lua_call(L, 1, 1);
+        if (lua_type(L, -1) != LUA_TNUMBER)
+            luaL_error(L, "dfle.model: U(t) must return a number, got %s (at t = 0)",
+                       dfle_lua_typename(L, -1));
+        o.U = lua_tonumber(L, -1);
+        lua_settop(L, 1);
+    } else {
+        dfle_lua_read_params(L, 1, "model", params, 3, component_keys);
+    }
+
+    base = lua_gettop(L);
+    push_component(L, 1, "channel", DFLE_LUA_CHANNEL, default_channel, 0);
+    push_component(L, 1, "fluvial", DFLE_LUA_FLUVIAL, default_fluvial, 1);
+    push_component(L, 1, "router", DFLE_LUA_ROUTER, default_router, 1);
+    if (lua_isnil(L, base + 3)) {
+        if (lua_getfield(L, 1, "law") != LUA_TNIL)
+            luaL_error(L, "dfle.model: 'law' given but router = false (no debris flows)");
+        lua_pop(L, 1);
+        lua_pushnil(L);
+    } else {
+        push_component(L, 1, "law", DFLE_LUA_LAW, default_law, 0);
+    }
+
+    o.channel = udata_ptr(L, base + 1);
+    o.fluvial = udata_ptr(L, base + 2);
+    o.router = udata_ptr(L, base + 3);
+    o.law = udata_ptr(L, base + 4);
+    if (o.channel == NULL || (lua_isuserdata(L, base + 2) && o.fluvial == NULL) ||
+        (lua_isuserdata(L, base + 3) && o.router == NULL) ||
+        (lua_isuserdata(L, base + 4) && o.law == NULL))
+        luaL_error(L, "dfle.model: a component has been closed");
+
+    u = dfle_lua_newobject(L, sizeof *u, DFLE_LUA_MODEL, UV_COUNT);
+    for (int k = UV_CHANNEL; k <= UV_LAW; k++) {
+        lua_pushvalue(L, base + k);
+        lua_setiuservalue(L, -2, k);
+    }
+    if (U_fn) {
+        lua_getfield(L, 1, "U");
+        lua_setiuservalue(L, -2, UV_U);
+    }
+    if (dfle_model_new(&o, &u->m, &err) != DFLE_OK)
+        return dfle_lua_raise(L, &err);
+    return 1;
+}
+
+static int l_model_init_fluvial_steady(lua_State *L)
+{
+    dfle_model *m = dfle_lua_check_model(L, 1);
+    const dfle_fluvial *fl = lua_isnoneornil(L, 2) ? NULL : dfle_lua_check_fluvial(L, 2);
+    dfle_error err;
+    if (dfle_model_init_fluvial_steady(m, fl, &err) != DFLE_OK)
+        return dfle_lua_raise(L, &err);
+    lua_settop(L, 1);
+    return 1;
+}
+
+static int l_model_set_z(lua_State *L)
+{
+    dfle_model *m = dfle_lua_check_model(L, 1);
+    size_t n;
+    double *z = dfle_lua_check_array(L, 2, "model:set_z: z", &n);
+    dfle_error err;
+    if (dfle_model_set_z(m, z, n, &err) != DFLE_OK)
+        return dfle_lua_raise(L, &err);
+    lua_settop(L, 1);
+    return 1;
+}
+
+static int l_model_set_U(lua_State *L)
+{
+    dfle_model *m = dfle_lua_check_model(L, 1);
+    dfle_error err;
+    if (dfle_model_set_U(m, luaL_checknumber(L, 2), &err) != DFLE_OK)
+        return dfle_lua_raise(L, &err);
+    lua_pushnil(L); /* a constant U replaces a U(t) function */
+    lua_setiuservalue(L, 1, UV_U);
+    lua_settop(L, 1);
+    return 1;
+}
+
+static void push_result(lua_State *L, const dfle_run_result *r)
+{
+    lua_createtable(L, 0, 9);
+    lua_pushboolean(L, r->converged), lua_setfield(L, -2, "converged");
+    lua_pushstring(L, dfle_stop_reason_name(r->reason)), lua_setfield(L, -2, "reason");
+    lua_pushnumber(L, r->time), lua_setfield(L, -2, "time");
+    lua_pushinteger(L, (lua_Integer)r->steps), lua_setfield(L, -2, "steps");
+    lua_pushinteger(L, (lua_Integer)r->routings), lua_setfield(L, -2, "routings");
+    lua_pushnumber(L, r->rate_ratio), lua_setfield(L, -2, "rate_ratio");
+    lua_pushnumber(L, r->dt_min), lua_setfield(L, -2, "dt_min");
+    lua_pushnumber(L, r->dt_max), lua_setfield(L, -2, "dt_max");
+    lua_pushinteger(L, (lua_Integer)r->nonpositive_slope_nodes);
+    lua_setfield(L, -2, "nonpositive_slope_nodes");
+    lua_pushstring(L, dfle_method_name(r->method)), lua_setfield(L, -2, "method");
+    lua_pushboolean(L, r->fallback), lua_setfield(L, -2, "fallback");
+    lua_pushinteger(L, (lua_Integer)r->iterations), lua_setfield(L, -2, "iterations");
+    if (r->note[0] != '\0')
+        lua_pushstring(L, r->note), lua_setfield(L, -2, "note");
+}
+
+/* The run's uplift callback: calls the model's
+ * U function (at stack index fidx of L, the thread running the run) under
+ * lua_pcall with a traceback, so an error comes back as a status. */
+typedef struct { lua_State *L; int fidx; } uplift_ctx;
+
+static int uplift_msgh(lua_State *L)
+{
+    const char *msg = lua_tostring(L, 1);
+    luaL_traceback(L, L, msg != NULL ? msg : "(error object is not a string)", 1);
+    return 1;
+}
+
+static int lua_uplift(void *ud, double t, double *U, dfle_error *err)
+{
+    uplift_ctx *c = ud;
+    lua_State *L = c->L;
+    int top = lua_gettop(L), ok;
+    lua_pushcfunction(L, uplift_msgh);
+    lua_pushvalue(L, c->fidx);
+    lua_pushnumber(L, t);
+    dfle_lua_touch(L); /* U(t) may change what a compiled law read */
+    if (lua_pcall(L, 1, 1, top + 1) != LUA_OK) {
+        dfle_error_set(err, DFLE_ECALLBACK, "model: U(t) failed at t = %g yr: %s", t,
+                       lua_tostring(L, -1) != NULL ? lua_tostring(L, -1) : "?");
+        lua_settop(L, top);
+        return DFLE_ECALLBACK;
+    }
+    ok = lua_type(L, -1) == LUA_TNUMBER;
+    if (ok)
+        *U = lua_tonumber(L, -1);
+    else
+        dfle_error_set(err, DFLE_ECALLBACK, "model: U(t) must return a number, got %s (at t = %g yr)",
+                       dfle_lua_typename(L, -1), t);
+    lua_settop(L, top);
+    return ok ? DFLE_OK : DFLE_ECALLBACK;
+}
+
+/* Shared by run_to_steady and run: `steady` selects the defaults. */
+static int model_run(lua_State *L, int steady)
+{
+    static const char *const steady_keys[] = {"progress", "method", NULL};
+    static const char *const run_keys[] = {"progress", "method", "record", NULL};
+    static const char *const methods[] = {"explicit", "implicit", "direct", "auto", NULL};
+    dfle_model *m = dfle_lua_check_model(L, 1);
+    const char *fn = steady ? "model:run_to_steady" : "model:run";
+    dfle_run_opts o;
+    dfle_run_result res;
+    dfle_error err;
+    double max_steps, years = -1;
+    const dfle_lua_progress *prog = dfle_lua_get_progress(L);
+    int st;
+
+    lua_settop(L, 2);
+    dfle_run_opts_default(&o);
+    o.method = steady ? DFLE_METHOD_AUTO : DFLE_METHOD_EXPLICIT;
+    max_steps = (double)o.max_steps;
+    if (steady) {
+        const dfle_lua_param params[] = {{"tol", &o.tol}, {"max_time", &o.max_time},
+                                         {"max_steps", &max_steps}, {"direct_tol", &o.direct_tol}};
+        dfle_lua_read_params(L, 2, fn, params, 4, steady_keys);
+        if (!(o.tol > 0))
+            luaL_error(L, "dfle.%s: tol must be > 0 (got %s)", fn, dfle_lua_number_text(L, o.tol));
+        if (!(o.max_time > 0))
+            luaL_error(L, "dfle.%s: max_time must be > 0 yr (got %s)", fn,
+                       dfle_lua_number_text(L, o.max_time));
+        if (!(o.direct_tol > 0 && o.direct_tol < 1))
+            luaL_error(L, "dfle.%s: direct_tol must be in (0, 1) (got %s)", fn,
+                       dfle_lua_number_text(L, o.direct_tol));
+    } else {
+        const dfle_lua_param params[] = {{"years", &years}, {"max_steps", &max_steps},
+                                         {"rtol", &o.rtol}};
+        luaL_checktype(L, 2, LUA_TTABLE);
+        dfle_lua_read_params(L, 2, fn, params, 3, run_keys);
+        if (lua_getfield(L, 2, "years") == LUA_TNIL)
+            luaL_error(L, "dfle.model:run: parameter 'years' is required");
+        lua_pop(L, 1);
+        if (!(years > 0))
+            luaL_error(L, "dfle.model:run: years must be > 0 (got %s)", dfle_lua_number_text(L, years));
+        if (!(o.rtol > 0 && o.rtol < 1))
+            luaL_error(L, "dfle.model:run: rtol must be in (0, 1) (got %s)",
+                       dfle_lua_number_text(L, o.rtol));
+        o.max_time = years;
+        o.tol = 0; /* plain time stepping: no steady-state stop */
+    }
+    o.max_steps = (size_t)dfle_lua_check_whole(L, max_steps, fn, "max_steps", 1, 1e15);
+    if (lua_istable(L, 2) && lua_getfield(L, 2, "method") != LUA_TNIL) {
+        if (lua_type(L, -1) != LUA_TSTRING)
+            luaL_error(L, "dfle.%s: parameter 'method' must be a string, got %s", fn,
+                       dfle_lua_typename(L, -1));
+        o.method = luaL_checkoption(L, -1, NULL, methods);
+        if (!steady && o.method == DFLE_METHOD_DIRECT)
+            luaL_error(L, "dfle.model:run: method 'direct' finds steady states only; use "
+                          "run_to_steady, or 'explicit' or 'implicit' here");
+    }
+    lua_settop(L, 2);
+    if (lua_istable(L, 2) && lua_getfield(L, 2, "record") != LUA_TNIL) {
+        size_t k;
+        double *times = dfle_lua_check_array(L, 3, "model:run: record", &k);
+        for (size_t j = 0; j < k; j++)
+            if (!(times[j] >= 0 && times[j] <= years && (j == 0 || times[j] > times[j - 1])))
+                luaL_error(L, "dfle.model:run: record times must increase within [0, years = %s] "
+                              "(time %d is %s)", dfle_lua_number_text(L, years), (int)j + 1,
+                           dfle_lua_number_text(L, times[j]));
+        o.n_record = k;
+        o.record_times = times;
+        o.record_z = lua_newuserdatauv(L, (k ? k : 1) * dfle_model_size(m) * sizeof(double), 0);
+    }
+    if (lua_istable(L, 2) && lua_getfield(L, 2, "progress") != LUA_TNIL) {
+        if (!lua_isboolean(L, -1))
+            luaL_error(L, "dfle.%s: parameter 'progress' must be a boolean", fn);
+        if (!lua_toboolean(L, -1))
+            prog = NULL;
+    }
+    if (prog != NULL) {
+        o.progress = prog->update;
+        o.progress_ud = prog->ud;
+    }
+    /* A U(t) function stays on the stack for the run. */
+    uplift_ctx uc = {L, 0};
+    if (lua_getiuservalue(L, 1, UV_U) == LUA_TFUNCTION) {
+        uc.fidx = lua_gettop(L);
+        o.uplift = lua_uplift;
+        o.uplift_ud = &uc;
+    }
+    st = dfle_model_run(m, &o, &res, &err);
+    if (prog != NULL && prog->finish != NULL)
+        prog->finish(prog->ud);
+    if (st != DFLE_OK)
+        return dfle_lua_raise(L, &err);
+    push_result(L, &res);
+    if (o.n_record > 0) {
+        const size_t n = dfle_model_size(m);
+        lua_createtable(L, (int)res.n_recorded, 0);
+        for (size_t j = 0; j < res.n_recorded; j++) {
+            lua_createtable(L, 0, 2);
+            lua_pushnumber(L, o.record_times[j]), lua_setfield(L, -2, "t");
+            dfle_lua_push_array(L, o.record_z + j * n, n), lua_setfield(L, -2, "z");
+            lua_rawseti(L, -2, (lua_Integer)j + 1);
+        }
+        lua_setfield(L, -2, "records");
+    }
+    return 1;
+}
+
+static int l_model_run_to_steady(lua_State *L) { return model_run(L, 1); }
+static int l_model_run(lua_State *L) { return model_run(L, 0); }
+
+static void push_field_names(lua_State *L)
+{
+    luaL_Buffer b;
+    luaL_buffinit(L, &b);
+    for (int f = 0; f < DFLE_FIELD_COUNT; f++) {
+        if (f)
+            luaL_addstring(&b, ", ");
+        luaL_addstring(&b, dfle_field_name(f));
+    }
+    luaL_pushresult(&b);
+}
+
+static int l_model_get(lua_State *L)
+{
+    dfle_model *m = dfle_lua_check_model(L, 1);
+    const char *name = luaL_checkstring(L, 2);
+    int f = dfle_field_lookup(name);
+    const double *v;
+    dfle_error err;
+
+    if (f < 0) {
+        push_field_names(L);
+        return luaL_error(L, "dfle.model:get: no field '%s' (fields: %s)", name,
+                          lua_tostring(L, -1));
+    }
+    v = dfle_model_field(m, f, &err);
+    if (v == NULL)
+        return dfle_lua_raise(L, &err);
+    dfle_lua_push_array(L, v, dfle_model_size(m));
+    return 1;
+}
+
+static int l_model_fields(lua_State *L)
+{
+    lua_createtable(L, DFLE_FIELD_COUNT, 0);
+    for (int f = 0; f < DFLE_FIELD_COUNT; f++) {
+        lua_pushstring(L, dfle_field_name(f));
+        lua_rawseti(L, -2, f + 1);
+    }
+    return 1;
+}
+
+static int l_model_write_csv(lua_State *L)
+{
+    dfle_model *m = dfle_lua_check_model(L, 1);
+    const char *path = luaL_checkstring(L, 2);
+    dfle_error err;
+    if (dfle_model_write_csv(m, path, &err) != DFLE_OK)
+        return dfle_lua_raise(L, &err);
+    lua_settop(L, 1);
+    return 1;
+}
+
+static int l_model_property(lua_State *L)
+{
+    dfle_model *m = dfle_lua_check_model(L, 1);
+    const char *key = lua_tostring(L, 2);
+    static const char *const components[] = {"channel", "fluvial", "router", "law"};
+
+    if (strcmp(key, "time") == 0) {
+        lua_pushnumber(L, dfle_model_time(m));
+        return 1;
+    }
+    if (strcmp(key, "U") == 0) {
+        lua_pushnumber(L, dfle_model_U(m));
+        return 1;
+    }
+    if (strcmp(key, "n") == 0) {
+        lua_pushinteger(L, (lua_Integer)dfle_model_size(m));
+        return 1;
+    }
+    for (int k = 0; k < 4; k++)
+        if (strcmp(key, components[k]) == 0) {
+            lua_getiuservalue(L, 1, k + 1);
+            return 1;
+        }
+    lua_pushnil(L);
+    return 1;
+}
+
+static int l_model_tostring(lua_State *L)
+{
+    dfle_lua_model *u = luaL_checkudata(L, 1, DFLE_LUA_MODEL);
+    dfle_model *m = u->m;
+    char buf[200];
+    if (m == NULL) {
+        lua_pushliteral(L, "dfle.model (closed)");
+        return 1;
+    }
+    snprintf(buf, sizeof buf, "dfle.model(n = %zu, U = %g m/yr, t = %g yr, fluvial = %s, router = %s)",
+             dfle_model_size(m), dfle_model_U(m), dfle_model_time(m),
+             dfle_model_fluvial(m) ? dfle_fluvial_name(dfle_model_fluvial(m)) : "off",
+             dfle_model_router(m) ? dfle_router_name(dfle_model_router(m)) : "off");
+    lua_pushstring(L, buf);
+    return 1;
+}
+
+static int l_model_gc(lua_State *L)
+{
+    dfle_lua_model *u = luaL_checkudata(L, 1, DFLE_LUA_MODEL);
+    dfle_model_free(u->m);
+    u->m = NULL;
+    return 0;
+}
+
+void dfle_lua_open_model(lua_State *L)
+{
+    static const luaL_Reg methods[] = {
+        {"init_fluvial_steady", l_model_init_fluvial_steady},
+        {"set_z", l_model_set_z},
+        {"set_U", l_model_set_U},
+        {"run_to_steady", l_model_run_to_steady},
+        {"run", l_model_run},
+        {"get", l_model_get},
+        {"fields", l_model_fields},
+        {"write_csv", l_model_write_csv},
+        {NULL, NULL}};
+    static const luaL_Reg meta[] = {
+        {"__gc", l_model_gc}, {"__close", l_model_gc}, {"__tostring", l_model_tostring},
+        {NULL, NULL}};
+    dfle_lua_register_type(L, DFLE_LUA_MODEL, methods, meta, l_model_property);
+    lua_pushcfunction(L, l_model_new);
+    lua_setfield(L, -2, "model");
+}

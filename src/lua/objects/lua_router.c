@@ -1,0 +1,279 @@
+/*
+ * lua_router.c - dfle.router.empirical{...}, dfle.router.process{...} and
+ * dfle.router.define{...} (lua_router_define.c): debris-flow routers.
+ *
+ * A router object from Lua is just the C router handle; the model takes
+ * it through the ops table, whatever its kind.  rt:params() returns the
+ * parameters so scripts can record what they ran.
+ */
+#include "lua/core/dfle_lua.h"
+
+#include <stdio.h>
+#include <string.h>
+
+#include "dfle/router_empirical.h"
+#include "dfle/router_process.h"
+
+static int l_router_empirical(lua_State *L)
+{
+    dfle_empirical_opts o;
+    dfle_lua_router *u;
+    dfle_error err;
+    const dfle_lua_param params[] = {
+        {"M0", &o.M0}, {"gamma", &o.gamma}, {"mu", &o.mu},       {"tau_y", &o.tau_y},
+        {"c1", &o.c1}, {"c2", &o.c2},       {"rho_b", &o.rho_b}, {"g", &o.g},
+    };
+
+    dfle_empirical_opts_default(&o);
+    dfle_lua_read_params(L, 1, "router.empirical", params, sizeof params / sizeof params[0],
+                         NULL);
+    u = dfle_lua_newobject(L, sizeof *u, DFLE_LUA_ROUTER, 0);
+    if (dfle_router_new_empirical(&o, &u->rt, &err) != DFLE_OK)
+        return dfle_lua_raise(L, &err);
+    return 1;
+}
+
+static void push_empirical_params(lua_State *L, const dfle_empirical_opts *o)
+{
+    lua_createtable(L, 0, 8);
+    lua_pushnumber(L, o->M0), lua_setfield(L, -2, "M0");
+    lua_pushnumber(L, o->gamma), lua_setfield(L, -2, "gamma");
+    lua_pushnumber(L, o->mu), lua_setfield(L, -2, "mu");
+    lua_pushnumber(L, o->tau_y), lua_setfield(L, -2, "tau_y");
+    lua_pushnumber(L, o->c1), lua_setfield(L, -2, "c1");
+    lua_pushnumber(L, o->c2), lua_setfield(L, -2, "c2");
+    lua_pushnumber(L, o->rho_b), lua_setfield(L, -2, "rho_b");
+    lua_pushnumber(L, o->g), lua_setfield(L, -2, "g");
+}
+
+static int l_router_process(lua_State *L)
+{
+    dfle_process_opts o;
+    dfle_lua_router *u;
+    dfle_error err;
+    double n_ghost, frequency_scaling = 0;
+    static const char *const other[] = {"frequency_scaling", NULL};
+    const dfle_lua_param params[] = {
+        {"M0", &o.M0},           {"eta", &o.flow.eta},         {"mu2", &o.flow.mu_2},
+        {"mu_s", &o.flow.mu_s},  {"I0", &o.flow.I0},           {"D", &o.flow.D},
+        {"D_eff", &o.flow.D_eff}, {"lambda0", &o.flow.lambda0}, {"v_f", &o.flow.v_f},
+        {"rho_b", &o.flow.rho},  {"rho_s", &o.flow.rho_s},     {"g", &o.flow.g},
+        {"cfl", &o.flow.cfl},    {"h_dry", &o.flow.h_dry},     {"n_ghost", &n_ghost},
+        {"reroute_dS", &o.reroute_dS}, {"q_erode", &o.q_erode}, {"q_rest", &o.q_rest},
+        {"volume_tol", &o.volume_tol}, {"t_max", &o.t_max},    {"gamma", &o.gamma},
+    };
+
+    dfle_process_opts_default(&o);
+    n_ghost = o.n_ghost;
+    dfle_lua_read_params(L, 1, "router.process", params, sizeof params / sizeof params[0], other);
+    o.n_ghost = (int)dfle_lua_check_whole(L, n_ghost, "router.process", "n_ghost", 1, 10000);
+    if (lua_istable(L, 1) && lua_getfield(L, 1, "frequency_scaling") != LUA_TNIL) {
+        if (!lua_isboolean(L, -1))
+            luaL_error(L, "dfle.router.process: parameter 'frequency_scaling' must be a boolean, "
+                          "got %s", dfle_lua_typename(L, -1));
+        frequency_scaling = lua_toboolean(L, -1);
+    }
+    o.frequency_scaling = frequency_scaling != 0;
+    u = dfle_lua_newobject(L, sizeof *u, DFLE_LUA_ROUTER, 0);
+    if (dfle_router_new_process(&o, &u->rt, &err) != DFLE_OK)
+        return dfle_lua_raise(L, &err);
+    return 1;
+}
+
+static void push_process_params(lua_State *L, const dfle_process_opts *o)
+{
+    const struct { const char *k; double v; } f[] = {
+        {"M0", o->M0}, {"eta", o->flow.eta}, {"mu2", o->flow.mu_2}, {"mu_s", o->flow.mu_s},
+        {"I0", o->flow.I0}, {"D", o->flow.D}, {"D_eff", o->flow.D_eff},
+        {"lambda0", o->flow.lambda0}, {"v_f", o->flow.v_f}, {"rho_b", o->flow.rho},
+        {"rho_s", o->flow.rho_s}, {"g", o->flow.g}, {"cfl", o->flow.cfl},
+        {"h_dry", o->flow.h_dry}, {"n_ghost", o->n_ghost}, {"reroute_dS", o->reroute_dS},
+        {"q_erode", o->q_erode}, {"q_rest", o->q_rest}, {"volume_tol", o->volume_tol},
+        {"t_max", o->t_max}, {"gamma", o->gamma},
+    };
+    lua_createtable(L, 0, (int)(sizeof f / sizeof f[0]) + 1);
+    for (size_t i = 0; i < sizeof f / sizeof f[0]; i++) {
+        lua_pushnumber(L, f[i].v);
+        lua_setfield(L, -2, f[i].k);
+    }
+    lua_pushboolean(L, o->frequency_scaling);
+    lua_setfield(L, -2, "frequency_scaling");
+}
+
+/* Push the parameters of any router kind as a table (the router object
+ * is at index 1). */
+static void push_params(lua_State *L, dfle_router *rt)
+{
+    const dfle_empirical_opts *eo = dfle_router_empirical_opts(rt);
+    const dfle_process_opts *po = dfle_router_process_opts(rt);
+    if (eo != NULL) {
+        push_empirical_params(L, eo);
+    } else if (po != NULL) {
+        push_process_params(L, po);
+    } else {
+        lua_newtable(L);
+        /* A Lua-defined router keeps its params as user value 2: copy. */
+        if (lua_getiuservalue(L, 1, 2) == LUA_TTABLE) {
+            lua_pushnil(L);
+            while (lua_next(L, -2) != 0) {
+                lua_pushvalue(L, -2);
+                lua_insert(L, -2);
+                lua_settable(L, -5);
+            }
+        }
+        lua_pop(L, 1);
+    }
+}
+
+static void set_array(lua_State *L, const char *key, const double *v, size_t n)
+{
+    dfle_lua_push_array(L, v, n);
+    lua_setfield(L, -2, key);
+}
+
+/* rt:route(m [, {snapshots = {t1, t2, ...}}]): route one flow over model
+ * m's current profile with m's erosion law, and return what it did. */
+static int l_router_route(lua_State *L)
+{
+    dfle_router *rt = dfle_lua_check_router(L, 1);
+    dfle_model *m = dfle_lua_check_model(L, 2);
+    static const char *const keys[] = {"snapshots", NULL};
+    const dfle_channel *ch = dfle_model_channel(m);
+    const size_t n = dfle_model_size(m);
+    const dfle_process_report *rep;
+    const double *S;
+    double *block, *times = NULL;
+    size_t ntimes = 0;
+    dfle_flow flow;
+    dfle_error err;
+    int st;
+
+    lua_settop(L, 3);
+    dfle_lua_read_params(L, 3, "router:route", NULL, 0, keys);
+    if (lua_istable(L, 3) && lua_getfield(L, 3, "snapshots") != LUA_TNIL) {
+        times = dfle_lua_check_array(L, -1, "router:route: snapshots", &ntimes);
+        if (dfle_router_process_opts(rt) == NULL)
+            luaL_error(L, "dfle.router:route: snapshots need a process-based router");
+    }
+    if (dfle_model_law(m) == NULL)
+        luaL_error(L, "dfle.router:route: the model has no erosion law (router = false)");
+    if ((S = dfle_model_field(m, DFLE_FIELD_S, &err)) == NULL)
+        return dfle_lua_raise(L, &err);
+    /* The flow's arrays live in a userdata: nothing to free if we raise. */
+    block = lua_newuserdatauv(L, 8 * n * sizeof *block, 0);
+    memset(block, 0, 8 * n * sizeof *block);
+    memset(&flow, 0, sizeof flow);
+    flow.n = n;
+    flow.M = block, flow.Q = block + n, flow.h = block + 2 * n, flow.v = block + 3 * n;
+    flow.t_p = block + 4 * n, flow.tau = block + 5 * n, flow.Theta = block + 6 * n;
+    flow.integral = block + 7 * n;
+    flow.integrand = dfle_law_get_ops(dfle_model_law(m))->integrand;
+    flow.integrand_state = dfle_law_state(dfle_model_law(m));
+    if (times != NULL && dfle_router_process_set_snapshots(rt, ntimes, times, &err) != DFLE_OK)
+        return dfle_lua_raise(L, &err);
+    st = dfle_router_route(rt, ch, S, &flow, &err);
+    rep = dfle_router_process_report(rt);
+    lua_createtable(L, 0, 24);
+    set_array(L, "h", flow.h, n);
+    set_array(L, "v", flow.v, n);
+    set_array(L, "Q", flow.Q, n);
+    set_array(L, "M", flow.M, n);
+    set_array(L, "t_p", flow.t_p, n);
+    set_array(L, "tau", flow.tau, n);
+    set_array(L, "Theta", flow.Theta, n);
+    lua_pushinteger(L, (lua_Integer)flow.runout_end), lua_setfield(L, -2, "runout_end");
+    if (st == DFLE_OK && rep != NULL) {
+        lua_getfield(L, -1, "h"), lua_setfield(L, -2, "h_peak");
+        lua_getfield(L, -1, "v"), lua_setfield(L, -2, "v_peak");
+        lua_getfield(L, -1, "t_p"), lua_setfield(L, -2, "passage");
+        set_array(L, "sum", flow.integral, n);
+        set_array(L, "arrival", rep->arrival, n);
+        lua_pushnumber(L, rep->volume_in), lua_setfield(L, -2, "volume_in");
+        lua_pushnumber(L, rep->volume_out), lua_setfield(L, -2, "volume_out");
+        lua_pushnumber(L, rep->volume_left), lua_setfield(L, -2, "volume_left");
+        lua_pushnumber(L, rep->duration), lua_setfield(L, -2, "duration");
+        lua_pushinteger(L, (lua_Integer)rep->steps), lua_setfield(L, -2, "steps");
+        lua_pushstring(L, dfle_process_end_name(rep->end)), lua_setfield(L, -2, "ended");
+        lua_createtable(L, (int)rep->n_snapshots, 0);
+        for (size_t j = 0; j < rep->n_snapshots; j++) {
+            lua_createtable(L, 0, 2);
+            lua_pushnumber(L, rep->snapshot_t[j]), lua_setfield(L, -2, "t");
+            set_array(L, "h", rep->snapshot_h + j * n, n);
+            lua_rawseti(L, -2, (lua_Integer)j + 1);
+        }
+        lua_setfield(L, -2, "snapshots");
+    }
+    if (times != NULL) /* the request was for this routing only */
+        dfle_router_process_set_snapshots(rt, 0, NULL, NULL);
+    /* The router now remembers this routing, not the model's last one. */
+    if (rt == dfle_model_router(m))
+        dfle_model_invalidate_flow(m);
+    if (st != DFLE_OK)
+        return dfle_lua_raise(L, &err);
+    return 1;
+}
+
+static int l_router_params(lua_State *L)
+{
+    push_params(L, dfle_lua_check_router(L, 1));
+    return 1;
+}
+
+static int l_router_property(lua_State *L)
+{
+    dfle_router *rt = dfle_lua_check_router(L, 1);
+    const char *key = lua_tostring(L, 2);
+
+    if (strcmp(key, "name") == 0) {
+        lua_pushstring(L, dfle_router_name(rt));
+        return 1;
+    }
+    push_params(L, rt);
+    lua_getfield(L, -1, key);
+    return 1;
+}
+
+static int l_router_tostring(lua_State *L)
+{
+    dfle_router *rt = dfle_lua_check_router(L, 1);
+    const dfle_empirical_opts *o = dfle_router_empirical_opts(rt);
+    const dfle_process_opts *po = dfle_router_process_opts(rt);
+    char buf[200];
+    if (o != NULL)
+        snprintf(buf, sizeof buf,
+                 "dfle.router.empirical(M0 = %g, gamma = %g, mu = %g Pa s, tau_y = %g Pa)",
+                 o->M0, o->gamma, o->mu, o->tau_y);
+    else if (po != NULL)
+        snprintf(buf, sizeof buf,
+                 "dfle.router.process(M0 = %g m^3, eta = %g Pa s, mu2 = %g, D = %g m^2/s)",
+                 po->M0, po->flow.eta, po->flow.mu_2, po->flow.D);
+    else
+        snprintf(buf, sizeof buf, "dfle.router.%s", dfle_router_name(rt));
+    lua_pushstring(L, buf);
+    return 1;
+}
+
+static int l_router_gc(lua_State *L)
+{
+    dfle_lua_router *u = luaL_checkudata(L, 1, DFLE_LUA_ROUTER);
+    dfle_router_free(u->rt);
+    u->rt = NULL;
+    return 0;
+}
+
+void dfle_lua_open_router(lua_State *L)
+{
+    static const luaL_Reg methods[] = {
+        {"params", l_router_params}, {"route", l_router_route}, {NULL, NULL}};
+    static const luaL_Reg meta[] = {
+        {"__gc", l_router_gc},
+        {"__tostring", l_router_tostring}, {NULL, NULL}};
+    dfle_lua_register_type(L, DFLE_LUA_ROUTER, methods, meta, l_router_property);
+    lua_newtable(L);
+    lua_pushcfunction(L, l_router_empirical);
+    lua_setfield(L, -2, "empirical");
+    lua_pushcfunction(L, l_router_process);
+    lua_setfield(L, -2, "process");
+    dfle_lua_open_router_define(L); /* dfle.router.define (lua_router_define.c) */
+    lua_setfield(L, -2, "router");
+}

@@ -1,0 +1,156 @@
+/*
+ * lua_trace_bytecode.c - the one thing a trace cannot see for itself.
+ *
+ * In Lua 5.4 `x == 0` with x a userdata is false without consulting any
+ * metamethod, so a traced function that tests a flow field for equality
+ * would silently take one branch for every node.  An assignment to an
+ * upvalue (a counter) is a side effect the trace cannot intercept either.
+ * Both show in the bytecode: the function is dumped (lua_dump) and its
+ * instructions, and those of its nested functions, are scanned for EQ,
+ * EQK, EQI and SETUPVAL.  The layout read is ldump.c's for Lua 5.4; a
+ * chunk with another header is reported as unreadable, and the law then
+ * runs as Lua.
+ */
+#include "lua/trace/lua_trace_internal.h"
+
+#include <lauxlib.h>
+#include <stdint.h>
+#include <string.h>
+
+
+/* Lua 5.4 opcodes the scan refuses (lopcodes.h order, stable in 5.4). */
+enum { OP_SETUPVAL = 10, OP_EQ = 57, OP_EQK = 60, OP_EQI = 61 };
+
+typedef struct { const unsigned char *p, *end; int bad; } reader;
+
+static size_t rd_size(reader *r)
+{
+    size_t x = 0;
+    for (int i = 0; i < 10; i++) {
+        unsigned b;
+        if (r->p >= r->end)
+            break;
+        b = *r->p++;
+        x = (x << 7) | (b & 0x7f);
+        if (b & 0x80)
+            return x;
+    }
+    r->bad = 1;
+    return 0;
+}
+
+static void rd_skip(reader *r, size_t n)
+{
+    if ((size_t)(r->end - r->p) < n) {
+        r->bad = 1;
+        r->p = r->end;
+    } else {
+        r->p += n;
+    }
+}
+
+static void rd_string(reader *r)
+{
+    size_t n = rd_size(r);
+    if (n > 0)
+        rd_skip(r, n - 1);
+}
+
+/* One function of a binary chunk (ldump.c's layout) and its nested ones. */
+static unsigned scan_function(reader *r, int depth)
+{
+    unsigned found = 0;
+    size_t n;
+    if (depth > 64)
+        return FOUND_BAD;
+    rd_string(r); /* source */
+    rd_size(r);   /* linedefined */
+    rd_size(r);   /* lastlinedefined */
+    rd_skip(r, 3); /* numparams, is_vararg, maxstacksize */
+    n = rd_size(r);
+    for (size_t i = 0; i < n && !r->bad; i++) {
+        uint32_t ins;
+        if (r->end - r->p < 4) {
+            r->bad = 1;
+            break;
+        }
+        memcpy(&ins, r->p, 4);
+        r->p += 4;
+        switch (ins & 0x7f) {
+        case OP_EQ: case OP_EQK: case OP_EQI: found |= FOUND_EQ; break;
+        case OP_SETUPVAL: found |= FOUND_SETUPVAL; break;
+        default: break;
+        }
+    }
+    n = rd_size(r); /* constants */
+    for (size_t i = 0; i < n && !r->bad; i++) {
+        unsigned tag = r->p < r->end ? *r->p++ : (r->bad = 1, 0u);
+        if (tag == 0x03 || tag == 0x13)
+            rd_skip(r, 8);
+        else if (tag == 0x04 || tag == 0x14)
+            rd_string(r);
+        else if (tag != 0x00 && tag != 0x01 && tag != 0x11)
+            r->bad = 1;
+    }
+    rd_skip(r, 3 * rd_size(r)); /* upvalue descriptions */
+    n = rd_size(r);             /* nested functions */
+    for (size_t i = 0; i < n && !r->bad; i++)
+        found |= scan_function(r, depth + 1);
+    rd_skip(r, rd_size(r)); /* line info */
+    n = rd_size(r);         /* absolute line info */
+    for (size_t i = 0; i < n && !r->bad; i++)
+        rd_size(r), rd_size(r);
+    n = rd_size(r); /* local variables */
+    for (size_t i = 0; i < n && !r->bad; i++)
+        rd_string(r), rd_size(r), rd_size(r);
+    n = rd_size(r); /* upvalue names */
+    for (size_t i = 0; i < n && !r->bad; i++)
+        rd_string(r);
+    return r->bad ? found | FOUND_BAD : found;
+}
+
+typedef struct { luaL_Buffer b; int init; } dump_state;
+
+static int dump_writer(lua_State *L, const void *p, size_t sz, void *ud)
+{
+    dump_state *d = ud;
+    if (!d->init) { /* after lua_dump has the function: the buffer may push */
+        d->init = 1;
+        luaL_buffinit(L, &d->b);
+    }
+    luaL_addlstring(&d->b, p, sz);
+    return 0;
+}
+
+unsigned dfle_trace_scan(lua_State *L, int fidx)
+{
+    static const unsigned char header[] = {0x1b, 'L', 'u', 'a', 0x54, 0x00, 0x19, 0x93,
+                                           '\r', '\n', 0x1a, '\n', 4};
+    dump_state d;
+    reader r;
+    size_t len;
+    unsigned found;
+
+    d.init = 0;
+    lua_pushvalue(L, fidx);
+    lua_dump(L, dump_writer, &d, 0);
+    if (!d.init) {
+        lua_pop(L, 1);
+        return FOUND_BAD;
+    }
+    luaL_pushresult(&d.b);
+    r.p = (const unsigned char *)lua_tolstring(L, -1, &len);
+    r.end = r.p + len;
+    r.bad = 0;
+    if (len < sizeof header + 2 || memcmp(r.p, header, sizeof header) != 0) {
+        lua_pop(L, 2);
+        return FOUND_BAD;
+    }
+    r.p += sizeof header;
+    rd_skip(&r, 2);                              /* sizes of lua_Integer, lua_Number */
+    rd_skip(&r, (size_t)r.p[-2] + r.p[-1] + 1); /* LUAC_INT, LUAC_NUM, sizeupvalues */
+    found = scan_function(&r, 0);
+    lua_pop(L, 2);
+    return found;
+}
+
