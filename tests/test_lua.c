@@ -518,7 +518,7 @@ static void errors_during_runs_do_not_leak(void **state)
               "  assert(not pcall(m.run_to_steady, m, { max_time = 1, bogus = true }))\n"
               "  assert(not pcall(m.run, m, { years = 10, max_steps = 0 }))\n"
               "end");
-    /* A numeric blow-up inside dfle_model_run: the error is raised after
+    /* A numeric blow-up inside dfle_solver_run: the error is raised after
      * the run has started stepping. */
     run_ok(L, "bad = dfle.model{ channel = dfle.channel{ A_max = 2e5 }, router = false,\n"
               "  fluvial = dfle.fluvial.stream_power{ K = 1e-3, m = 0, n = 200 } }");

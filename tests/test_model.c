@@ -8,6 +8,7 @@
 #include "dfle/analytical.h"
 #include "dfle/law_power.h"
 #include "dfle/model.h"
+#include "dfle/solver.h"
 #include "dfle/router_empirical.h"
 
 /* A model on the default channel with whichever parts a test asks for. */
@@ -75,7 +76,7 @@ static int rig_run(rig *r, double tol, double max_time, dfle_run_result *res, df
         ro.tol = tol;
     if (max_time > 0)
         ro.max_time = max_time;
-    return dfle_model_run(r->m, &ro, res, err);
+    return dfle_solver_run(r->m, &ro, res, err);
 }
 
 static void fluvial_only_converges_to_eq26(void **state)
@@ -190,9 +191,11 @@ static int mock_route(void *s, const dfle_channel *ch, const double *S, dfle_flo
     return 0;
 }
 
-static int mock_never_again(void *s, size_t n, const double *S)
+static int mock_never_again(void *s, size_t n, const double *S_routed, const double *S,
+                            int *reroute, dfle_error *err)
 {
-    (void)s, (void)n, (void)S;
+    (void)s, (void)n, (void)S_routed, (void)S, (void)err;
+    *reroute = 0;
     return 0;
 }
 
@@ -290,7 +293,7 @@ static void limits_and_cancellation(void **state)
     assert_ok(dfle_model_set_U(r.m, 5e-4, &err), &err);
     dfle_run_opts_default(&ro);
     ro.max_steps = 7;
-    assert_ok(dfle_model_run(r.m, &ro, &res, &err), &err);
+    assert_ok(dfle_solver_run(r.m, &ro, &res, &err), &err);
     assert_int_equal(res.reason, DFLE_STOP_STEPS);
     assert_int_equal(res.steps, 7);
     assert_string_equal(dfle_stop_reason_name(res.reason), "steps");
@@ -298,12 +301,12 @@ static void limits_and_cancellation(void **state)
     dfle_run_opts_default(&ro);
     ro.progress = cancel_at_once;
     ro.progress_ud = &calls;
-    assert_int_equal(dfle_model_run(r.m, &ro, &res, &err), DFLE_ECANCELED);
+    assert_int_equal(dfle_solver_run(r.m, &ro, &res, &err), DFLE_ECANCELED);
     assert_int_equal(calls, 1);
 
     ro.progress = NULL;
     ro.max_time = -1;
-    assert_int_equal(dfle_model_run(r.m, &ro, &res, &err), DFLE_EINVAL);
+    assert_int_equal(dfle_solver_run(r.m, &ro, &res, &err), DFLE_EINVAL);
     assert_msg_contains(err.msg, "max_time");
     rig_free(&r);
 }

@@ -10,6 +10,7 @@
 #include "dfle/analytical.h"
 #include "dfle/law_power.h"
 #include "dfle/model.h"
+#include "dfle/solver.h"
 #include "dfle/router_empirical.h"
 #include "dfle/router_process.h"
 
@@ -64,7 +65,7 @@ static double *steady_slopes(const parts *p, double U, int method, dfle_run_resu
     assert_ok(dfle_model_new(&mo, &m, &err), &err);
     dfle_run_opts_default(&ro);
     ro.method = method;
-    assert_ok(dfle_model_run(m, &ro, &res, &err), &err);
+    assert_ok(dfle_solver_run(m, &ro, &res, &err), &err);
     if (!res.converged || res.fallback)
         print_message("method %s: reason %s, ratio %g, note %s\n", dfle_method_name(method),
                       dfle_stop_reason_name(res.reason), res.rate_ratio, res.note);
@@ -244,7 +245,7 @@ static void uplift_step_transient(void **state)
         assert_ok(dfle_model_new(&mo, &m, &err), &err);
         dfle_run_opts_default(&ro);
         ro.method = DFLE_METHOD_DIRECT;
-        assert_ok(dfle_model_run(m, &ro, &res, &err), &err);
+        assert_ok(dfle_solver_run(m, &ro, &res, &err), &err);
         memcpy(z0, dfle_model_field(m, DFLE_FIELD_Z, &err), n * sizeof *z0);
         assert_ok(dfle_model_set_U(m, 1e-3, &err), &err);
         zr[k] = malloc(3 * n * sizeof *zr[k]);
@@ -255,7 +256,7 @@ static void uplift_step_transient(void **state)
         ro.n_record = 3;
         ro.record_times = times;
         ro.record_z = zr[k];
-        assert_ok(dfle_model_run(m, &ro, &res, &err), &err);
+        assert_ok(dfle_solver_run(m, &ro, &res, &err), &err);
         assert_int_equal(res.n_recorded, 3);
         dfle_model_free(m);
     }
@@ -303,7 +304,7 @@ static void direct_falls_back_and_says_why(void **state)
     dfle_run_opts_default(&ro);
     ro.method = DFLE_METHOD_DIRECT;
     ro.max_time = 1e4;
-    assert_ok(dfle_model_run(m, &ro, &res, &err), &err);
+    assert_ok(dfle_solver_run(m, &ro, &res, &err), &err);
     assert_true(res.fallback);
     assert_int_equal(res.method, DFLE_METHOD_IMPLICIT);
     assert_false(res.converged);
@@ -337,23 +338,23 @@ static void records_land_on_their_times(void **state)
     ro.tol = 0;
     ro.max_time = 3000;
     ro.n_record = 2, ro.record_times = times, ro.record_z = rec;
-    assert_ok(dfle_model_run(a, &ro, &res, &err), &err);
+    assert_ok(dfle_solver_run(a, &ro, &res, &err), &err);
     assert_int_equal(res.n_recorded, 2);
     dfle_run_opts_default(&ro);
     ro.tol = 0;
     ro.max_time = 1234.5;
-    assert_ok(dfle_model_run(b, &ro, &res, &err), &err);
+    assert_ok(dfle_solver_run(b, &ro, &res, &err), &err);
     const double *z = dfle_model_field(b, DFLE_FIELD_Z, &err);
     for (size_t i = 0; i < 202; i++)
         assert_close(rec[202 + i], z[i], 1e-9, 1e-9);
     /* Record times must increase within the run. */
     const double bad[] = {10.0, 5.0};
     ro.n_record = 2, ro.record_times = bad, ro.record_z = rec;
-    assert_int_equal(dfle_model_run(b, &ro, &res, &err), DFLE_EINVAL);
+    assert_int_equal(dfle_solver_run(b, &ro, &res, &err), DFLE_EINVAL);
     assert_msg_contains(err.msg, "record times");
     ro.n_record = 0;
     ro.method = DFLE_METHOD_DIRECT;
-    assert_int_equal(dfle_model_run(b, &ro, &res, &err), DFLE_EINVAL);
+    assert_int_equal(dfle_solver_run(b, &ro, &res, &err), DFLE_EINVAL);
     assert_msg_contains(err.msg, "steady states only");
     dfle_model_free(a);
     dfle_model_free(b);

@@ -39,13 +39,26 @@ typedef struct dfle_flow {
     /* Time-resolved routers only (time_resolved = 1). */
     int time_resolved;
     double *integral;  /* Eq. (11): sum over flow steps of g Phi dt        */
-    double (*integrand)(void *law_state, double h, double v, double lambda);
+    /* The law's integrand g (law.h): 0 with *g set, or a negative
+     * dfle_status with err set (the routing then fails with it). */
+    int (*integrand)(void *law_state, double h, double v, double lambda, double *g,
+                     dfle_error *err);
     void *integrand_state; /* first argument of integrand               */
 } dfle_flow;
+
+/* Doubles a flow's arrays take per node (M, Q, h, v, t_p, tau, Theta,
+ * integral): the size of the block dfle_flow_bind carves. */
+#define DFLE_FLOW_ARRAYS 8
 
 /* Allocate zeroed arrays for n nodes (integral included); runout_end
  * starts at 0, time_resolved at 0, integrand NULL. */
 int dfle_flow_init(dfle_flow *flow, size_t n, dfle_error *err);
+
+/* Point the arrays of `flow` into `block` (DFLE_FLOW_ARRAYS * n
+ * doubles, owned by the caller: a stack buffer, a Lua userdata) for n
+ * nodes; everything else is zeroed.  dfle_flow_release must not be
+ * called on such a flow. */
+void dfle_flow_bind(dfle_flow *flow, double *block, size_t n);
 
 /* Release the arrays (flow may be zeroed or NULL); idempotent. */
 void dfle_flow_release(dfle_flow *flow);

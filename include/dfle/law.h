@@ -15,7 +15,8 @@
  * router sums the law's integrand over the flow (flow.h) and
  * F = sum h^beta Phi dt.  Laws are `static const dfle_law_ops` tables
  * with a private state, exactly like routers; a law written in Lua is
- * one more table.  Ops return 0 or a negative dfle_status with `err` set.
+ * one more table.  Every op that can fail returns 0 or a negative
+ * dfle_status with `err` set.
  */
 #ifndef DFLE_LAW_H
 #define DFLE_LAW_H
@@ -23,6 +24,7 @@
 #include <stddef.h>
 #include "dfle/error.h"
 #include "dfle/flow.h"
+#include "dfle/param.h"
 
 #ifdef __cplusplus
 extern "C" {
@@ -48,8 +50,13 @@ typedef struct dfle_law_ops {
     /* Optional; needed only with time-resolved routers (the process-based
      * one).  The integrand g of Eq. (11) at one node and flow step: the
      * router sums g Phi dt into flow->integral, which flow_factor then
-     * reads.  For the power law g = h^beta.  h [m], v [m/s], lambda [-]. */
-    double (*integrand)(void *state, double h, double v, double lambda);
+     * reads.  For the power law g = h^beta.  h [m], v [m/s], lambda [-].
+     * Sets *g and returns 0, or fails like the other ops. */
+    int (*integrand)(void *state, double h, double v, double lambda, double *g,
+                     dfle_error *err);
+    /* Optional.  The parameters (param.h): write up to cap of them to
+     * out and return how many there are. */
+    size_t (*params)(const void *state, dfle_param *out, size_t cap);
     /* Optional.  Release the state. */
     void (*destroy)(void *state);
 } dfle_law_ops;
@@ -65,6 +72,11 @@ int dfle_law_flow_factor(dfle_law *law, const dfle_law_ctx *ctx, double *F,
                          dfle_error *err);
 int dfle_law_rate(dfle_law *law, const dfle_law_ctx *ctx, const double *F,
                   double *E, dfle_error *err);
+
+/* The parameters (param.h), up to cap of them; returns how many there
+ * are, or (size_t)-1 when the law has no params op (a law written in Lua
+ * keeps its own). */
+size_t dfle_law_params(const dfle_law *law, dfle_param *out, size_t cap);
 
 const char *dfle_law_name(const dfle_law *law);
 const dfle_law_ops *dfle_law_get_ops(const dfle_law *law);

@@ -1,18 +1,21 @@
 /*
  * model.h - the channel-profile model, Eq. (3):  dz/dt = U - E_f - E_df.
  *
- * The model owns the elevations z [m] and the diagnostic fields that go
- * with them; it borrows the channel, fluvial law, router and erosion law,
- * which must outlive it.  Time is in years, rates in m/yr.
+ * The model holds the state (elevations z [m], model time [yr], the
+ * routed debris flow) and evaluates the rates; it does not step.  Time
+ * stepping and steady-state solving are the solvers' (solver.h), which
+ * sit above the model and use only what this header declares, so a new
+ * solver needs nothing private.  It borrows the channel, fluvial law,
+ * router and erosion law, which must outlive it.  Rates are in m/yr.
  *
- * Stepping is explicit forward Euler, as in the paper.  The step is set
- * by a CFL condition on the upwind slope: erosion that depends on the
- * downstream slope moves a slope perturbation upstream at the speed
- * c_i = |dE_i/dS_i| [m/yr], so dt = cfl * dx / max_i c_i, capped at
- * dt_max and at the time left in the run.
- *
- * Steady state (explicit and configurable): the run stops when
- *   max over nodes 0..n-2 of |dz/dt| <= tol * U.
+ * The model is solved on a receiver tree (Braun and Willett 2013): each
+ * node drains to one receiver over a flow length L [m], base-level nodes
+ * (the outlet) are their own receivers and are held fixed, and the stack
+ * lists every node after its receiver.  The slope of node i is
+ *   S_i = (z_i - z_receiver(i)) / L_i
+ * (the paper's downstream difference; a base-level node repeats the slope
+ * of its largest donor).  A 1D channel is the tree in which node i drains
+ * to i + 1 over dx; nothing in the model or the solvers assumes i + 1.
  */
 #ifndef DFLE_MODEL_H
 #define DFLE_MODEL_H
@@ -89,108 +92,6 @@ void dfle_model_invalidate_flow(dfle_model *m);
 int dfle_model_set_z(dfle_model *m, const double *z, size_t n,
                      dfle_error *err);
 
-/* Progress hook: called every few hundred steps with the state of the
- * run; return nonzero to stop it (the run then fails with
- * DFLE_ECANCELED). */
-typedef struct dfle_run_status {
-    double time;       /* years simulated in this run          */
-    double max_time;   /* limit of this run [yr]               */
-    size_t steps;      /* steps taken in this run              */
-    double dt;         /* last time step [yr]                  */
-    double rate_ratio; /* max |dz/dt| / U                      */
-    double tol;        /* steady-state target for rate_ratio   */
-    double fraction;   /* rough completion estimate in [0, 1]  */
-} dfle_run_status;
-typedef int (*dfle_progress_fn)(void *ud, const dfle_run_status *st);
-
-/* How to reach the answer (all reach the same steady state):
- *  - EXPLICIT: forward Euler with the CFL step, as in the paper (the
- *    reference);
- *  - IMPLICIT: backward Euler swept from the outlet up, one scalar
- *    Newton solve per node; unconditionally stable.  For steady states
- *    the step grows geometrically; for transients (tol = 0) it is
- *    adapted to the error estimate `rtol` by step doubling;
- *  - DIRECT: steady state only.  Empirical router: solve U = E_f + E_df
- *    node by node from the head down, stopping the flow where it would
- *    stop.  Process-based router: alternate routing and solving until no
- *    slope changes by more than direct_tol (relative).  If no consistent
- *    solution is found, the run falls back to IMPLICIT stepping and says
- *    so in the result;
- *  - AUTO: DIRECT for steady states, EXPLICIT otherwise. */
-enum dfle_method {
-    DFLE_METHOD_EXPLICIT = 0,
-    DFLE_METHOD_IMPLICIT = 1,
-    DFLE_METHOD_DIRECT = 2,
-    DFLE_METHOD_AUTO = 3
-};
-const char *dfle_method_name(int method); /* "explicit", ... */
-int dfle_method_lookup(const char *name); /* or -1 */
-
-typedef struct dfle_run_opts {
-    double max_time;  /* simulated years allowed for this run, > 0        */
-    double tol;       /* steady when max|dz/dt| <= tol*U; 0 = never stop  */
-    size_t max_steps; /* hard cap on steps (guards against a hang)        */
-    int method;       /* enum dfle_method                    (EXPLICIT)   */
-    double rtol;      /* IMPLICIT transients: local error per step at
-                       * most rtol U dt [m], so a run's error stays
-                       * below rtol times its uplift        (1e-3)      */
-    double direct_tol; /* DIRECT, routed rarely: stop when no slope
-                        * changes by more than this, relative (2e-3).
-                        * A routed flow's erosion sum answers slope
-                        * changes in small steps (cells crossing the Phi
-                        * threshold), so rounds settle to ~1e-3, no less */
-    /* Optional: record z at these times [yr since the start of the run,
-     * increasing, <= max_time] into record_z (n_record x n values).
-     * The steps land on each time exactly. */
-    size_t n_record;
-    const double *record_times;
-    double *record_z;
-    dfle_progress_fn progress; /* optional */
-    void *progress_ud;
-    /* Optional, time-varying uplift U(t) (doc/laws.md): set *U [m/yr] for
-     * model time t [yr, dfle_model_time] and return 0, or a negative
-     * status with err set (the run stops with it).  Called before every
-     * landscape step, and once before a direct solve; the model's U
-     * becomes the value returned.  The steady-state test compares |dz/dt|
-     * with tol times the current U. */
-    int (*uplift)(void *ud, double t, double *U, dfle_error *err);
-    void *uplift_ud;
-} dfle_run_opts;
-
-/* tol = 1e-3, max_time = 2e7 yr, max_steps = 1e7 (about ten minutes on
- * the default 403-node grid: long enough for any sane run, short enough
- * that a run with a vanishing time step ends with reason "steps"). */
-void dfle_run_opts_default(dfle_run_opts *o);
-
-enum dfle_stop_reason {
-    DFLE_STOP_STEADY = 0, /* the steady-state criterion was met     */
-    DFLE_STOP_TIME = 1,   /* max_time was reached                   */
-    DFLE_STOP_STEPS = 2   /* max_steps was reached                  */
-};
-const char *dfle_stop_reason_name(int reason); /* "steady", "time", "steps" */
-
-typedef struct dfle_run_result {
-    int converged;     /* 1 when reason == DFLE_STOP_STEADY            */
-    int reason;        /* enum dfle_stop_reason                        */
-    double time;       /* years simulated in this run                  */
-    size_t steps;      /* time steps taken                             */
-    size_t routings;   /* debris flows routed                          */
-    double rate_ratio; /* final max |dz/dt| / U                        */
-    double dt_min, dt_max; /* smallest and largest step taken [yr]     */
-    size_t nonpositive_slope_nodes; /* node-steps with S <= 0 (no erosion there) */
-    int method;        /* the method that produced the result        */
-    int fallback;      /* 1: DIRECT found no consistent solution and
-                        * the run continued with IMPLICIT stepping    */
-    size_t iterations; /* DIRECT: routing-and-solving rounds          */
-    size_t n_recorded; /* record times reached                        */
-    char note[160];    /* why a fallback happened, else empty         */
-} dfle_run_result;
-
-/* Step Eq. (3) until steady state, max_time or max_steps.  A NaN or Inf
- * anywhere fails with DFLE_ENUMERIC naming the node, field and time. */
-int dfle_model_run(dfle_model *m, const dfle_run_opts *opts,
-                   dfle_run_result *res, dfle_error *err);
-
 double dfle_model_time(const dfle_model *m); /* total simulated years */
 double dfle_model_U(const dfle_model *m);
 int dfle_model_set_U(dfle_model *m, double U, dfle_error *err);
@@ -198,6 +99,56 @@ const dfle_channel *dfle_model_channel(const dfle_model *m);
 const dfle_fluvial *dfle_model_fluvial(const dfle_model *m);
 dfle_router *dfle_model_router(const dfle_model *m);
 dfle_law *dfle_model_law(const dfle_model *m);
+
+double dfle_model_cfl(const dfle_model *m);    /* explicit Courant number  */
+double dfle_model_dt_max(const dfle_model *m); /* largest time step [yr]   */
+
+/* --- For solvers (solver.h): topology, state, rates. ---------------- */
+
+/* Receiver of every node (a base-level node is its own), flow length to
+ * it [m], and the stack: all n nodes, each after its receiver. */
+const size_t *dfle_model_receivers(const dfle_model *m);
+const double *dfle_model_flow_length(const dfle_model *m);
+const size_t *dfle_model_stack(const dfle_model *m);
+/* 1 if node i is held at base level. */
+int dfle_model_is_base(const dfle_model *m, size_t i);
+
+/* The elevations [m] for a solver to change in place; call
+ * dfle_model_touch afterwards (the fields are then stale). */
+double *dfle_model_z(dfle_model *m);
+void dfle_model_touch(dfle_model *m);
+/* Add dt [yr] to the model time. */
+void dfle_model_advance_time(dfle_model *m, double dt);
+
+/* Bring S, E_f, E_df and dz/dt up to date with z: route the debris flow
+ * if it is stale (a local router every time, another when it asks, from
+ * the slopes of this model's last routing), then check every value a
+ * step produces; a NaN or Inf fails with DFLE_ENUMERIC naming the node,
+ * field and time.  dfle_model_is_evaluated says whether that is needed. */
+int dfle_model_evaluate(dfle_model *m, dfle_error *err);
+int dfle_model_is_evaluated(const dfle_model *m);
+/* From the last evaluation: max over non-base nodes of |dz/dt| / U,
+ * the number of those with S <= 0, and routings since creation. */
+double dfle_model_rate_ratio(const dfle_model *m);
+size_t dfle_model_nonpositive_slopes(const dfle_model *m);
+size_t dfle_model_routings(const dfle_model *m);
+/* 1 if the last routed flow reaches node i (E_df may be nonzero). */
+int dfle_model_flow_reaches(const dfle_model *m, size_t i);
+
+/* Kinematic-wave speed |dE/dS| [m/yr per unit slope] of every node for
+ * the evaluated state (0 on base nodes): exact for the fluvial power
+ * law, a one-sided difference for the debris-flow part (which works for
+ * any router and law without asking them for derivatives).  *c points
+ * at n values owned by the model. */
+int dfle_model_celerity(dfle_model *m, const double **c, dfle_error *err);
+
+/* Erosion E_f + E_df [m/yr] at node i for slope S, the rest of the
+ * profile as it is.  with_df = 0 leaves out debris flows.  For a router
+ * routed every step the flow at the node is re-evaluated for S (its
+ * node_flow op), and *goes_on says whether the flow, arriving, would go
+ * on; for other routers the cached Eq. (11) factor is used. */
+int dfle_model_node_erosion(dfle_model *m, size_t i, double S, int with_df, double *E,
+                            int *goes_on, dfle_error *err);
 
 /* CSV of every field, header row with units. */
 int dfle_model_write_csv(dfle_model *m, const char *path, dfle_error *err);

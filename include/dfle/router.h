@@ -7,8 +7,10 @@
  * only ever calls through the table, so the empirical router, the
  * process-based router and routers written in Lua are interchangeable.
  *
- * Ops return 0 on success and a negative dfle_status on failure, with a
- * message in `err`.
+ * Every op that can fail returns 0 on success and a negative dfle_status
+ * on failure, with a message in `err`.  A router keeps no state that
+ * depends on which model calls it (the model keeps the slopes of its
+ * last routing), so one router object may serve several models.
  */
 #ifndef DFLE_ROUTER_H
 #define DFLE_ROUTER_H
@@ -17,6 +19,7 @@
 #include "dfle/channel.h"
 #include "dfle/error.h"
 #include "dfle/flow.h"
+#include "dfle/param.h"
 
 #ifdef __cplusplus
 extern "C" {
@@ -29,18 +32,24 @@ typedef struct dfle_router_ops {
      * runout_end.  Required. */
     int (*route)(void *state, const dfle_channel *ch, const double *S,
                  dfle_flow *flow, dfle_error *err);
-    /* Optional.  Nonzero when the slopes S have moved far enough from the
-     * last routing that the flow must be routed again.  NULL means the
+    /* Optional.  Set *reroute nonzero when the slopes S have moved far
+     * enough from S_routed, the slopes the caller last routed over, that
+     * the flow must be routed again.  The caller (the model) keeps
+     * S_routed, so one router may serve several models.  NULL means the
      * router is cheap and local and is routed at every landscape step. */
-    int (*needs_reroute)(void *state, size_t n, const double *S);
+    int (*needs_reroute)(void *state, size_t n, const double *S_routed, const double *S,
+                         int *reroute, dfle_error *err);
     /* Optional; only for routers routed every step.  The flow at node i
      * alone for slope S, as if it had arrived there: fill the one-node
-     * view `node` (its arrays point at one value each) and return 1 if it
-     * goes on (e.g. tau >= tau_y), 0 if it stops here (then Theta = 0).
-     * The implicit and direct solvers need it to treat E_df at a node as
-     * a function of that node's slope. */
+     * view `node` (its arrays point at one value each) and set *goes_on
+     * to 1 if it goes on (e.g. tau >= tau_y), 0 if it stops here (then
+     * Theta = 0).  The implicit and direct solvers need it to treat E_df
+     * at a node as a function of that node's slope. */
     int (*node_flow)(void *state, const dfle_channel *ch, size_t i, double S,
-                     dfle_flow *node);
+                     dfle_flow *node, int *goes_on, dfle_error *err);
+    /* Optional.  The parameters (param.h): write up to cap of them to
+     * out and return how many there are. */
+    size_t (*params)(const void *state, dfle_param *out, size_t cap);
     /* Optional.  Release the state. */
     void (*destroy)(void *state);
 } dfle_router_ops;
@@ -54,12 +63,19 @@ void dfle_router_free(dfle_router *rt);
 
 int dfle_router_route(dfle_router *rt, const dfle_channel *ch,
                       const double *S, dfle_flow *flow, dfle_error *err);
-/* 1 if the router must be re-routed for slopes S (always 1 without the op). */
-int dfle_router_needs_reroute(dfle_router *rt, size_t n, const double *S);
+/* *reroute = 1 if the router must be routed again for slopes S, having
+ * last been routed over S_routed (always 1 without the op). */
+int dfle_router_needs_reroute(dfle_router *rt, size_t n, const double *S_routed,
+                              const double *S, int *reroute, dfle_error *err);
 /* The node_flow op, or DFLE_ESTATE (with a message) if the router has
  * none.  *goes_on receives its verdict. */
 int dfle_router_node_flow(dfle_router *rt, const dfle_channel *ch, size_t i,
                           double S, dfle_flow *node, int *goes_on, dfle_error *err);
+
+/* The parameters (param.h), up to cap of them; returns how many there
+ * are, or (size_t)-1 when the router has no params op (a router written
+ * in Lua keeps its own). */
+size_t dfle_router_params(const dfle_router *rt, dfle_param *out, size_t cap);
 
 /* 1 if the router is routed at every step (no needs_reroute op). */
 int dfle_router_is_local(const dfle_router *rt);

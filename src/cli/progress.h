@@ -6,7 +6,7 @@
 
 #include <stdio.h>
 
-#include "dfle/model.h"
+#include "dfle/solver.h"
 
 typedef struct dfle_progress_bar {
     FILE *out;

@@ -59,6 +59,13 @@ int dfle_law_rate(dfle_law *law, const dfle_law_ctx *ctx, const double *F,
     return law->ops->rate(law->state, ctx, F, E, err);
 }
 
+size_t dfle_law_params(const dfle_law *law, dfle_param *out, size_t cap)
+{
+    if (law->ops->params == NULL)
+        return (size_t)-1;
+    return law->ops->params(law->state, out, cap);
+}
+
 const char *dfle_law_name(const dfle_law *law) { return law->ops->name; }
 const dfle_law_ops *dfle_law_get_ops(const dfle_law *law) { return law->ops; }
 void *dfle_law_state(const dfle_law *law) { return law->state; }

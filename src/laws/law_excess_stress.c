@@ -48,6 +48,15 @@ static int excess_rate(void *state, const dfle_law_ctx *ctx, const double *F, do
     return DFLE_OK;
 }
 
+static size_t excess_params(const void *state, dfle_param *out, size_t cap)
+{
+    const dfle_excess_stress_law_opts *o = &((const excess_law *)state)->opts;
+    const dfle_param p[] = {
+        {"k", o->k, "", 0}, {"tau_c", o->tau_c, "Pa", 0}, {"p", o->p, "", 0},
+    };
+    return dfle_param_copy(p, sizeof p / sizeof p[0], out, cap);
+}
+
 static void excess_destroy(void *state) { free(state); }
 
 static const dfle_law_ops excess_ops = {
@@ -55,6 +64,7 @@ static const dfle_law_ops excess_ops = {
     .flow_factor = excess_flow_factor,
     .rate = excess_rate,
     .integrand = NULL, /* tau is not a function of (h, v, lambda) alone */
+    .params = excess_params,
     .destroy = excess_destroy,
 };
 

@@ -61,10 +61,22 @@ static int inertial_rate(void *state, const dfle_law_ctx *ctx, const double *F, 
     return DFLE_OK;
 }
 
-static double inertial_integrand(void *state, double h, double v, double lambda)
+static int inertial_integrand(void *state, double h, double v, double lambda, double *g,
+                              dfle_error *err)
 {
-    (void)lambda;
-    return inertial_stress(&((const inertial_law *)state)->opts, h, v);
+    (void)lambda, (void)err;
+    *g = inertial_stress(&((const inertial_law *)state)->opts, h, v);
+    return DFLE_OK;
+}
+
+static size_t inertial_params(const void *state, dfle_param *out, size_t cap)
+{
+    const dfle_inertial_law_opts *o = &((const inertial_law *)state)->opts;
+    const dfle_param p[] = {
+        {"k", o->k, "", 0}, {"D", o->D, "m", 0}, {"rho_s", o->rho_s, "kg/m^3", 0},
+        {"alpha", o->alpha, "", 0},
+    };
+    return dfle_param_copy(p, sizeof p / sizeof p[0], out, cap);
 }
 
 static void inertial_destroy(void *state) { free(state); }
@@ -74,6 +86,7 @@ static const dfle_law_ops inertial_ops = {
     .flow_factor = inertial_flow_factor,
     .rate = inertial_rate,
     .integrand = inertial_integrand,
+    .params = inertial_params,
     .destroy = inertial_destroy,
 };
 

@@ -76,11 +76,23 @@ static int power_rate(void *state, const dfle_law_ctx *ctx, const double *F,
     return DFLE_OK;
 }
 
-static double power_integrand(void *state, double h, double v, double lambda)
+static int power_integrand(void *state, double h, double v, double lambda, double *g,
+                           dfle_error *err)
 {
     const power_law *pl = state;
-    (void)v, (void)lambda;
-    return power_of(h, pl->opts.beta, pl->beta_int);
+    (void)v, (void)lambda, (void)err;
+    *g = power_of(h, pl->opts.beta, pl->beta_int);
+    return DFLE_OK;
+}
+
+static size_t power_params(const void *state, dfle_param *out, size_t cap)
+{
+    const dfle_power_law_opts *o = &((const power_law *)state)->opts;
+    /* k_df absorbs the debris-flow frequency: E_df in m/yr from t_p in s. */
+    const dfle_param p[] = {
+        {"k_df", o->k_df, "", 0}, {"alpha", o->alpha, "", 0}, {"beta", o->beta, "", 0},
+    };
+    return dfle_param_copy(p, sizeof p / sizeof p[0], out, cap);
 }
 
 static void power_destroy(void *state) { free(state); }
@@ -90,6 +102,7 @@ static const dfle_law_ops power_ops = {
     .flow_factor = power_flow_factor,
     .rate = power_rate,
     .integrand = power_integrand,
+    .params = power_params,
     .destroy = power_destroy,
 };
 

@@ -51,23 +51,30 @@ int dfle_router_route(dfle_router *rt, const dfle_channel *ch,
     return rt->ops->route(rt->state, ch, S, flow, err);
 }
 
-int dfle_router_needs_reroute(dfle_router *rt, size_t n, const double *S)
+int dfle_router_needs_reroute(dfle_router *rt, size_t n, const double *S_routed,
+                              const double *S, int *reroute, dfle_error *err)
 {
+    *reroute = 1;
     if (rt->ops->needs_reroute == NULL)
-        return 1;
-    return rt->ops->needs_reroute(rt->state, n, S) != 0;
+        return DFLE_OK;
+    return rt->ops->needs_reroute(rt->state, n, S_routed, S, reroute, err);
 }
 
 int dfle_router_node_flow(dfle_router *rt, const dfle_channel *ch, size_t i,
                           double S, dfle_flow *node, int *goes_on, dfle_error *err)
 {
+    *goes_on = 0;
     if (rt->ops->node_flow == NULL)
         return dfle_error_set(err, DFLE_ESTATE,
                               "router.%s cannot evaluate the flow at one node", rt->ops->name);
-    *goes_on = rt->ops->node_flow(rt->state, ch, i, S, node);
-    return *goes_on < 0 ? dfle_error_set(err, DFLE_ENOMEM, "router.%s: out of memory",
-                                         rt->ops->name)
-                        : DFLE_OK;
+    return rt->ops->node_flow(rt->state, ch, i, S, node, goes_on, err);
+}
+
+size_t dfle_router_params(const dfle_router *rt, dfle_param *out, size_t cap)
+{
+    if (rt->ops->params == NULL)
+        return (size_t)-1;
+    return rt->ops->params(rt->state, out, cap);
 }
 
 int dfle_router_is_local(const dfle_router *rt)

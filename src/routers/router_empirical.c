@@ -13,6 +13,7 @@
  */
 #include "dfle/router_empirical.h"
 
+#include <assert.h>
 #include <math.h>
 #include <stdlib.h>
 #include <string.h>
@@ -131,21 +132,37 @@ static int empirical_route(void *state, const dfle_channel *ch,
 }
 
 static int empirical_node_flow(void *state, const dfle_channel *ch, size_t i, double S,
-                               dfle_flow *node)
+                               dfle_flow *node, int *goes_on, dfle_error *err)
 {
     empirical *e = state;
-    if (ensure_cache(e, ch, NULL) != DFLE_OK)
-        return -1;
+    int st;
+    *goes_on = 0;
+    if ((st = ensure_cache(e, ch, err)) != DFLE_OK)
+        return st;
+    assert(i < e->n && node->n >= 1);
     node->time_resolved = 0;
     if (!(S > 0)) {
         zero_node(node, 0);
-        return 0;
+        return DFLE_OK;
     }
     if (empirical_at(e, dfle_channel_w(ch), i, S, node, 0) < e->opts.tau_y) {
         node->Theta[0] = 0.0; /* arriving, it stops here: no erosion */
-        return 0;
+        return DFLE_OK;
     }
-    return 1;
+    *goes_on = 1;
+    return DFLE_OK;
+}
+
+static size_t empirical_params(const void *state, dfle_param *out, size_t cap)
+{
+    const dfle_empirical_opts *o = &((const empirical *)state)->opts;
+    const dfle_param p[] = {
+        {"M0", o->M0, "m^(3-2 gamma)", 0}, {"gamma", o->gamma, "", 0},
+        {"mu", o->mu, "Pa s", 0},          {"tau_y", o->tau_y, "Pa", 0},
+        {"c1", o->c1, "", 0},              {"c2", o->c2, "", 0},
+        {"rho_b", o->rho_b, "kg/m^3", 0},  {"g", o->g, "m/s^2", 0},
+    };
+    return dfle_param_copy(p, sizeof p / sizeof p[0], out, cap);
 }
 
 static void empirical_destroy(void *state)
@@ -162,6 +179,7 @@ static const dfle_router_ops empirical_ops = {
     .route = empirical_route,
     .needs_reroute = NULL, /* cheap and local: route every step */
     .node_flow = empirical_node_flow,
+    .params = empirical_params,
     .destroy = empirical_destroy,
 };
 

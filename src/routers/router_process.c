@@ -19,13 +19,15 @@
 #define MAX_SNAPSHOTS 1000
 #define MAX_GHOSTS 10000
 
+/* Nothing here depends on which model routes: the slopes a routing was
+ * made for are the model's to keep (router.h), so one router serves any
+ * number of models.  The report describes this router's last routing,
+ * whoever asked for it. */
 typedef struct process {
     dfle_process_opts opts;
-    /* Slopes of the last routing, for needs_reroute. */
-    double *S_last;
-    size_t n_last;
-    /* Report of the last routing and its arrays. */
+    /* Report of the last routing and its arrays (n_alloc nodes). */
     dfle_process_report report;
+    size_t n_alloc, snap_alloc;
     double *arrival;
     /* Snapshot request and results. */
     size_t n_snap;
@@ -56,21 +58,21 @@ const char *dfle_process_end_name(int end)
     }
 }
 
-/* Make room for n-node results (arrival, slopes, snapshots). */
+/* Make room for n-node results (arrival times, snapshots). */
 static int process_reserve(process *pr, size_t n, dfle_error *err)
 {
-    if (pr->n_last == n && pr->S_last != NULL)
+    if (pr->n_alloc == n && pr->snap_alloc == pr->n_snap && pr->arrival != NULL)
         return DFLE_OK;
-    free(pr->S_last);
     free(pr->arrival);
     free(pr->snap_h);
-    pr->S_last = calloc(n, sizeof *pr->S_last);
+    pr->report.routed = 0; /* the report's arrays go */
     pr->arrival = calloc(n, sizeof *pr->arrival);
     pr->snap_h = calloc(pr->n_snap * n + 1, sizeof *pr->snap_h);
-    pr->n_last = 0;
-    if (pr->S_last == NULL || pr->arrival == NULL || pr->snap_h == NULL)
+    pr->n_alloc = pr->snap_alloc = 0;
+    if (pr->arrival == NULL || pr->snap_h == NULL)
         return dfle_error_set(err, DFLE_ENOMEM, "router.process: out of memory for %zu nodes", n);
-    pr->n_last = n;
+    pr->n_alloc = n;
+    pr->snap_alloc = pr->n_snap;
     return DFLE_OK;
 }
 
@@ -161,7 +163,10 @@ static int process_route(void *state, const dfle_channel *ch, const double *S, d
                 const double lam = dfle_flow1d_lambda(f, hk, t_entry < 0 ? -1.0 : t - t_entry);
                 const double tau = (1.0 - lam) * o->flow.rho * o->flow.g * cos(atan(S[i])) * hk *
                                    dfle_flow1d_phi(f, k, hk, v);
-                flow->integral[i] += flow->integrand(flow->integrand_state, hk, v, lam) * dt;
+                double g;
+                if ((st = flow->integrand(flow->integrand_state, hk, v, lam, &g, err)) != DFLE_OK)
+                    goto done;
+                flow->integral[i] += g * dt;
                 flow->t_p[i] += dt;
                 if (isnan(pr->arrival[i]))
                     pr->arrival[i] = t;
@@ -207,7 +212,6 @@ static int process_route(void *state, const dfle_channel *ch, const double *S, d
         if (o->frequency_scaling)
             flow->integral[i] *= 1000.0 * pow(1e-6 * A[i], o->gamma) / o->M0;
     }
-    memcpy(pr->S_last, S, n * sizeof *S);
     pr->report = (dfle_process_report){
         .routed = 1, .end = end, .volume_in = released, .volume_out = out_total,
         .volume_left = dfle_flow1d_volume(f, 0, N), .duration = t, .steps = steps, .n = n,
@@ -222,15 +226,38 @@ done:
     return st;
 }
 
-static int process_needs_reroute(void *state, size_t n, const double *S)
+static int process_needs_reroute(void *state, size_t n, const double *S_routed,
+                                 const double *S, int *reroute, dfle_error *err)
 {
-    process *pr = state;
-    if (!pr->report.routed || pr->n_last != n)
-        return 1;
+    const process *pr = state;
+    (void)err;
+    *reroute = 0;
     for (size_t i = 0; i < n; i++)
-        if (fabs(S[i] - pr->S_last[i]) >= pr->opts.reroute_dS)
-            return 1;
-    return 0;
+        if (fabs(S[i] - S_routed[i]) >= pr->opts.reroute_dS) {
+            *reroute = 1;
+            break;
+        }
+    return DFLE_OK;
+}
+
+static size_t process_params(const void *state, dfle_param *out, size_t cap)
+{
+    const dfle_process_opts *o = &((const process *)state)->opts;
+    /* Named as in dfle.router.process{...}. */
+    const dfle_param p[] = {
+        {"M0", o->M0, "m^3", 0},          {"eta", o->flow.eta, "Pa s", 0},
+        {"mu2", o->flow.mu_2, "", 0},     {"mu_s", o->flow.mu_s, "", 0},
+        {"I0", o->flow.I0, "", 0},        {"D", o->flow.D, "m^2/s", 0},
+        {"D_eff", o->flow.D_eff, "m", 0}, {"lambda0", o->flow.lambda0, "", 0},
+        {"v_f", o->flow.v_f, "", 0},      {"rho_b", o->flow.rho, "kg/m^3", 0},
+        {"rho_s", o->flow.rho_s, "kg/m^3", 0}, {"g", o->flow.g, "m/s^2", 0},
+        {"cfl", o->flow.cfl, "", 0},      {"h_dry", o->flow.h_dry, "m", 0},
+        {"n_ghost", o->n_ghost, "", 0},   {"reroute_dS", o->reroute_dS, "", 0},
+        {"q_erode", o->q_erode, "m^2/s", 0}, {"q_rest", o->q_rest, "m^2/s", 0},
+        {"volume_tol", o->volume_tol, "", 0}, {"t_max", o->t_max, "s", 0},
+        {"gamma", o->gamma, "", 0},       {"frequency_scaling", o->frequency_scaling, "", 1},
+    };
+    return dfle_param_copy(p, sizeof p / sizeof p[0], out, cap);
 }
 
 static void process_destroy(void *state)
@@ -238,7 +265,6 @@ static void process_destroy(void *state)
     process *pr = state;
     if (pr == NULL)
         return;
-    free(pr->S_last);
     free(pr->arrival);
     free(pr->snap_times);
     free(pr->snap_t);
@@ -250,6 +276,7 @@ static const dfle_router_ops process_ops = {
     .name = "process",
     .route = process_route,
     .needs_reroute = process_needs_reroute,
+    .params = process_params,
     .destroy = process_destroy,
 };
 
@@ -328,7 +355,6 @@ int dfle_router_process_set_snapshots(dfle_router *rt, size_t k, const double *t
     pr->snap_times = nt;
     pr->snap_t = ns;
     pr->n_snap = k;
-    pr->n_last = 0; /* resize the snapshot store on the next routing */
-    pr->report.routed = 0;
+    pr->report.routed = 0; /* the next routing resizes the snapshot store */
     return DFLE_OK;
 }

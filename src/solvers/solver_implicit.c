@@ -1,13 +1,14 @@
 /*
- * model_implicit.c - backward-Euler stepping of Eq. (3).
+ * solver_implicit.c - backward-Euler stepping of Eq. (3).
  *
- *   z_i' = z_i + dt (U - E_i(S_i')),   S_i' = (z_i' - z_{i+1}') / dx
+ *   z_i' = z_i + dt (U - E_i(S_i')),   S_i' = (z_i' - z_r') / L_i
  *
- * Erosion at a node depends only on its own (downstream) slope, so the
- * step is solved exactly, node by node, from the outlet (fixed) up: at
- * node i the new elevation below is known and the node's own equation,
- * E(S) + (dx/dt) S = U + (z_i - z_{i+1}')/dt, is one scalar root
- * (model_node.c).  No linear system, no stability limit, and uplift
+ * Erosion at a node depends only on its own slope to its receiver r, so
+ * the step is solved exactly, node by node, in stack order from base
+ * level (fixed) up (Braun and Willett 2013): at node i the receiver's new
+ * elevation is known and the node's own equation,
+ * E(S) + (L/dt) S = U + (z_i - z_r')/dt, is one scalar root
+ * (solver_node.c).  No linear system, no stability limit, and uplift
  * enters every step in full, so the steady state has no time-step bias:
  * where dz/dt = 0 the equation is exactly U = E(S).
  *
@@ -26,7 +27,9 @@
 #include <stdio.h>
 #include <string.h>
 
-#include "model/model_internal.h"
+#include <stdlib.h>
+
+#include "solvers/solver_internal.h"
 
 #define STEADY_DT_FIRST 100.0   /* [yr] */
 #define STEADY_DT_GROWTH 4.0
@@ -42,6 +45,7 @@ typedef struct implicit_state {
     int finishing;  /* 1: finishing with explicit steps */
     double rtol;
     dfle_run_result *res;
+    double *z_new, *z_start, *z_full; /* n values each (one block) */
 } implicit_state;
 
 /* Large steps that stop making progress for this many steps hand over
@@ -49,31 +53,37 @@ typedef struct implicit_state {
 #define STALL_STEPS 4
 
 /* One backward-Euler step of dt [yr] from the current (evaluated) state. */
-static int be_step(dfle_model *m, double dt, dfle_error *err)
+static int be_step(dfle_model *m, implicit_state *s, double dt, dfle_error *err)
 {
-    const size_t n = m->n;
-    const size_t reach = m->rt != NULL ? m->flow.runout_end : 0;
-    double *zn = m->z_work;
+    const size_t n = dfle_model_size(m);
+    const size_t *stack = dfle_model_stack(m), *recv = dfle_model_receivers(m);
+    const double *L = dfle_model_flow_length(m), U = dfle_model_U(m);
+    double *z = dfle_model_z(m), *zn = s->z_new;
     int st;
 
-    zn[n - 1] = m->z[n - 1];
-    for (size_t i = n - 1; i-- > 0;) {
+    for (size_t k = 0; k < n; k++) {
+        const size_t i = stack[k], r = recv[i];
         double S;
-        st = dfle_mi_solve_node(m, i, m->U + (m->z[i] - zn[i + 1]) / dt, m->dx / dt,
-                                i < reach, (m->z[i] - m->z[i + 1]) / m->dx, &S, NULL, err);
+        if (dfle_model_is_base(m, i)) {
+            zn[i] = z[i];
+            continue;
+        }
+        st = dfle_solve_node(m, i, U + (z[i] - zn[r]) / dt, L[i] / dt,
+                             dfle_model_flow_reaches(m, i), (z[i] - z[r]) / L[i], &S, NULL, err);
         if (st != DFLE_OK)
             return st;
-        zn[i] = zn[i + 1] + S * m->dx;
+        zn[i] = zn[r] + S * L[i];
     }
-    memcpy(m->z, zn, n * sizeof *zn);
-    dfle_mi_touch(m);
+    memcpy(z, zn, n * sizeof *zn);
+    dfle_model_touch(m);
     return DFLE_OK;
 }
 
 static int steady_advance(dfle_model *m, implicit_state *s, double dt_limit, double *dt_taken,
                           dfle_error *err)
 {
-    double r = dfle_mi_rate_ratio(m), dt;
+    double r = dfle_model_rate_ratio(m), dt;
+    const dfle_router *rt = dfle_model_router(m);
 
     /* A router routed rarely makes the steady state a fixed point of
      * routing and stepping.  Huge steps jump to the steady state of the
@@ -82,16 +92,16 @@ static int steady_advance(dfle_model *m, implicit_state *s, double dt_limit, dou
      * steps re-route at small slope increments, which damps the cycle, so
      * once large steps stop gaining the run finishes with those. */
     if (s->finishing)
-        return dfle_mi_explicit_advance(m, dt_limit, dt_taken, NULL, err);
+        return dfle_explicit_advance(m, dt_limit, dt_taken, NULL, err);
     if (r < 0.5 * s->r_best) {
         s->r_best = r;
         s->stalled = 0;
-    } else if (++s->stalled >= STALL_STEPS && m->rt != NULL && !dfle_router_is_local(m->rt)) {
+    } else if (++s->stalled >= STALL_STEPS && rt != NULL && !dfle_router_is_local(rt)) {
         s->finishing = 1;
         snprintf(s->res->note, sizeof s->res->note,
                  "implicit: large steps stalled at max|dz/dt|/U = %.3g; finished with "
                  "explicit steps", r);
-        return dfle_mi_explicit_advance(m, dt_limit, dt_taken, NULL, err);
+        return dfle_explicit_advance(m, dt_limit, dt_taken, NULL, err);
     }
     if (s->r_prev >= 0) {
         if (r < s->r_prev)
@@ -102,7 +112,7 @@ static int steady_advance(dfle_model *m, implicit_state *s, double dt_limit, dou
     s->r_prev = r;
     dt = fmin(s->dt, dt_limit);
     *dt_taken = dt;
-    return be_step(m, dt, err);
+    return be_step(m, s, dt, err);
 }
 
 /* Step doubling: accept when one step of dt and two of dt/2 agree to
@@ -111,28 +121,30 @@ static int steady_advance(dfle_model *m, implicit_state *s, double dt_limit, dou
 static int transient_advance(dfle_model *m, implicit_state *s, double dt_limit,
                              double *dt_taken, dfle_error *err)
 {
-    const size_t n = m->n;
-    double *z_start = m->z_save, *z_full = m->S_pert;
+    const size_t n = dfle_model_size(m);
+    double *z = dfle_model_z(m), *z_start = s->z_start, *z_full = s->z_full;
     int st;
 
-    memcpy(z_start, m->z, n * sizeof *z_start);
+    memcpy(z_start, z, n * sizeof *z_start);
     for (int tries = 0; tries < MAX_REJECTIONS; tries++) {
         double dt = fmin(s->dt, dt_limit), diff = 0.0, zmax = 0.0, scale, q;
-        if ((st = be_step(m, dt, err)) != DFLE_OK)
+        if ((st = be_step(m, s, dt, err)) != DFLE_OK)
             return st;
-        memcpy(z_full, m->z, n * sizeof *z_full);
-        memcpy(m->z, z_start, n * sizeof *z_start);
-        dfle_mi_touch(m);
-        if ((st = dfle_mi_evaluate(m, err)) != DFLE_OK || (st = be_step(m, 0.5 * dt, err)) != DFLE_OK ||
-            (st = dfle_mi_evaluate(m, err)) != DFLE_OK || (st = be_step(m, 0.5 * dt, err)) != DFLE_OK)
+        memcpy(z_full, z, n * sizeof *z_full);
+        memcpy(z, z_start, n * sizeof *z_start);
+        dfle_model_touch(m);
+        if ((st = dfle_model_evaluate(m, err)) != DFLE_OK ||
+            (st = be_step(m, s, 0.5 * dt, err)) != DFLE_OK ||
+            (st = dfle_model_evaluate(m, err)) != DFLE_OK ||
+            (st = be_step(m, s, 0.5 * dt, err)) != DFLE_OK)
             return st;
         for (size_t i = 0; i < n; i++) {
-            diff = fmax(diff, fabs(m->z[i] - z_full[i]));
-            zmax = fmax(zmax, fabs(m->z[i]));
+            diff = fmax(diff, fabs(z[i] - z_full[i]));
+            zmax = fmax(zmax, fabs(z[i]));
         }
         /* Error per step against uplift per step: summed over a run, the
          * error stays below rtol times the uplift of the run. */
-        scale = s->rtol * m->U * dt + 1e-12 * (zmax + 1.0);
+        scale = s->rtol * dfle_model_U(m) * dt + 1e-12 * (zmax + 1.0);
         q = diff > 0 ? 0.9 * sqrt(scale / diff) : 4.0;
         if (diff <= scale) {
             s->dt = dt * fmin(4.0, fmax(0.2, q));
@@ -140,15 +152,15 @@ static int transient_advance(dfle_model *m, implicit_state *s, double dt_limit,
             return DFLE_OK;
         }
         /* Rejected: back to the start, smaller step. */
-        memcpy(m->z, z_start, n * sizeof *z_start);
-        dfle_mi_touch(m);
-        if ((st = dfle_mi_evaluate(m, err)) != DFLE_OK)
+        memcpy(z, z_start, n * sizeof *z_start);
+        dfle_model_touch(m);
+        if ((st = dfle_model_evaluate(m, err)) != DFLE_OK)
             return st;
         s->dt = dt * fmax(0.2, q);
     }
     return dfle_error_set(err, DFLE_ENUMERIC,
                           "model: implicit step rejected %d times at t = %g yr (step %g yr)",
-                          MAX_REJECTIONS, m->time, s->dt);
+                          MAX_REJECTIONS, dfle_model_time(m), s->dt);
 }
 
 static int implicit_advance(dfle_model *m, double dt_limit, double *dt_taken, void *state,
@@ -159,17 +171,33 @@ static int implicit_advance(dfle_model *m, double dt_limit, double *dt_taken, vo
                      : transient_advance(m, s, dt_limit, dt_taken, err);
 }
 
-int dfle_mi_run_implicit(dfle_model *m, const dfle_run_opts *o, dfle_run_result *res,
-                         dfle_error *err)
+static int implicit_run(dfle_model *m, const dfle_run_opts *o, dfle_run_result *res,
+                        dfle_error *err)
 {
+    const size_t n = dfle_model_size(m);
     implicit_state s = {
         .steady = o->tol > 0,
-        .dt = o->tol > 0 ? STEADY_DT_FIRST : fmin(m->dt_max, o->max_time),
+        .dt = o->tol > 0 ? STEADY_DT_FIRST : fmin(dfle_model_dt_max(m), o->max_time),
         .r_prev = -1.0,
         .r_best = INFINITY,
         .rtol = o->rtol,
         .res = res,
     };
+    double *block = malloc(3 * n * sizeof *block);
+    int st;
+
+    if (block == NULL)
+        return dfle_error_set(err, DFLE_ENOMEM, "model: out of memory for %zu nodes", n);
+    s.z_new = block;
+    s.z_start = block + n;
+    s.z_full = block + 2 * n;
     res->method = DFLE_METHOD_IMPLICIT;
-    return dfle_mi_drive(m, o, implicit_advance, &s, res, err);
+    st = dfle_stepping_run(m, o, implicit_advance, &s, res, err);
+    free(block);
+    return st;
 }
+
+const dfle_solver_ops dfle_solver_implicit = {
+    .name = "implicit",
+    .run = implicit_run,
+};

@@ -36,6 +36,29 @@ tests["process: bad parameters name themselves and the caller's line"] = functio
                   "'frequency_scaling' must be a boolean")
 end
 
+tests["process: one router shared by two models gives each what its own would"] = function()
+    -- The slopes a routing was made for are the model's, not the router's:
+    -- stepped alternately, two models on one router route when (and only
+    -- when) each would on a router of its own.
+    local shared = dfle.router.process{}
+    local a, b = small_model(shared), small_model(shared)
+    local a1, b1 = small_model(dfle.router.process{}), small_model(dfle.router.process{})
+    local ra, rb, ra1, rb1 = 0, 0, 0, 0
+    for _ = 1, 15 do
+        ra = ra + a:run{ years = 2000 }.routings
+        rb = rb + b:run{ years = 1000 }.routings
+        ra1 = ra1 + a1:run{ years = 2000 }.routings
+        rb1 = rb1 + b1:run{ years = 1000 }.routings
+    end
+    T.eq(ra, ra1)
+    T.eq(rb, rb1)
+    local za, za1, zb, zb1 = a:get("z"), a1:get("z"), b:get("z"), b1:get("z")
+    for i = 1, a.n do
+        T.eq(za[i], za1[i])
+        T.eq(zb[i], zb1[i])
+    end
+end
+
 tests["process: route returns the flow and balances its volume"] = function()
     local rt = dfle.router.process{}
     local m = small_model(rt)

@@ -26,6 +26,7 @@
 #include "dfle/fluvial.h"
 #include "dfle/law.h"
 #include "dfle/model.h"
+#include "dfle/solver.h"
 #include "dfle/router.h"
 
 #define DFLE_LUA_CHANNEL "dfle.channel"

@@ -121,14 +121,16 @@ int ll_compiled_sweep(lua_law *ll, int op, const dfle_law_ctx *ctx, const double
 /* Calls of a newly compiled integrand checked against Lua. */
 #define G_VERIFY_CALLS 64
 
-/* The integrand through its compiled form; NaN asks for the Lua call
+/* The integrand through its compiled form; TRY_LUA asks for the Lua call
  * (not compilable, or a value that is not finite, which Lua reports). */
-double ll_compiled_integrand(lua_law *ll, double h, double v, double lambda)
+int ll_compiled_integrand(lua_law *ll, double h, double v, double lambda, double *g,
+                          dfle_error *err)
 {
     static const char *const names[] = {"h", "v", "lambda"};
     lua_State *T = ll->T;
     const double in[3] = {h, v, lambda};
-    double g, gl;
+    double gc, gl;
+    int st;
 
     if (ll->gprog != NULL && ll->gseen != *ll->epoch) {
         lua_settop(T, SLOT_COUNT);
@@ -146,26 +148,32 @@ double ll_compiled_integrand(lua_law *ll, double h, double v, double lambda)
         lua_replace(T, SLOT_GUARDS_G);
         if (ll->gprog == NULL) {
             ll->gstate = -1;
-            return NAN;
+            return TRY_LUA;
         }
         ll->gstate = 1;
         ll->gseen = *ll->epoch;
         ll->gverify = G_VERIFY_CALLS;
     }
-    g = dfle_trace_eval(ll->gprog, in);
-    if (ll->gverify == 0 || !isfinite(g))
-        return g;
+    gc = dfle_trace_eval(ll->gprog, in);
+    if (!isfinite(gc))
+        return TRY_LUA;
+    if (ll->gverify == 0) {
+        *g = gc;
+        return DFLE_OK;
+    }
     ll->gverify--;
-    gl = ll_lua_integrand(ll, h, v, lambda);
-    if (isfinite(gl) && memcmp(&g, &gl, sizeof g) != 0) {
+    if ((st = ll_lua_integrand(ll, h, v, lambda, &gl, err)) != DFLE_OK)
+        return st;
+    if (memcmp(&gc, &gl, sizeof gc) != 0) {
         snprintf(ll->gwhy, sizeof ll->gwhy,
                  "its compiled form gave %.17g where Lua gives %.17g (h = %g, v = %g, "
-                 "lambda = %g)", g, gl, h, v, lambda);
+                 "lambda = %g)", gc, gl, h, v, lambda);
         dfle_trace_free(ll->gprog);
         ll->gprog = NULL;
         ll->gstate = -1;
     }
-    return gl;
+    *g = gl;
+    return DFLE_OK;
 }
 
 static void push_status(lua_State *L, const lua_law *ll, int state, const char *why)

@@ -409,11 +409,6 @@ static int ll_flow_factor(void *state, const dfle_law_ctx *ctx, double *F, dfle_
     const dfle_flow *fl = ctx->flow;
 
     ll->time_resolved = fl->time_resolved;
-    if (fl->time_resolved && ll->g_failed) {
-        /* The integrand failed during the routing; report it now. */
-        ll->g_failed = 0;
-        return dfle_error_set(err, DFLE_ECALLBACK, "law.%s: %s", ll->name, ll->g_msg);
-    }
     if (ll->has_factor)
         return run_sweep(ll, OP_FACTOR, ctx, NULL, F, err);
     /* No factor: the Eq. (11) sum for a time-resolved flow, else 1 where
@@ -430,12 +425,11 @@ static int ll_rate(void *state, const dfle_law_ctx *ctx, const double *F, double
     return run_sweep(ll, ll->time_resolved ? OP_RATE_TR : OP_RATE, ctx, F, E, err);
 }
 
-/* The integrand through the user's Lua function: one protected call.  A
- * failure is remembered (the first message) for the next flow_factor. */
-double ll_lua_integrand(lua_law *ll, double h, double v, double lambda)
+/* The integrand through the user's Lua function: one protected call. */
+int ll_lua_integrand(lua_law *ll, double h, double v, double lambda, double *g,
+                     dfle_error *err)
 {
     lua_State *T = ll->T;
-    double g;
     int st;
 
     lua_settop(T, SLOT_COUNT);
@@ -448,56 +442,53 @@ double ll_lua_integrand(lua_law *ll, double h, double v, double lambda)
     dfle_lua_touch(T);
     if (st != LUA_OK) {
         const char *msg = lua_tostring(T, -1);
-        snprintf(ll->g_msg, sizeof ll->g_msg, "%s", msg != NULL ? msg : "error in integrand");
-        ll->g_failed = 1;
+        dfle_error_set(err, DFLE_ECALLBACK, "%s: %s", ll->who,
+                       msg != NULL ? msg : "error in integrand");
         lua_settop(T, SLOT_COUNT);
-        return NAN;
+        return DFLE_ECALLBACK;
     }
-    g = lua_type(T, -1) == LUA_TNUMBER ? lua_tonumber(T, -1) : NAN;
-    if (!isfinite(g)) {
-        const char *what = lua_type(T, -1) == LUA_TNUMBER ? dfle_lua_number_text(T, g)
+    *g = lua_type(T, -1) == LUA_TNUMBER ? lua_tonumber(T, -1) : NAN;
+    if (!isfinite(*g)) {
+        const char *what = lua_type(T, -1) == LUA_TNUMBER ? dfle_lua_number_text(T, *g)
                                                           : dfle_lua_typename(T, -1);
         const char *at = where_defined(T, SLOT_INTEGRAND);
-        snprintf(ll->g_msg, sizeof ll->g_msg,
-                 "integrand (defined at %s) returned %s, expected a finite number "
-                 "(h = %g m, v = %g m/s, lambda = %g)", at, what, h, v, lambda);
-        ll->g_failed = 1;
+        dfle_error_set(err, DFLE_ECALLBACK,
+                       "%s: integrand (defined at %s) returned %s, expected a finite number "
+                       "(h = %g m, v = %g m/s, lambda = %g)", ll->who, at, what, h, v, lambda);
+        lua_settop(T, SLOT_COUNT);
+        return DFLE_ECALLBACK;
     }
     lua_settop(T, SLOT_COUNT);
-    return g;
+    return DFLE_OK;
 }
 
-/* The Eq. (11) integrand.  The router calls it once per wet cell and flow
- * step with no way to report an error, so a failure is remembered (the
- * first message) and returned by the next flow_factor; NaN marks the sum. */
-static double ll_integrand(void *state, double h, double v, double lambda)
+/* The Eq. (11) integrand, called by a time-resolved router once per wet
+ * cell and flow step. */
+static int ll_integrand(void *state, double h, double v, double lambda, double *g,
+                        dfle_error *err)
 {
     lua_law *ll = state;
-    double g;
 
     if (ll->g_kind == G_POWER) {
-        g = ll->gh != 0 ? pow(h, ll->gh) : 1.0;
+        double r = ll->gh != 0 ? pow(h, ll->gh) : 1.0;
         if (ll->gv != 0)
-            g *= pow(v, ll->gv);
+            r *= pow(v, ll->gv);
         if (ll->gl != 0)
-            g *= pow(lambda, ll->gl);
-        return g;
+            r *= pow(lambda, ll->gl);
+        *g = r;
+        return DFLE_OK;
     }
-    if (ll->g_failed)
-        return NAN;
-    if (ll->g_kind == G_NONE) {
-        ll->g_failed = 1;
-        snprintf(ll->g_msg, sizeof ll->g_msg,
-                 "the law has no integrand, which a time-resolved router needs: give "
-                 "integrand = { h = beta } (h^beta, as the power law) or a function");
-        return NAN;
-    }
+    if (ll->g_kind == G_NONE)
+        return dfle_error_set(err, DFLE_EINVAL,
+                              "%s: the law has no integrand, which a time-resolved router needs: "
+                              "give integrand = { h = beta } (h^beta, as the power law) or a "
+                              "function", ll->who);
     if (ll->compile && ll->gstate >= 0) {
-        g = ll_compiled_integrand(ll, h, v, lambda);
-        if (isfinite(g) || ll->g_failed)
-            return g;
+        int st = ll_compiled_integrand(ll, h, v, lambda, g, err);
+        if (st != TRY_LUA)
+            return st;
     }
-    return ll_lua_integrand(ll, h, v, lambda);
+    return ll_lua_integrand(ll, h, v, lambda, g, err);
 }
 
 static void ll_destroy(void *state)

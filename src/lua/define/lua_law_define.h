@@ -65,8 +65,6 @@ typedef struct lua_law {
     int has_factor, has_frequency;
     int g_kind;             /* G_NONE, G_POWER (h^gh v^gv lambda^gl), G_LUA */
     double gh, gv, gl;
-    char g_msg[DFLE_ERROR_MSG_MAX]; /* first integrand failure of a routing */
-    int g_failed;
     /* C shadows of the input arrays: what each Lua array holds now. */
     size_t cap;
     double *shadow; /* N_IN blocks of cap values */
@@ -117,8 +115,10 @@ int ll_memo_find(const lua_law *ll, double A, size_t *at);
 /* Run one op as a protected sweep of the user's Lua function. */
 int ll_interpreted_sweep(lua_law *ll, int op, const dfle_law_ctx *ctx, const double *F_in,
                          double *out, dfle_error *err);
-/* The integrand through the user's Lua function (one protected call). */
-double ll_lua_integrand(lua_law *ll, double h, double v, double lambda);
+/* The integrand through the user's Lua function (one protected call);
+ * fails like an op. */
+int ll_lua_integrand(lua_law *ll, double h, double v, double lambda, double *g,
+                     dfle_error *err);
 
 /* lua_law_compiled.c */
 enum { TRY_LUA = 1 };
@@ -126,7 +126,9 @@ enum { TRY_LUA = 1 };
  * sweep must do it instead. */
 int ll_compiled_sweep(lua_law *ll, int op, const dfle_law_ctx *ctx, const double *F_in,
                       double *out, dfle_error *err);
-/* The integrand compiled; NaN asks for the Lua call. */
-double ll_compiled_integrand(lua_law *ll, double h, double v, double lambda);
+/* The integrand compiled: 0 with *g set, a negative dfle_status, or
+ * TRY_LUA when the Lua call must do it. */
+int ll_compiled_integrand(lua_law *ll, double h, double v, double lambda, double *g,
+                          dfle_error *err);
 
 #endif

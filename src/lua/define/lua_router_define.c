@@ -16,12 +16,8 @@
  * Same shell design as dfle.law.define (lua_law_define.c): a Lua thread
  * of its own, anchored to the router object, holds the function, the
  * params and a reused record; the state is a userdata on that thread, so
- * the collector owns everything; every op is one protected call.
- *
- * node_flow has no error channel (router.h: it returns 1, 0, or < 0 for
- * "out of memory"), so an error there is kept and the node treated as
- * one where the flow stops; the next route() - which every solver makes
- * right after its node-by-node pass - returns the user's error.
+ * the collector owns everything; every op is one protected call, whose
+ * error (with the user's file:line) the op returns.
  */
 #include "lua/core/dfle_lua.h"
 
@@ -60,9 +56,6 @@ typedef struct lua_router {
     size_t j0;         /* flow index of node `first` */
     size_t end;        /* out: first node not reached */
     int node_goes_on;  /* out (node_flow) */
-    /* An error from node_flow, reported by the next route(). */
-    int pending;
-    char pending_msg[DFLE_ERROR_MSG_MAX];
 } lua_router;
 
 static int bad_output(lua_State *T, const lua_router *r, size_t i, const char *field,
@@ -181,10 +174,6 @@ static int lr_route(void *state, const dfle_channel *ch, const double *S, dfle_f
     const size_t n = dfle_channel_size(ch);
     int st;
 
-    if (r->pending) {
-        r->pending = 0;
-        return dfle_error_set(err, DFLE_ECALLBACK, "%s", r->pending_msg);
-    }
     if (flow->n != n)
         return dfle_error_set(err, DFLE_EINVAL, "router.%s: flow has %zu nodes, channel %zu",
                               r->name, flow->n, n);
@@ -199,24 +188,21 @@ static int lr_route(void *state, const dfle_channel *ch, const double *S, dfle_f
 }
 
 static int lr_node_flow(void *state, const dfle_channel *ch, size_t i, double S,
-                        dfle_flow *node)
+                        dfle_flow *node, int *goes_on, dfle_error *err)
 {
     lua_router *r = state;
-    dfle_error err;
+    int st;
 
+    *goes_on = 0;
     node->time_resolved = 0;
     zero_node(node, 0);
-    if (r->pending || !(S > 0))
-        return 0;
+    if (!(S > 0))
+        return DFLE_OK;
     r->ch = ch, r->S = &S, r->first = i, r->n = 1, r->flow = node, r->j0 = 0;
-    if (run_sweep(r, &err) != DFLE_OK) {
-        /* Kept for the next route(); here the flow just stops. */
-        snprintf(r->pending_msg, sizeof r->pending_msg, "%s", err.msg);
-        r->pending = 1;
-        zero_node(node, 0);
-        return 0;
-    }
-    return r->node_goes_on;
+    if ((st = run_sweep(r, err)) != DFLE_OK)
+        return st;
+    *goes_on = r->node_goes_on;
+    return DFLE_OK;
 }
 
 static const dfle_router_ops lua_router_ops = {

@@ -319,7 +319,7 @@ static int model_run(lua_State *L, int steady)
         o.uplift = lua_uplift;
         o.uplift_ud = &uc;
     }
-    st = dfle_model_run(m, &o, &res, &err);
+    st = dfle_solver_run(m, &o, &res, &err);
     if (prog != NULL && prog->finish != NULL)
         prog->finish(prog->ud);
     if (st != DFLE_OK)

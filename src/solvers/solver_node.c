@@ -1,13 +1,13 @@
 /*
- * model_node.c - erosion at one node as a function of its slope, and the
- * scalar root solve that the implicit and direct solvers build on.
+ * solver_node.c - the scalar root solve that the implicit and direct
+ * solvers build on.
  *
- * Both solvers sweep the profile one node at a time: backward Euler from
- * the outlet up (the node below is already known), the steady state from
- * the head down (the flow arriving from above is already known).  Either
- * way each node is one equation in its own slope,
+ * Both solvers sweep the nodes one at a time: backward Euler from base
+ * level up (the receiver's new elevation is already known), the steady
+ * state from the heads down (the flow arriving from above is already
+ * known).  Either way each node is one equation in its own slope,
  *
- *   U_eff = E(S) + c S,      E = E_f + E_df,
+ *   U_eff = E(S) + c S,      E = E_f + E_df  (dfle_model_node_erosion),
  *
  * which has exactly one root when E is non-decreasing in S (every law
  * here; Theta is clamped at 0 where tau < tau_y, so E stays continuous).
@@ -20,87 +20,24 @@
  * converge it says so rather than return a guess.
  */
 #include <math.h>
-#include <string.h>
 
-#include "model/model_internal.h"
+#include "solvers/solver_internal.h"
 
 #define SOLVE_MAX_ITER 200
 #define SOLVE_REL_TOL 1e-10 /* slopes far beyond what tol = 1e-3 on dz/dt needs */
-
-/* A one-node view of the model's routed flow at node i. */
-static dfle_flow flow_at(const dfle_flow *f, size_t i)
-{
-    dfle_flow v;
-    memset(&v, 0, sizeof v);
-    v.n = 1;
-    v.runout_end = i < f->runout_end;
-    v.M = f->M + i, v.Q = f->Q + i, v.h = f->h + i, v.v = f->v + i;
-    v.t_p = f->t_p + i, v.tau = f->tau + i, v.Theta = f->Theta + i;
-    v.integral = f->integral + i;
-    v.time_resolved = f->time_resolved;
-    return v;
-}
-
-int dfle_mi_node_erosion(dfle_model *m, size_t i, double S, int with_df, double *E,
-                         int *goes_on, dfle_error *err)
-{
-    double e = 0.0;
-    *goes_on = 0;
-    if (!(S > 0)) { /* no erosion up a reverse slope (model.h) */
-        *E = 0.0;
-        return DFLE_OK;
-    }
-    if (m->fl != NULL)
-        e = m->KAm[i] * pow(S, dfle_fluvial_n(m->fl));
-    if (with_df && m->rt != NULL) {
-        dfle_law_ctx ctx = {.n = 1, .S = &S, .A = dfle_channel_A(m->ch) + i,
-                            .w = dfle_channel_w(m->ch) + i};
-        dfle_flow view; /* lives as long as ctx: rate may read the flow */
-        double F, Edf;
-        int st;
-        if (dfle_router_is_local(m->rt)) {
-            /* The flow at this node follows its slope: re-evaluate it. */
-            st = dfle_router_node_flow(m->rt, m->ch, i, S, &m->node, goes_on, err);
-            if (st != DFLE_OK)
-                return st;
-            m->node.runout_end = 1;
-            ctx.flow = &m->node;
-            if ((st = dfle_law_flow_factor(m->law, &ctx, &F, err)) != DFLE_OK)
-                return st;
-        } else {
-            /* Routed rarely: the cached Eq. (11) factor stands. */
-            view = flow_at(&m->flow, i);
-            *goes_on = i < m->flow.runout_end;
-            if (!*goes_on) {
-                *E = e;
-                return DFLE_OK;
-            }
-            ctx.flow = &view;
-            F = m->F[i];
-        }
-        if ((st = dfle_law_rate(m->law, &ctx, &F, &Edf, err)) != DFLE_OK)
-            return st;
-        e += Edf;
-    }
-    if (!isfinite(e))
-        return dfle_error_set(err, DFLE_ENUMERIC,
-                              "model: erosion is not finite at node %zu for S = %g", i + 1, S);
-    *E = e;
-    return DFLE_OK;
-}
 
 /* G(S) = E(S) + c S, non-decreasing in S. */
 static int total(dfle_model *m, size_t i, double S, double c, int with_df, double *G,
                  int *goes_on, dfle_error *err)
 {
     double E;
-    int st = dfle_mi_node_erosion(m, i, S, with_df, &E, goes_on, err);
+    int st = dfle_model_node_erosion(m, i, S, with_df, &E, goes_on, err);
     *G = E + c * S;
     return st;
 }
 
-int dfle_mi_solve_node(dfle_model *m, size_t i, double U_eff, double c, int with_df,
-                       double guess, double *S_out, int *goes_on, dfle_error *err)
+int dfle_solve_node(dfle_model *m, size_t i, double U_eff, double c, int with_df, double guess,
+                    double *S_out, int *goes_on, dfle_error *err)
 {
     int on = 0, on2;
     const double log_target = log(U_eff);
@@ -133,7 +70,7 @@ int dfle_mi_solve_node(dfle_model *m, size_t i, double U_eff, double c, int with
                 return dfle_error_set(err, DFLE_EFIT,
                                       "model: erosion never reaches U at node %zu (x = %g m): "
                                       "no steady slope there",
-                                      i + 1, dfle_channel_x(m->ch)[i]);
+                                      i + 1, dfle_channel_x(dfle_model_channel(m))[i]);
         }
     }
     /* Newton on ln G against ln S, which is close to a straight line for
@@ -183,5 +120,5 @@ int dfle_mi_solve_node(dfle_model *m, size_t i, double U_eff, double c, int with
     }
     return dfle_error_set(err, DFLE_ENUMERIC,
                           "model: the slope at node %zu (x = %g m) did not converge (bracket "
-                          "[%g, %g])", i + 1, dfle_channel_x(m->ch)[i], lo, hi);
+                          "[%g, %g])", i + 1, dfle_channel_x(dfle_model_channel(m))[i], lo, hi);
 }

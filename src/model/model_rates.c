@@ -1,0 +1,251 @@
+/*
+ * model_rates.c - the rates of Eq. (3) for the model's state: slopes,
+ * fluvial erosion, the debris flow and its erosion, dz/dt; their slope
+ * derivative (the kinematic-wave speed that limits explicit steps); and
+ * the erosion at one node as a function of its own slope, which the
+ * implicit and direct solvers turn into one scalar equation per node.
+ *
+ * One evaluation:
+ *   1. slopes from elevations, S_i = (z_i - z_r) / L_i (receiver r);
+ *   2. fluvial erosion per node;
+ *   3. route the debris flow (every step for a local router such as the
+ *      empirical one; otherwise only when the router says the slopes have
+ *      moved far enough from those of this model's last routing), the
+ *      law's flow factor after each routing and its rate every time;
+ *   4. dz/dt, and a check that everything produced is finite.
+ */
+#include <assert.h>
+#include <math.h>
+#include <string.h>
+
+#include "model/model_internal.h"
+
+/* Relative slope perturbation of the finite-difference dE/dS: large
+ * enough to stay clear of round-off in E, small enough to be local. */
+#define CELERITY_EPS 1e-6
+
+/* Debris-flow erosion for slopes S into E; routes into `flow` when asked
+ * (route != 0), otherwise reuses the flow factor F. */
+static int debris_flow_erosion(dfle_model *m, const double *S, dfle_flow *flow,
+                               double *F, double *E, int route, dfle_error *err)
+{
+    const dfle_law_ops *lops = dfle_law_get_ops(m->law);
+    dfle_law_ctx ctx;
+    int st;
+
+    if (route) {
+        /* Time-resolved routers sum the law's Eq. (11) integrand as they go. */
+        flow->integrand = lops->integrand;
+        flow->integrand_state = dfle_law_state(m->law);
+        st = dfle_router_route(m->rt, m->ch, S, flow, err);
+        if (st != DFLE_OK)
+            return st;
+        assert(flow->runout_end <= m->n);
+    }
+    ctx.n = flow->runout_end;
+    ctx.S = S;
+    ctx.A = dfle_channel_A(m->ch);
+    ctx.w = dfle_channel_w(m->ch);
+    ctx.flow = flow;
+    if (route) {
+        st = dfle_law_flow_factor(m->law, &ctx, F, err);
+        if (st != DFLE_OK)
+            return st;
+    }
+    st = dfle_law_rate(m->law, &ctx, F, E, err);
+    if (st != DFLE_OK)
+        return st;
+    for (size_t i = ctx.n; i < m->n; i++)
+        E[i] = 0.0;
+    return DFLE_OK;
+}
+
+/* Name the first non-finite value so the user can see where it began. */
+static int report_nonfinite(const dfle_model *m, size_t i, dfle_error *err)
+{
+    const char *what = !isfinite(m->z[i])      ? "z"
+                       : !isfinite(m->S[i])    ? "S"
+                       : !isfinite(m->E_f[i])  ? "E_f"
+                       : !isfinite(m->E_df[i]) ? "E_df"
+                                               : "dz/dt";
+    return dfle_error_set(err, DFLE_ENUMERIC,
+                          "model: %s is not finite at node %zu (x = %g m) at t = %g yr "
+                          "(z = %g m, S = %g, E_f = %g, E_df = %g m/yr)",
+                          what, i + 1, dfle_channel_x(m->ch)[i], m->time, m->z[i], m->S[i],
+                          m->E_f[i], m->E_df[i]);
+}
+
+int dfle_model_evaluate(dfle_model *m, dfle_error *err)
+{
+    const size_t n = m->n;
+    size_t nonpositive = 0;
+    int st;
+
+    for (size_t i = 0; i < n; i++) {
+        if (m->is_base[i])
+            continue;
+        m->S[i] = (m->z[i] - m->z[m->recv[i]]) * m->inv_len[i];
+        nonpositive += !(m->S[i] > 0);
+    }
+    for (size_t i = 0; i < n; i++)
+        if (m->is_base[i])
+            m->S[i] = m->base_donor[i] != NO_NODE ? m->S[m->base_donor[i]] : 0.0;
+    m->nonpositive = nonpositive;
+
+    if (m->fl != NULL) {
+        const double n_s = dfle_fluvial_n(m->fl);
+        for (size_t i = 0; i < n; i++)
+            m->E_f[i] = m->S[i] > 0 ? m->KAm[i] * pow(m->S[i], n_s) : 0.0;
+    }
+    if (m->rt != NULL) {
+        int route = 1;
+        if (m->flow_valid &&
+            (st = dfle_router_needs_reroute(m->rt, n, m->S_routed, m->S, &route, err)) != DFLE_OK)
+            return st;
+        st = debris_flow_erosion(m, m->S, &m->flow, m->F, m->E_df, route, err);
+        if (st != DFLE_OK)
+            return st;
+        if (route) {
+            m->routings++;
+            m->flow_valid = 1;
+            if (!dfle_router_is_local(m->rt)) /* what the next needs_reroute compares with */
+                memcpy(m->S_routed, m->S, n * sizeof *m->S);
+        }
+    }
+    for (size_t i = 0; i < n; i++)
+        m->dzdt[i] = m->is_base[i] ? 0.0 : m->U - m->E_f[i] - m->E_df[i];
+    /* Everything a step produces, not only the rates: a NaN elevation
+     * gives S = NaN, which every law reads as "no erosion". */
+    for (size_t i = 0; i < n; i++)
+        if (!isfinite(m->z[i]) || !isfinite(m->S[i]) || !isfinite(m->dzdt[i]) ||
+            !isfinite(m->E_f[i]) || !isfinite(m->E_df[i]))
+            return report_nonfinite(m, i, err);
+    m->evaluated = 1;
+    return DFLE_OK;
+}
+
+int dfle_model_is_evaluated(const dfle_model *m) { return m->evaluated; }
+size_t dfle_model_nonpositive_slopes(const dfle_model *m) { return m->nonpositive; }
+size_t dfle_model_routings(const dfle_model *m) { return m->routings; }
+
+int dfle_model_flow_reaches(const dfle_model *m, size_t i)
+{
+    assert(i < m->n);
+    return m->rt != NULL && i < m->flow.runout_end;
+}
+
+double dfle_model_rate_ratio(const dfle_model *m)
+{
+    double r = 0.0;
+    assert(m->evaluated);
+    for (size_t i = 0; i < m->n; i++) {
+        double a = fabs(m->dzdt[i]); /* 0 on base nodes */
+        if (a > r)
+            r = a;
+    }
+    return r / m->U;
+}
+
+int dfle_model_celerity(dfle_model *m, const double **c_out, dfle_error *err)
+{
+    const size_t n = m->n;
+
+    assert(m->evaluated);
+    for (size_t i = 0; i < n; i++)
+        m->celerity[i] = 0.0;
+    if (m->fl != NULL) {
+        const double n_s = dfle_fluvial_n(m->fl);
+        for (size_t i = 0; i < n; i++)
+            if (!m->is_base[i] && m->S[i] > 0)
+                m->celerity[i] = n_s * m->E_f[i] / m->S[i];
+    }
+    if (m->rt != NULL && m->flow.runout_end > 0) {
+        int local = dfle_router_is_local(m->rt);
+        size_t active;
+        int st;
+
+        for (size_t i = 0; i < n; i++)
+            m->S_pert[i] = m->S[i] > 0 ? m->S[i] * (1.0 + CELERITY_EPS) : m->S[i];
+        if (local) {
+            st = debris_flow_erosion(m, m->S_pert, &m->flow_pert, m->F_pert, m->E_pert, 1, err);
+        } else {
+            /* The flow stays as routed; only the slope term moves. */
+            st = debris_flow_erosion(m, m->S_pert, &m->flow, m->F, m->E_pert, 0, err);
+        }
+        if (st != DFLE_OK)
+            return st;
+        /* A node the perturbed flow newly reaches would show a jump, not
+         * a derivative: use only nodes both flows reach. */
+        active = m->flow.runout_end;
+        if (local && m->flow_pert.runout_end < active)
+            active = m->flow_pert.runout_end;
+        for (size_t i = 0; i < active; i++)
+            if (!m->is_base[i] && m->S[i] > 0)
+                m->celerity[i] += fabs(m->E_pert[i] - m->E_df[i]) / (CELERITY_EPS * m->S[i]);
+    }
+    *c_out = m->celerity;
+    return DFLE_OK;
+}
+
+/* A one-node view of the model's routed flow at node i. */
+static dfle_flow flow_at(const dfle_flow *f, size_t i)
+{
+    dfle_flow v;
+    memset(&v, 0, sizeof v);
+    v.n = 1;
+    v.runout_end = i < f->runout_end;
+    v.M = f->M + i, v.Q = f->Q + i, v.h = f->h + i, v.v = f->v + i;
+    v.t_p = f->t_p + i, v.tau = f->tau + i, v.Theta = f->Theta + i;
+    v.integral = f->integral + i;
+    v.time_resolved = f->time_resolved;
+    return v;
+}
+
+int dfle_model_node_erosion(dfle_model *m, size_t i, double S, int with_df, double *E,
+                            int *goes_on, dfle_error *err)
+{
+    double e = 0.0;
+    assert(i < m->n);
+    *goes_on = 0;
+    if (!(S > 0)) { /* no erosion up a reverse slope (model.h) */
+        *E = 0.0;
+        return DFLE_OK;
+    }
+    if (m->fl != NULL)
+        e = m->KAm[i] * pow(S, dfle_fluvial_n(m->fl));
+    if (with_df && m->rt != NULL) {
+        dfle_law_ctx ctx = {.n = 1, .S = &S, .A = dfle_channel_A(m->ch) + i,
+                            .w = dfle_channel_w(m->ch) + i};
+        dfle_flow view; /* lives as long as ctx: rate may read the flow */
+        double F, Edf;
+        int st;
+        if (dfle_router_is_local(m->rt)) {
+            /* The flow at this node follows its slope: re-evaluate it. */
+            st = dfle_router_node_flow(m->rt, m->ch, i, S, &m->node, goes_on, err);
+            if (st != DFLE_OK)
+                return st;
+            m->node.runout_end = 1;
+            ctx.flow = &m->node;
+            if ((st = dfle_law_flow_factor(m->law, &ctx, &F, err)) != DFLE_OK)
+                return st;
+        } else {
+            /* Routed rarely: the cached Eq. (11) factor stands. */
+            view = flow_at(&m->flow, i);
+            *goes_on = i < m->flow.runout_end;
+            if (!*goes_on) {
+                *E = e;
+                return DFLE_OK;
+            }
+            ctx.flow = &view;
+            F = m->F[i];
+        }
+        if ((st = dfle_law_rate(m->law, &ctx, &F, &Edf, err)) != DFLE_OK)
+            return st;
+        e += Edf;
+    }
+    if (!isfinite(e))
+        return dfle_error_set(err, DFLE_ENUMERIC,
+                              "model: erosion is not finite at node %zu for S = %g", i + 1, S);
+    *E = e;
+    return DFLE_OK;
+}

@@ -1,0 +1,119 @@
+/*
+ * solver.c - the dispatcher: check a run's options, pick the method and
+ * fall back when the direct method finds no consistent steady state.
+ *
+ * The methods are solver ops tables (solver.h), one file each; this is
+ * the only place that knows more than one of them.
+ */
+#include "dfle/solver.h"
+
+#include <math.h>
+#include <stdio.h>
+#include <string.h>
+
+#include "solvers/solver_internal.h"
+
+void dfle_run_opts_default(dfle_run_opts *o)
+{
+    memset(o, 0, sizeof *o);
+    o->max_time = 2e7;
+    o->tol = 1e-3;
+    o->max_steps = 10000000u;
+    o->method = DFLE_METHOD_EXPLICIT;
+    o->rtol = 1e-3;
+    o->direct_tol = 2e-3;
+}
+
+const char *dfle_stop_reason_name(int reason)
+{
+    switch (reason) {
+    case DFLE_STOP_STEADY: return "steady";
+    case DFLE_STOP_TIME: return "time";
+    case DFLE_STOP_STEPS: return "steps";
+    default: return "unknown";
+    }
+}
+
+static const dfle_solver_ops *const methods[] = {
+    [DFLE_METHOD_EXPLICIT] = &dfle_solver_explicit,
+    [DFLE_METHOD_IMPLICIT] = &dfle_solver_implicit,
+    [DFLE_METHOD_DIRECT] = &dfle_solver_direct,
+};
+
+const char *dfle_method_name(int method)
+{
+    if (method == DFLE_METHOD_AUTO)
+        return "auto";
+    return method >= 0 && method < DFLE_METHOD_AUTO ? methods[method]->name : "unknown";
+}
+
+int dfle_method_lookup(const char *name)
+{
+    for (int k = 0; k <= DFLE_METHOD_AUTO; k++)
+        if (strcmp(name, dfle_method_name(k)) == 0)
+            return k;
+    return -1;
+}
+
+static int check_opts(const dfle_run_opts *o, dfle_error *err)
+{
+    if (!(isfinite(o->max_time) && o->max_time > 0))
+        return dfle_error_set(err, DFLE_EINVAL, "model: max_time must be > 0 yr (got %g)",
+                              o->max_time);
+    if (!(isfinite(o->tol) && o->tol >= 0))
+        return dfle_error_set(err, DFLE_EINVAL, "model: tol must be >= 0 (got %g)", o->tol);
+    if (o->max_steps == 0)
+        return dfle_error_set(err, DFLE_EINVAL, "model: max_steps must be > 0");
+    if (!(isfinite(o->rtol) && o->rtol > 0 && o->rtol < 1))
+        return dfle_error_set(err, DFLE_EINVAL, "model: rtol must be in (0, 1) (got %g)", o->rtol);
+    if (!(isfinite(o->direct_tol) && o->direct_tol > 0 && o->direct_tol < 1))
+        return dfle_error_set(err, DFLE_EINVAL, "model: direct_tol must be in (0, 1) (got %g)",
+                              o->direct_tol);
+    if (o->n_record > 0 && (o->record_times == NULL || o->record_z == NULL))
+        return dfle_error_set(err, DFLE_EINVAL, "model: record times need a place to record");
+    for (size_t k = 0; k < o->n_record; k++)
+        if (!(isfinite(o->record_times[k]) && o->record_times[k] >= 0 &&
+              o->record_times[k] <= o->max_time &&
+              (k == 0 || o->record_times[k] > o->record_times[k - 1])))
+            return dfle_error_set(err, DFLE_EINVAL,
+                                  "model: record times must increase within [0, max_time = %g yr] "
+                                  "(time %zu is %g)", o->max_time, k + 1, o->record_times[k]);
+    if (o->method < 0 || o->method > DFLE_METHOD_AUTO)
+        return dfle_error_set(err, DFLE_EINVAL, "model: unknown method %d", o->method);
+    if (o->method == DFLE_METHOD_DIRECT && !(o->tol > 0))
+        return dfle_error_set(err, DFLE_EINVAL,
+                              "model: the direct method finds steady states only (tol > 0)");
+    if (o->method == DFLE_METHOD_DIRECT && o->n_record > 0)
+        return dfle_error_set(err, DFLE_EINVAL, "model: the direct method has no time to record at");
+    return DFLE_OK;
+}
+
+int dfle_solver_run(dfle_model *m, const dfle_run_opts *o, dfle_run_result *res,
+                    dfle_error *err)
+{
+    dfle_run_opts opts = *o;
+    int st;
+
+    memset(res, 0, sizeof *res);
+    if ((st = check_opts(o, err)) != DFLE_OK)
+        return st;
+    if (opts.method == DFLE_METHOD_AUTO)
+        opts.method = o->tol > 0 ? DFLE_METHOD_DIRECT : DFLE_METHOD_EXPLICIT;
+    res->method = opts.method;
+    if (opts.method != DFLE_METHOD_DIRECT)
+        return methods[opts.method]->run(m, &opts, res, err);
+
+    /* With U(t): the steady state for U at the current time. */
+    if ((st = dfle_stepping_uplift(m, &opts, err)) != DFLE_OK)
+        return st;
+    st = dfle_solver_direct.run(m, &opts, res, err);
+    if (st != DFLE_EFIT)
+        return st;
+    /* No consistent solution: step from where the direct method left the
+     * state, and say why. */
+    res->fallback = 1;
+    snprintf(res->note, sizeof res->note, "direct: %.110s; continued by implicit stepping",
+             err != NULL ? err->msg : "no consistent solution");
+    dfle_error_clear(err);
+    return dfle_solver_implicit.run(m, &opts, res, err);
+}
