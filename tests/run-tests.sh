@@ -24,6 +24,9 @@ for t in "$BUILD"/tests/test_*; do
     run "$(basename "$t")" $vg "$t"
 done
 
+# The architecture: includes go down the layers (doc/c-api.md).
+run layers sh tests/check-layers.sh
+
 # Lua-level tests of the scripting API (ends with "N passed, N failed").
 run lua-tests $vg "$DFLE" -q tests/lua/run.lua "$DFLE"
 

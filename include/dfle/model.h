@@ -112,6 +112,8 @@ const double *dfle_model_flow_length(const dfle_model *m);
 const size_t *dfle_model_stack(const dfle_model *m);
 /* 1 if node i is held at base level. */
 int dfle_model_is_base(const dfle_model *m, size_t i);
+/* 1 if every flow length is the same (a 1D channel). */
+int dfle_model_uniform_flow_length(const dfle_model *m);
 
 /* The elevations [m] for a solver to change in place; call
  * dfle_model_touch afterwards (the fields are then stale). */

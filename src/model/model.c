@@ -96,16 +96,17 @@ static int topology_from_channel(dfle_model *m, dfle_error *err)
 {
     const size_t n = m->n;
     const double dx = dfle_channel_dx(m->ch);
-    /* Three size_t arrays, two double arrays, then bytes: each part
+    /* Four size_t arrays, two double arrays, then bytes: each part
      * starts suitably aligned for what follows it. */
-    void *block = malloc(3 * n * sizeof(size_t) + 2 * n * sizeof(double) + n);
+    void *block = malloc(4 * n * sizeof(size_t) + 2 * n * sizeof(double) + n);
 
     if (block == NULL)
         return dfle_error_set(err, DFLE_ENOMEM, "model: out of memory for %zu nodes", n);
     m->recv = block;
     m->stack = m->recv + n;
     m->base_donor = m->stack + n;
-    m->len = (double *)(void *)(m->base_donor + n);
+    m->base = m->base_donor + n;
+    m->len = (double *)(void *)(m->base + n);
     m->inv_len = m->len + n;
     m->is_base = (unsigned char *)(m->inv_len + n);
     for (size_t i = 0; i < n; i++) {
@@ -117,6 +118,9 @@ static int topology_from_channel(dfle_model *m, dfle_error *err)
         m->inv_len[i] = 1.0 / dx;
         m->is_base[i] = (unsigned char)base;
     }
+    m->base[0] = n - 1;
+    m->n_base = 1;
+    m->uniform_len = 1;
     return DFLE_OK;
 }
 

@@ -27,6 +27,9 @@ struct dfle_model {
     size_t *recv, *stack, *base_donor;
     double *len, *inv_len; /* L_i [m] and 1 / L_i (slopes multiply by it) */
     unsigned char *is_base;
+    size_t *base;          /* the n_base base-level nodes                 */
+    size_t n_base;
+    int uniform_len;       /* every L_i is the same (a 1D channel)        */
 
     /* State and fields: one block of n-arrays, see model_alloc(). */
     double *z, *S, *E_f, *E_df, *dzdt, *F, *KAm;

@@ -75,21 +75,35 @@ static int report_nonfinite(const dfle_model *m, size_t i, dfle_error *err)
                           m->E_f[i], m->E_df[i]);
 }
 
+/* Slow path of the finiteness check: the first bad node, named. */
+static int check_finite(const dfle_model *m, dfle_error *err)
+{
+    for (size_t i = 0; i < m->n; i++)
+        if (!isfinite(m->z[i]) || !isfinite(m->S[i]) || !isfinite(m->dzdt[i]) ||
+            !isfinite(m->E_f[i]) || !isfinite(m->E_df[i]))
+            return report_nonfinite(m, i, err);
+    return DFLE_OK;
+}
+
 int dfle_model_evaluate(dfle_model *m, dfle_error *err)
 {
     const size_t n = m->n;
     size_t nonpositive = 0;
+    double sum = 0.0;
     int st;
 
+    /* Branch-free over all nodes: a base node is its own receiver, so its
+     * slope comes out 0 (counted, then taken back) and is then replaced
+     * by its donor's. */
     for (size_t i = 0; i < n; i++) {
-        if (m->is_base[i])
-            continue;
         m->S[i] = (m->z[i] - m->z[m->recv[i]]) * m->inv_len[i];
         nonpositive += !(m->S[i] > 0);
     }
-    for (size_t i = 0; i < n; i++)
-        if (m->is_base[i])
-            m->S[i] = m->base_donor[i] != NO_NODE ? m->S[m->base_donor[i]] : 0.0;
+    for (size_t k = 0; k < m->n_base; k++) {
+        const size_t i = m->base[k];
+        nonpositive -= !(m->S[i] > 0);
+        m->S[i] = m->base_donor[i] != NO_NODE ? m->S[m->base_donor[i]] : 0.0;
+    }
     m->nonpositive = nonpositive;
 
     if (m->fl != NULL) {
@@ -112,14 +126,18 @@ int dfle_model_evaluate(dfle_model *m, dfle_error *err)
                 memcpy(m->S_routed, m->S, n * sizeof *m->S);
         }
     }
-    for (size_t i = 0; i < n; i++)
-        m->dzdt[i] = m->is_base[i] ? 0.0 : m->U - m->E_f[i] - m->E_df[i];
+    for (size_t i = 0; i < n; i++) {
+        m->dzdt[i] = m->U - m->E_f[i] - m->E_df[i];
+        /* A sum is finite only if every term is (or it overflowed, which
+         * the slow path then clears): one test per node, not five. */
+        sum += m->z[i] + m->S[i] + m->dzdt[i];
+    }
+    for (size_t k = 0; k < m->n_base; k++)
+        m->dzdt[m->base[k]] = 0.0;
     /* Everything a step produces, not only the rates: a NaN elevation
      * gives S = NaN, which every law reads as "no erosion". */
-    for (size_t i = 0; i < n; i++)
-        if (!isfinite(m->z[i]) || !isfinite(m->S[i]) || !isfinite(m->dzdt[i]) ||
-            !isfinite(m->E_f[i]) || !isfinite(m->E_df[i]))
-            return report_nonfinite(m, i, err);
+    if (!isfinite(sum) && (st = check_finite(m, err)) != DFLE_OK)
+        return st;
     m->evaluated = 1;
     return DFLE_OK;
 }
@@ -151,13 +169,13 @@ int dfle_model_celerity(dfle_model *m, const double **c_out, dfle_error *err)
     const size_t n = m->n;
 
     assert(m->evaluated);
-    for (size_t i = 0; i < n; i++)
-        m->celerity[i] = 0.0;
     if (m->fl != NULL) {
         const double n_s = dfle_fluvial_n(m->fl);
         for (size_t i = 0; i < n; i++)
-            if (!m->is_base[i] && m->S[i] > 0)
-                m->celerity[i] = n_s * m->E_f[i] / m->S[i];
+            m->celerity[i] = m->S[i] > 0 ? n_s * m->E_f[i] / m->S[i] : 0.0;
+    } else {
+        for (size_t i = 0; i < n; i++)
+            m->celerity[i] = 0.0;
     }
     if (m->rt != NULL && m->flow.runout_end > 0) {
         int local = dfle_router_is_local(m->rt);
@@ -180,12 +198,16 @@ int dfle_model_celerity(dfle_model *m, const double **c_out, dfle_error *err)
         if (local && m->flow_pert.runout_end < active)
             active = m->flow_pert.runout_end;
         for (size_t i = 0; i < active; i++)
-            if (!m->is_base[i] && m->S[i] > 0)
+            if (m->S[i] > 0)
                 m->celerity[i] += fabs(m->E_pert[i] - m->E_df[i]) / (CELERITY_EPS * m->S[i]);
     }
+    for (size_t k = 0; k < m->n_base; k++)
+        m->celerity[m->base[k]] = 0.0; /* held fixed: no wave there */
     *c_out = m->celerity;
     return DFLE_OK;
 }
+
+int dfle_model_uniform_flow_length(const dfle_model *m) { return m->uniform_len; }
 
 /* A one-node view of the model's routed flow at node i. */
 static dfle_flow flow_at(const dfle_flow *f, size_t i)

@@ -14,35 +14,63 @@
 
 #include "solvers/solver_internal.h"
 
+/* The CFL step over the nodes' wave speeds c: the smallest
+ * cfl L_i / c_i, found as the largest c_i / L_i (a product with 1 / L,
+ * where one division at the end gives exactly the old single-dx value
+ * for a channel).  NaN and Inf are caught by one sum, then named. */
+static int cfl_step(dfle_model *m, const double *c, double *dt, dfle_error *err)
+{
+    const size_t n = dfle_model_size(m);
+    const double *L = dfle_model_flow_length(m), cfl = dfle_model_cfl(m);
+    double sum = 0.0, best = 0.0;
+    size_t at = n;
+
+    if (dfle_model_uniform_flow_length(m)) {
+        for (size_t i = 0; i < n; i++) {
+            sum += c[i];
+            if (c[i] > best)
+                best = c[i], at = i;
+        }
+    } else {
+        for (size_t i = 0; i < n; i++) {
+            sum += c[i];
+            if (c[i] / L[i] > best)
+                best = c[i] / L[i], at = i;
+        }
+    }
+    if (!isfinite(sum)) {
+        for (size_t i = 0; i < n; i++)
+            if (!isfinite(c[i]))
+                return dfle_error_set(err, DFLE_ENUMERIC,
+                                      "model: erosion rate has no finite slope derivative at "
+                                      "node %zu at t = %g yr", i + 1, dfle_model_time(m));
+    }
+    *dt = dfle_model_dt_max(m);
+    if (at < n && cfl * L[at] / c[at] < *dt)
+        *dt = cfl * L[at] / c[at];
+    return DFLE_OK;
+}
+
 int dfle_explicit_advance(dfle_model *m, double dt_limit, double *dt_taken, void *state,
                           dfle_error *err)
 {
     const size_t n = dfle_model_size(m);
-    const double *L = dfle_model_flow_length(m), cfl = dfle_model_cfl(m);
-    const double *c, *dzdt = NULL;
-    double dt = dfle_model_dt_max(m), *z;
+    const double *c, *dzdt;
+    double dt = 0.0, *z;
     int st;
     (void)state;
 
-    if ((st = dfle_model_celerity(m, &c, err)) != DFLE_OK)
+    if ((st = dfle_model_celerity(m, &c, err)) != DFLE_OK ||
+        (st = cfl_step(m, c, &dt, err)) != DFLE_OK)
         return st;
-    for (size_t i = 0; i < n; i++) {
-        if (!isfinite(c[i]))
-            return dfle_error_set(err, DFLE_ENUMERIC,
-                                  "model: erosion rate has no finite slope derivative at node "
-                                  "%zu at t = %g yr", i + 1, dfle_model_time(m));
-        /* (cfl L) / c, smallest where c is largest */
-        if (c[i] > 0 && cfl * L[i] / c[i] < dt)
-            dt = cfl * L[i] / c[i];
-    }
     if (dt > dt_limit)
         dt = dt_limit;
     if ((dzdt = dfle_model_field(m, DFLE_FIELD_DZDT, err)) == NULL)
         return err != NULL ? err->code : DFLE_ESTATE;
+    /* dz/dt is 0 on base nodes: they stay where they are. */
     z = dfle_model_z(m);
     for (size_t i = 0; i < n; i++)
-        if (!dfle_model_is_base(m, i))
-            z[i] += dt * dzdt[i];
+        z[i] += dt * dzdt[i];
     dfle_model_touch(m);
     *dt_taken = dt;
     return DFLE_OK;
