@@ -51,17 +51,25 @@ static int cfl_step(dfle_model *m, const double *c, double *dt, dfle_error *err)
     return DFLE_OK;
 }
 
+int dfle_explicit_step(dfle_model *m, double *dt, dfle_error *err)
+{
+    const double *c;
+    int st;
+    if ((st = dfle_model_celerity(m, &c, err)) != DFLE_OK)
+        return st;
+    return cfl_step(m, c, dt, err);
+}
+
 int dfle_explicit_advance(dfle_model *m, double dt_limit, double *dt_taken, void *state,
                           dfle_error *err)
 {
     const size_t n = dfle_model_size(m);
-    const double *c, *dzdt;
+    const double *dzdt;
     double dt = 0.0, *z;
     int st;
     (void)state;
 
-    if ((st = dfle_model_celerity(m, &c, err)) != DFLE_OK ||
-        (st = cfl_step(m, c, &dt, err)) != DFLE_OK)
+    if ((st = dfle_explicit_step(m, &dt, err)) != DFLE_OK)
         return st;
     if (dt > dt_limit)
         dt = dt_limit;

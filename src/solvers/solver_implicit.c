@@ -46,6 +46,9 @@ typedef struct implicit_state {
     double rtol;
     dfle_run_result *res;
     double *z_new, *z_start, *z_full; /* n values each (one block) */
+    /* Transients: explicit steps to take before trying a large implicit
+     * step again, and the wait after the next failure (doubling). */
+    unsigned explicit_left, explicit_wait;
 } implicit_state;
 
 /* Large steps that stop making progress for this many steps hand over
@@ -115,47 +118,96 @@ static int steady_advance(dfle_model *m, implicit_state *s, double dt_limit, dou
     return be_step(m, s, dt, err);
 }
 
+/* Explicit steps after a failed large step before the next try, at
+ * most (each failure doubles the wait, a success resets it). */
+#define EXPLICIT_WAIT_MAX 256u
+/* Error control asking for steps this far below the explicit stability
+ * limit is reacting to something that is not smooth, not to accuracy. */
+#define SUB_CFL_FLOOR 1e-3
+
+/* A safety net, not the rule: where error control wants steps far below
+ * the explicit CFL step, an explicit step is taken instead (stable there
+ * by construction, as accurate as the paper's method, far cheaper than
+ * three backward-Euler sweeps), so no state can make the run crawl in
+ * steps of 1e-11 yr.  Large implicit steps are tried again after a wait
+ * that doubles with each failure. */
+static int explicit_instead(dfle_model *m, implicit_state *s, double dt_limit,
+                            double *dt_taken, dfle_error *err)
+{
+    int st = dfle_explicit_advance(m, dt_limit, dt_taken, NULL, err);
+    if (st == DFLE_OK && s->explicit_left > 0)
+        s->explicit_left--;
+    return st;
+}
+
 /* Step doubling: accept when one step of dt and two of dt/2 agree to
- * within rtol U dt (the local error against the uplift of the step);
- * the two half steps are kept. */
+ * within rtol times the larger of the step's uplift U dt and its largest
+ * change in elevation; the two half steps are kept.
+ *
+ * All three sweeps use the flow of the step's start (the lagged runout
+ * and, for a router routed rarely, the lagged Eq. 11 factor): the state
+ * is not evaluated between the half steps.  Otherwise a runout that moves
+ * by a node within the step makes the full step and the half steps see
+ * different erosion there, a jump that does not shrink like dt^2, and
+ * error control would halve the step without end (it reached 1e-11 yr).
+ * The runout is refreshed at the start of the next step, as for a single
+ * backward-Euler step.
+ *
+ * Relative to the change as well as to uplift, because a profile far
+ * from equilibrium (a fluvial start meeting debris flows: tens of metres
+ * in the first year) changes thousands of times faster than U, and an
+ * error of rtol U dt would there mean steps of 1e-8 yr. */
 static int transient_advance(dfle_model *m, implicit_state *s, double dt_limit,
                              double *dt_taken, dfle_error *err)
 {
     const size_t n = dfle_model_size(m);
-    double *z = dfle_model_z(m), *z_start = s->z_start, *z_full = s->z_full;
+    double *z = dfle_model_z(m), *z_start = s->z_start, *z_full = s->z_full, dt_cfl;
     int st;
 
+    if (s->explicit_left > 0)
+        return explicit_instead(m, s, dt_limit, dt_taken, err);
+    if ((st = dfle_explicit_step(m, &dt_cfl, err)) != DFLE_OK)
+        return st;
     memcpy(z_start, z, n * sizeof *z_start);
     for (int tries = 0; tries < MAX_REJECTIONS; tries++) {
-        double dt = fmin(s->dt, dt_limit), diff = 0.0, zmax = 0.0, scale, q;
+        double dt = fmin(s->dt, dt_limit), diff = 0.0, zmax = 0.0, change = 0.0, scale, q;
+        if (dt < SUB_CFL_FLOOR * dt_cfl && dt < dt_limit) {
+            /* Error control asks for less than an explicit step. */
+            s->explicit_wait = s->explicit_wait ? 2 * s->explicit_wait : 1;
+            if (s->explicit_wait > EXPLICIT_WAIT_MAX)
+                s->explicit_wait = EXPLICIT_WAIT_MAX;
+            s->explicit_left = s->explicit_wait;
+            s->dt = dt_cfl; /* what the next try starts from */
+            if (!dfle_model_is_evaluated(m) && (st = dfle_model_evaluate(m, err)) != DFLE_OK)
+                return st; /* z is back at the start after a rejection */
+            return explicit_instead(m, s, dt_limit, dt_taken, err);
+        }
         if ((st = be_step(m, s, dt, err)) != DFLE_OK)
             return st;
         memcpy(z_full, z, n * sizeof *z_full);
         memcpy(z, z_start, n * sizeof *z_start);
-        dfle_model_touch(m);
-        if ((st = dfle_model_evaluate(m, err)) != DFLE_OK ||
-            (st = be_step(m, s, 0.5 * dt, err)) != DFLE_OK ||
-            (st = dfle_model_evaluate(m, err)) != DFLE_OK ||
+        if ((st = be_step(m, s, 0.5 * dt, err)) != DFLE_OK ||
             (st = be_step(m, s, 0.5 * dt, err)) != DFLE_OK)
             return st;
         for (size_t i = 0; i < n; i++) {
             diff = fmax(diff, fabs(z[i] - z_full[i]));
+            change = fmax(change, fabs(z[i] - z_start[i]));
             zmax = fmax(zmax, fabs(z[i]));
         }
-        /* Error per step against uplift per step: summed over a run, the
-         * error stays below rtol times the uplift of the run. */
-        scale = s->rtol * dfle_model_U(m) * dt + 1e-12 * (zmax + 1.0);
+        /* Summed over a run, the error stays below rtol times the larger
+         * of its uplift and its change. */
+        scale = s->rtol * fmax(dfle_model_U(m) * dt, change) + 1e-12 * (zmax + 1.0);
         q = diff > 0 ? 0.9 * sqrt(scale / diff) : 4.0;
         if (diff <= scale) {
             s->dt = dt * fmin(4.0, fmax(0.2, q));
+            s->explicit_wait = 0;
             *dt_taken = dt;
             return DFLE_OK;
         }
-        /* Rejected: back to the start, smaller step. */
+        /* Rejected: back to the start (whose flow is still the model's:
+         * nothing was evaluated), smaller step. */
         memcpy(z, z_start, n * sizeof *z_start);
         dfle_model_touch(m);
-        if ((st = dfle_model_evaluate(m, err)) != DFLE_OK)
-            return st;
         s->dt = dt * fmax(0.2, q);
     }
     return dfle_error_set(err, DFLE_ENUMERIC,

@@ -31,6 +31,8 @@ int dfle_stepping_uplift(dfle_model *m, const dfle_run_opts *o, dfle_error *err)
  * implicit method finishes with these when large steps stall. */
 int dfle_explicit_advance(dfle_model *m, double dt_limit, double *dt_taken, void *state,
                           dfle_error *err);
+/* The CFL time step of the evaluated state [yr], capped at dt_max. */
+int dfle_explicit_step(dfle_model *m, double *dt, dfle_error *err);
 
 /* Solve U_eff = E(S) + c S for the slope S of node i, where E is
  * dfle_model_node_erosion: safeguarded Newton with bisection, started

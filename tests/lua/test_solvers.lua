@@ -31,6 +31,30 @@ tests["run_to_steady: the direct method says when it falls back"] = function()
     T.has(r.note, "direct:", "continued by implicit stepping")
 end
 
+tests["run: an implicit transient far from equilibrium neither crawls nor drifts"] = function()
+    -- From the default (fluvial) start the debris flows carve tens of
+    -- metres in the first year and their runout moves from step to step;
+    -- error control once halved the step to 1e-11 yr there (hours for
+    -- one simulated year).  Bounded by max_steps, it must now finish, and
+    -- closer to a fine explicit reference than the default explicit run.
+    local ref = dfle.model{ cfl = 0.05 }
+    ref:run{ years = 1 }
+    local e = dfle.model{}
+    e:run{ years = 1 }
+    local m = dfle.model{}
+    local r = m:run{ years = 1, method = "implicit", max_steps = 5000 }
+    T.eq(r.reason, "time")
+    T.close(r.time, 1, 1e-12, 0)
+    T.ok(r.steps < 5000, r.steps)
+    local zr, ze, zi = ref:get("z"), e:get("z"), m:get("z")
+    local err_e, err_i = 0, 0
+    for i = 1, m.n do
+        err_e = math.max(err_e, math.abs(ze[i] - zr[i]))
+        err_i = math.max(err_i, math.abs(zi[i] - zr[i]))
+    end
+    T.ok(err_i < err_e, ("implicit error %g m, explicit %g m"):format(err_i, err_e))
+end
+
 tests["run: implicit transients and recorded profiles"] = function()
     local m = model()
     m:run_to_steady{}
