@@ -190,6 +190,35 @@ static void pile_on_a_gentle_channel_stays_put(void **state)
     dfle_channel_free(ch);
 }
 
+/* A Courant number of 3.2e-9 is accepted (it is in (0, 1]) but would
+ * need ~1e11 flow steps: the routing must stop at max_steps and say why,
+ * not run for days. */
+static void routing_work_is_bounded(void **state)
+{
+    dfle_process_opts o;
+    dfle_channel *ch = channel(10.0);
+    dfle_router *rt;
+    dfle_flow flow;
+    double S[202];
+    dfle_error err;
+    (void)state;
+    dfle_process_opts_default(&o);
+    o.flow.cfl = 3.2e-9;
+    o.max_steps = 2000;
+    fluvial_slopes(ch, S);
+    assert_ok(dfle_router_new_process(&o, &rt, &err), &err);
+    assert_int_equal(dfle_flow_init(&flow, dfle_channel_size(ch), NULL), DFLE_OK);
+    flow.integrand = one;
+    assert_int_equal(dfle_router_route(rt, ch, S, &flow, &err), DFLE_ENUMERIC);
+    assert_non_null(strstr(err.msg, "max_steps = 2000"));
+    assert_non_null(strstr(err.msg, "raise cfl"));
+    o.max_steps = 0;
+    assert_int_equal(dfle_router_new_process(&o, &rt, &err), DFLE_EINVAL);
+    assert_non_null(strstr(err.msg, "max_steps"));
+    dfle_flow_release(&flow);
+    dfle_channel_free(ch);
+}
+
 static void snapshots_are_taken_at_the_requested_times(void **state)
 {
     dfle_process_opts o;
@@ -341,6 +370,7 @@ int main(void)
         cmocka_unit_test(rerouting_follows_the_slope_threshold),
         cmocka_unit_test(pile_on_a_gentle_channel_stays_put),
         cmocka_unit_test(snapshots_are_taken_at_the_requested_times),
+        cmocka_unit_test(routing_work_is_bounded),
         cmocka_unit_test(table_g2_g4_corners_route_cleanly),
         cmocka_unit_test(fig6_steady_state_converges_and_fits),
         cmocka_unit_test(bad_parameters_and_missing_integrand),

@@ -16,8 +16,12 @@
  * A routing ends (the criterion, explicitly):
  *   left  - the volume in the domain, ghost cells included, is at most
  *           volume_tol * volume released;
- *   rest  - every cell has |v| h <= q_rest [m^2/s];
+ *   rest  - every cell has |v| h <= q_rest [m^2/s] after the flow has
+ *           once been faster than that, or every cell is still (q = 0,
+ *           a pile friction holds);
  *   time  - t_max seconds have passed (reported; not an error).
+ * A routing that needs more than max_steps flow steps (a tiny cfl, a
+ * flow too fast for its cells) fails with DFLE_ENUMERIC and says so. 
  */
 #ifndef DFLE_ROUTER_PROCESS_H
 #define DFLE_ROUTER_PROCESS_H
@@ -38,6 +42,9 @@ typedef struct dfle_process_opts {
     double q_rest;      /* at rest: every |v| h <= q_rest [m^2/s]   (1e-3)  */
     double volume_tol;  /* left: volume in domain <= tol * released (1e-4)  */
     double t_max;       /* longest routing [s]                      (3600)  */
+    double max_steps;   /* most flow time steps in one routing, a bound
+                         * on work whatever cfl and the flow do: past it
+                         * the routing fails saying so        (1e6)     */
     /* Appendix D: scale the erosion sum (so k_df) by
      * 1000 (1e-6 A)^gamma / M0, a debris-flow frequency growing with A. */
     int frequency_scaling; /* 0 or 1                                (0)     */

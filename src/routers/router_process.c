@@ -44,6 +44,7 @@ void dfle_process_opts_default(dfle_process_opts *o)
     o->q_rest = 1e-3;
     o->volume_tol = 1e-4;
     o->t_max = 3600.0;
+    o->max_steps = 1e6;
     o->frequency_scaling = 0;
     o->gamma = 0.0;
 }
@@ -96,7 +97,7 @@ static int process_route(void *state, const dfle_channel *ch, const double *S, d
     double *cw = NULL, *cS = NULL, *h, *q, released, out_total = 0.0, t = 0.0, t_entry = -1.0;
     dfle_flow1d *f = NULL;
     size_t steps = 0, next_snap = 0;
-    int st, end;
+    int st, end, moved = 0;
 
     if (flow->integrand == NULL)
         return dfle_error_set(err, DFLE_EINVAL,
@@ -142,6 +143,14 @@ static int process_route(void *state, const dfle_channel *ch, const double *S, d
         }
         if (dt > o->t_max - t)
             dt = o->t_max - t;
+        if ((double)steps >= o->max_steps) {
+            st = dfle_error_set(err, DFLE_ENUMERIC,
+                                "router.process: the flow needed more than max_steps = %.0f time "
+                                "steps (stopped at t = %g s of t_max = %g s, step %g s, cfl = %g); "
+                                "raise cfl or max_steps",
+                                o->max_steps, t, o->t_max, dt, o->flow.cfl);
+            goto done;
+        }
         if ((st = dfle_flow1d_step(f, dt, t_entry < 0 ? -1.0 : t - t_entry, &outflow, err)) != DFLE_OK)
             goto done;
         t += dt;
@@ -192,7 +201,12 @@ static int process_route(void *state, const dfle_channel *ch, const double *S, d
             end = DFLE_PROCESS_LEFT;
             break;
         }
-        if (qmax <= o->q_rest) {
+        /* At rest: held still by friction (q = 0 everywhere), or moving
+         * once and slow everywhere now.  A pile only just released is
+         * slow too, because it has not had time to accelerate: after a
+         * first step of 1e-8 s (a tiny cfl) it must not count as at rest. */
+        moved = moved || qmax > o->q_rest;
+        if (qmax == 0.0 || (moved && qmax <= o->q_rest)) {
             end = DFLE_PROCESS_REST;
             break;
         }
@@ -255,6 +269,7 @@ static size_t process_params(const void *state, dfle_param *out, size_t cap)
         {"n_ghost", o->n_ghost, "", 0},   {"reroute_dS", o->reroute_dS, "", 0},
         {"q_erode", o->q_erode, "m^2/s", 0}, {"q_rest", o->q_rest, "m^2/s", 0},
         {"volume_tol", o->volume_tol, "", 0}, {"t_max", o->t_max, "s", 0},
+        {"max_steps", o->max_steps, "", 0},
         {"gamma", o->gamma, "", 0},       {"frequency_scaling", o->frequency_scaling, "", 1},
     };
     return dfle_param_copy(p, sizeof p / sizeof p[0], out, cap);
@@ -292,6 +307,7 @@ int dfle_router_new_process(const dfle_process_opts *o, dfle_router **out, dfle_
         {"M0", o->M0, 0},           {"reroute_dS", o->reroute_dS, 0},
         {"q_erode", o->q_erode, 1}, {"q_rest", o->q_rest, 1},
         {"volume_tol", o->volume_tol, 1}, {"t_max", o->t_max, 0},
+        {"max_steps", o->max_steps, 0},
         {"gamma", o->gamma, 1},
     };
     for (size_t i = 0; i < sizeof pos / sizeof pos[0]; i++)
