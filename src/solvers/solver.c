@@ -88,10 +88,17 @@ static int check_opts(const dfle_run_opts *o, dfle_error *err)
     return DFLE_OK;
 }
 
+/* A model message without its "model: " prefix, to quote inside another. */
+static const char *unprefixed(const char *msg)
+{
+    return strncmp(msg, "model: ", 7) == 0 ? msg + 7 : msg;
+}
+
 int dfle_solver_run(dfle_model *m, const dfle_run_opts *o, dfle_run_result *res,
                     dfle_error *err)
 {
     dfle_run_opts opts = *o;
+    char direct_why[DFLE_ERROR_MSG_MAX] = "";
     int st;
 
     memset(res, 0, sizeof *res);
@@ -113,7 +120,17 @@ int dfle_solver_run(dfle_model *m, const dfle_run_opts *o, dfle_run_result *res,
      * state, and say why. */
     res->fallback = 1;
     snprintf(res->note, sizeof res->note, "direct: %.110s; continued by implicit stepping",
-             err != NULL ? err->msg : "no consistent solution");
+             err != NULL ? unprefixed(err->msg) : "no consistent solution");
+    if (err != NULL)
+        snprintf(direct_why, sizeof direct_why, "%s", unprefixed(err->msg));
     dfle_error_clear(err);
-    return dfle_solver_implicit.run(m, &opts, res, err);
+    st = dfle_solver_implicit.run(m, &opts, res, err);
+    if (st != DFLE_OK && err != NULL) {
+        /* Say both: why direct gave up, and why stepping failed too. */
+        char why[DFLE_ERROR_MSG_MAX];
+        snprintf(why, sizeof why, "%s", unprefixed(err->msg));
+        dfle_error_set(err, st, "model: no steady state by the direct method (%.230s); "
+                                "implicit stepping then failed: %.250s", direct_why, why);
+    }
+    return st;
 }

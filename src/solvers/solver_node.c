@@ -25,6 +25,10 @@
 
 #define SOLVE_MAX_ITER 200
 #define SOLVE_REL_TOL 1e-10 /* slopes far beyond what tol = 1e-3 on dz/dt needs */
+/* A slope below which a node is flat for any purpose here [-]: 5e-12 m
+ * of drop over a 5 m node.  If erosion alone still exceeds U_eff there,
+ * no positive slope balances it. */
+#define SLOPE_FLOOR 1e-12
 
 /* G(S) = E(S) + c S, non-decreasing in S. */
 static int total(dfle_model *m, size_t i, double S, double c, int with_df, double *G,
@@ -88,10 +92,24 @@ int dfle_solve_node(dfle_model *m, size_t i, double U_eff, double c, int with_df
             *S_out = S;
             return DFLE_OK;
         }
-        if (G < U_eff)
+        if (G < U_eff) {
             lo = S;
-        else
+        } else {
             hi = S;
+            /* Erosion that exceeds U_eff at every slope down to the floor
+             * does not grow with slope (alpha = 0 with tau_y = 0 gives
+             * E_df ~ h ~ S^(-1/3), unbounded as S -> 0): the bracket would
+             * only close on S = 0.  Not a root, and not a numerical
+             * failure either: say which it is, as a slope that cannot
+             * balance U (the direct method then falls back). */
+            if (lo == 0 && hi < SLOPE_FLOOR && G - c * S >= U_eff)
+                return dfle_error_set(
+                    err, DFLE_EFIT,
+                    "model: at node %zu (x = %g m) erosion exceeds %g m/yr at every slope down "
+                    "to 1e-12: it does not grow with slope (alpha = 0 with tau_y = 0 does that), "
+                    "so no slope balances it",
+                    i + 1, dfle_channel_x(dfle_model_channel(m))[i], U_eff);
+        }
         phi = G > 0 ? log(G) - log_target : -INFINITY;
         next = -1.0;
         if (isfinite(phi)) {

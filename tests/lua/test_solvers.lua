@@ -55,6 +55,18 @@ tests["run: an implicit transient far from equilibrium neither crawls nor drifts
     T.ok(err_i < err_e, ("implicit error %g m, explicit %g m"):format(err_i, err_e))
 end
 
+tests["run_to_steady: erosion that falls as slope rises is named, not a convergence failure"] = function()
+    -- alpha = 0 and tau_y = 0 are both valid, together E_df ~ h ~ S^(-1/3):
+    -- no slope balances U at the head.  The direct method must fall back
+    -- as documented, and the implicit method must say why it cannot go on.
+    local m = dfle.model{ router = dfle.router.empirical{ tau_y = 0 }, law = dfle.law.power{ alpha = 0 } }
+    local ok, msg = pcall(function() return m:run_to_steady{} end)
+    T.ok(not ok)
+    T.has(msg, "no steady state by the direct method", "does not grow with slope",
+          "alpha = 0 with tau_y = 0", "implicit stepping then failed")
+    T.ok(not msg:find("did not converge"), msg)
+end
+
 tests["run: implicit transients and recorded profiles"] = function()
     local m = model()
     m:run_to_steady{}
