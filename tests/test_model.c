@@ -174,6 +174,7 @@ static void uplift_alone_raises_every_node_by_U_t(void **state)
 typedef struct mock {
     int routes, factors, rates;
     int poison_after; /* rate() writes NaN at node 6 after this many calls */
+    int huge_after;   /* rate() writes 1e308 at node 6 after this many calls */
 } mock;
 
 static int mock_route(void *s, const dfle_channel *ch, const double *S, dfle_flow *flow,
@@ -220,6 +221,8 @@ static int mock_rate(void *s, const dfle_law_ctx *ctx, const double *F, double *
         E[i] = 1e-3 * ctx->S[i] * ctx->S[i] * F[i];
     if (mk->poison_after > 0 && mk->rates > mk->poison_after)
         E[6] = NAN;
+    if (mk->huge_after > 0 && mk->rates > mk->huge_after)
+        E[6] = 1e308;
     return 0;
 }
 
@@ -255,6 +258,46 @@ static void non_local_router_is_routed_once_and_law_cached(void **state)
     for (size_t i = 0; i + 1 < dfle_model_size(r.m); i++)
         assert_close(S[i], sqrt(0.5), 1e-3, 0);
     rig_free(&r);
+}
+
+/* Every rate finite, yet the step overflows z: a finite but absurd
+ * erosion rate times the step is -inf, and the next evaluation must
+ * name z, not pass the profile on (a NaN z reads as "no erosion"). */
+static void overflowing_elevation_is_reported(void **state)
+{
+    rig r = {0};
+    mock rk = {0}, lk = {.huge_after = 20};
+    dfle_run_result res;
+    dfle_error err;
+    (void)state;
+    rig_mocks(&r, &rk, &lk);
+    assert_int_equal(rig_run(&r, -1, 0, &res, &err), DFLE_ENUMERIC);
+    assert_msg_contains(err.msg, "is not finite at node");
+    rig_free(&r);
+}
+
+/* No finite starting profile: (U/K)^(1/n_s) overflows for n_s = 0.0014. */
+static void infinite_starting_profile_is_refused(void **state)
+{
+    dfle_channel_opts co;
+    dfle_channel *ch;
+    dfle_fluvial *fl;
+    dfle_model_opts mo;
+    dfle_model *m = NULL;
+    dfle_error err;
+    (void)state;
+    dfle_channel_opts_default(&co);
+    assert_int_equal(dfle_channel_new(&co, &ch, NULL), DFLE_OK);
+    assert_int_equal(dfle_fluvial_new_stream_power(1e-5, 0.5, 0.0014, &fl, NULL), DFLE_OK);
+    dfle_model_opts_default(&mo);
+    mo.channel = ch;
+    mo.fluvial = fl;
+    assert_int_equal(dfle_model_new(&mo, &m, &err), DFLE_ENUMERIC);
+    assert_null(m);
+    assert_msg_contains(err.msg, "starting profile");
+    assert_msg_contains(err.msg, "n_s = 0.0014");
+    dfle_fluvial_free(fl);
+    dfle_channel_free(ch);
 }
 
 static void nan_is_reported_with_node_and_time(void **state)
@@ -384,6 +427,8 @@ int main(void)
         cmocka_unit_test(uplift_alone_raises_every_node_by_U_t),
         cmocka_unit_test(non_local_router_is_routed_once_and_law_cached),
         cmocka_unit_test(nan_is_reported_with_node_and_time),
+        cmocka_unit_test(overflowing_elevation_is_reported),
+        cmocka_unit_test(infinite_starting_profile_is_refused),
         cmocka_unit_test(limits_and_cancellation),
         cmocka_unit_test(bad_options_are_named),
         cmocka_unit_test(fields_and_csv),

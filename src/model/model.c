@@ -275,15 +275,27 @@ int dfle_model_init_fluvial_steady(dfle_model *m, const dfle_fluvial *fl,
         fl = own;
     }
     /* Up from base level (z = 0), each node after its receiver. */
+    st = DFLE_OK;
     for (size_t k = 0; k < m->n; k++) {
         const size_t i = m->stack[k];
-        m->z[i] = m->is_base[i] ? 0.0
-                                : m->z[m->recv[i]] +
-                                      m->len[i] * dfle_fluvial_steady_slope(fl, m->U, A[i]);
+        const double S = m->is_base[i] ? 0.0 : dfle_fluvial_steady_slope(fl, m->U, A[i]);
+        m->z[i] = m->is_base[i] ? 0.0 : m->z[m->recv[i]] + m->len[i] * S;
+        if (!isfinite(m->z[i])) {
+            /* (U/K)^(1/n_s) overflows for a tiny n_s: no profile to start from. */
+            st = dfle_error_set(
+                err, DFLE_ENUMERIC,
+                "model: the starting profile, the fluvial steady state S = (U/K)^(1/n_s) "
+                "A^(-m_s/n_s) of Eq. (26), is not finite at node %zu (A = %g m^2: S = %g, z = %g m) "
+                "for K = %g, m_s = %g, n_s = %g, U = %g m/yr; use a fluvial law with a finite "
+                "steady slope",
+                i + 1, A[i], S, m->z[i], dfle_fluvial_K(fl), dfle_fluvial_m(fl), dfle_fluvial_n(fl),
+                m->U);
+            break;
+        }
     }
     dfle_fluvial_free(own);
     dfle_model_invalidate_flow(m);
-    return DFLE_OK;
+    return st;
 }
 
 int dfle_model_set_z(dfle_model *m, const double *z, size_t n, dfle_error *err)

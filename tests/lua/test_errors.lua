@@ -199,6 +199,14 @@ tests["fluvial.stochastic_threshold: n_s = 0 is refused, not taken as derive"] =
     raises(function() return dfle.fluvial.stochastic_threshold{ n_s = 0 } end, "n_s")
 end
 
+tests["model: a fluvial law with no finite steady profile is refused, not run to NaN"] = function()
+    -- n = 0.0014 is a valid exponent, but (U/K)^(1/n) overflows: the
+    -- starting profile was NaN at every node and a run "succeeded".
+    local fl = dfle.fluvial.stream_power{ K = 1e-5, m = 0.5, n = 0.0014 }
+    raises(function() return dfle.model{ fluvial = fl } end, "starting profile", "not finite",
+           "n_s = 0.0014")
+end
+
 tests["channel: geometry errors name the parameter"] = function()
     raises(function() return dfle.channel{ A0 = -5 } end, "A0")
     raises(function() return dfle.channel{ hack_exp = 0 } end, "hack_exp")
