@@ -9,6 +9,7 @@
  * binding; this file only parses options, reports errors with a
  * traceback and owns the terminal (progress bar).
  */
+#include <signal.h>
 #include <stdio.h>
 #include <stdlib.h>
 #include <string.h>
@@ -256,6 +257,9 @@ int main(int argc, char **argv)
     lua_State *L;
     int i, status;
 
+    /* Past a file-size limit (ulimit -f) a write should fail with EFBIG,
+     * which dfle reports, not end the process without a word. */
+    signal(SIGXFSZ, SIG_IGN);
     if (argc > 0 && argv[0] != NULL && argv[0][0] != '\0') {
         const char *slash = strrchr(argv[0], '/');
         progname = slash != NULL ? slash + 1 : argv[0];

@@ -19,6 +19,7 @@
 #include <stdlib.h>
 #include <string.h>
 
+#include "dfle/file.h"
 #include "dfle/flow.h"
 #include "model/model_internal.h"
 
@@ -341,26 +342,21 @@ const double *dfle_model_field(dfle_model *m, int field, dfle_error *err)
 int dfle_model_write_csv(dfle_model *m, const char *path, dfle_error *err)
 {
     const double *col[DFLE_FIELD_COUNT];
-    FILE *f;
-    int bad;
+    dfle_file out;
+    int st;
 
     for (int k = 0; k < DFLE_FIELD_COUNT; k++)
         if ((col[k] = dfle_model_field(m, k, err)) == NULL)
             return err != NULL ? err->code : DFLE_ESTATE;
-    f = fopen(path, "w");
-    if (f == NULL)
-        return dfle_error_set(err, DFLE_EIO, "model: cannot open '%s' for writing", path);
+    if ((st = dfle_file_begin(&out, path, "model", err)) != DFLE_OK)
+        return st;
     for (int k = 0; k < DFLE_FIELD_COUNT; k++)
-        fprintf(f, "%s%s (%s)", k ? "," : "", field_info[k].name, field_info[k].unit);
-    fputc('\n', f);
+        fprintf(out.fp, "%s%s (%s)", k ? "," : "", field_info[k].name, field_info[k].unit);
+    fputc('\n', out.fp);
     for (size_t i = 0; i < m->n; i++) {
         for (int k = 0; k < DFLE_FIELD_COUNT; k++)
-            fprintf(f, "%s%.10g", k ? "," : "", col[k][i]);
-        fputc('\n', f);
+            fprintf(out.fp, "%s%.10g", k ? "," : "", col[k][i]);
+        fputc('\n', out.fp);
     }
-    bad = ferror(f);
-    if (fclose(f) != 0 || bad)
-        return dfle_error_set(err, DFLE_EIO, "model: error writing '%s'", path);
-    return DFLE_OK;
+    return dfle_file_commit(&out, err);
 }
-

@@ -98,6 +98,23 @@ tests["syntax error: exit 1 with file:line"] = function()
     T.match(out, "%.lua:2: ")
 end
 
+tests["file-size limit: write_csv fails with the reason and keeps the old file"] = function()
+    -- Under ulimit -f the process once died without a word (SIGXFSZ) and
+    -- left a truncated file in place of a good one.
+    need_binary()
+    local csv = T.tmpname(".csv")
+    T.write_file(csv, "good\n")
+    local script = T.tmpname(".lua")
+    T.write_file(script, ("dfle.model{}:write_csv(%q)\n"):format(csv))
+    local out, ok, code = sh("ulimit -f 20; " .. q(T.dfle) .. " -q " .. q(script))
+    T.eq(ok, nil)
+    T.eq(code, 1)
+    T.has(out, "cannot write", "File too large")
+    local f = assert(io.open(csv))
+    T.eq(f:read("a"), "good\n")
+    f:close()
+end
+
 tests["missing script file: non-zero exit with a clear message"] = function()
     need_binary()
     local path = T.tmpname() .. "-does-not-exist.lua"

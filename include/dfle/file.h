@@ -1,0 +1,52 @@
+/*
+ * file.h - files written whole or not at all.
+ *
+ * Every file dfle writes goes through here: the data go to a temporary
+ * file beside the target (same directory, so same file system), which is
+ * flushed to disk and then renamed over the target.  A reader, another
+ * run or a crash at any moment sees the old file or the new one, never a
+ * torn one; a full disk or a file-size limit leaves the old file as it
+ * was and the error says what the system said.
+ *
+ * The temporary file is `.<name>.<pid>.XXXXXX` in the target's directory.
+ * One left by a process that was killed (kill -9, power loss) is removed
+ * by the next write of the same target, once its process is gone.
+ *
+ * A file-size limit (ulimit -f) is reported as EFBIG only if SIGXFSZ is
+ * ignored; the dfle command ignores it, a host program should too
+ * (otherwise the signal ends the process).
+ */
+#ifndef DFLE_FILE_H
+#define DFLE_FILE_H
+
+#include <stdio.h>
+
+#include "dfle/error.h"
+
+#ifdef __cplusplus
+extern "C" {
+#endif
+
+typedef struct dfle_file {
+    FILE *fp;   /* write here (stdio) between begin and commit */
+    char *path; /* the target                                  */
+    char *tmp;  /* the temporary file                          */
+    const char *who; /* prefix of error messages, e.g. "model" */
+} dfle_file;
+
+/* Start writing `path`: open a temporary file beside it.  `who` prefixes
+ * error messages ("model: cannot write 'x.csv': ..."). */
+int dfle_file_begin(dfle_file *f, const char *path, const char *who, dfle_error *err);
+
+/* Finish: check for write errors, flush, fsync, close and rename over
+ * the target.  On failure the target is untouched, the temporary file
+ * removed, and err says why (the system's reason). */
+int dfle_file_commit(dfle_file *f, dfle_error *err);
+
+/* Give up: close and remove the temporary file (f may be unbegun). */
+void dfle_file_abort(dfle_file *f);
+
+#ifdef __cplusplus
+}
+#endif
+#endif
