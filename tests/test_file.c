@@ -226,7 +226,7 @@ static void bad_targets_say_why(void **state)
     char path[300];
     dfle_file f;
     dfle_error err;
-    assert_int_equal(dfle_file_begin(&f, d->path, "test", &err), DFLE_EINVAL);
+    assert_int_equal(dfle_file_begin(&f, d->path, "test", &err), DFLE_EIO);
     assert_msg_contains(err.msg, "is a directory");
     snprintf(path, sizeof path, "%s/no/such/dir.csv", d->path);
     assert_int_equal(dfle_file_begin(&f, path, "test", &err), DFLE_EIO);

@@ -15,6 +15,7 @@
 #include <fcntl.h>
 #include <stdlib.h>
 #include <string.h>
+#include <sys/resource.h>
 #include <sys/stat.h>
 #include <unistd.h>
 
@@ -468,6 +469,73 @@ static void test_gnuplot_fails(void **state)
     assert_png(in_dir(fx, "small.png"));
 }
 
+/* Bytes of a file, for comparing an image before and after. */
+static long file_size(const char *path)
+{
+    struct stat sb;
+    return stat(path, &sb) == 0 ? (long)sb.st_size : -1;
+}
+
+/* A disk that fills up leaves gnuplot's image cut short while gnuplot
+ * exits 0: the cut image must not replace the good one, and the error
+ * must say so (it once reported success). */
+static void test_truncated_image_keeps_the_old_one(void **state)
+{
+    fixture *fx = *state;
+    char prog[600];
+    dfle_error err = {0};
+    assert_ok(plot_small(fx, &err), &err);
+    long good = file_size(in_dir(fx, "small.png"));
+    assert_true(good > 1000);
+    /* gnuplot, then cut what it wrote to 100 bytes. */
+    snprintf(prog, sizeof prog, "%s/cutting-gnuplot", fx->dir);
+    write_script(prog, "#!/bin/sh\n"
+                       "gp=$(cat)\n"
+                       "out=$(printf '%s\\n' \"$gp\" | sed -n \"s/^set output '\\([^']*\\)'$/\\1/p\")\n"
+                       "printf '%s\\n' \"$gp\" | gnuplot || exit\n"
+                       "head -c 100 \"$out\" > \"$out.cut\" && mv \"$out.cut\" \"$out\"\n");
+    assert_int_equal(with_gnuplot(prog, plot_small, fx, &err), DFLE_EIO);
+    assert_msg_contains(err.msg, "incomplete");
+    assert_int_equal(file_size(in_dir(fx, "small.png")), good);
+    assert_png(in_dir(fx, "small.png"));
+}
+
+/* Under a file-size limit gnuplot is stopped (or its writes fail): an
+ * error that says so, not "install gnuplot", and the old image stays. */
+static void test_size_limit_keeps_the_old_image(void **state)
+{
+    fixture *fx = *state;
+    dfle_error err = {0};
+    struct rlimit old, small;
+    assert_ok(plot_small(fx, &err), &err);
+    long good = file_size(in_dir(fx, "small.png"));
+    assert_int_equal(getrlimit(RLIMIT_FSIZE, &old), 0);
+    small = old;
+    small.rlim_cur = 2048;
+    assert_int_equal(setrlimit(RLIMIT_FSIZE, &small), 0);
+    int st = plot_small(fx, &err);
+    assert_int_equal(setrlimit(RLIMIT_FSIZE, &old), 0);
+    assert_true(st == DFLE_EEXTERNAL || st == DFLE_EIO);
+    assert_null(strstr(err.msg, "install"));
+    assert_int_equal(file_size(in_dir(fx, "small.png")), good);
+}
+
+/* A plot killed with -9 leaves its temporary image; the next plot of
+ * the same file removes it, and no stray file is ever left in TMPDIR. */
+static void test_leftover_of_a_killed_plot_is_removed(void **state)
+{
+    fixture *fx = *state;
+    dfle_error err = {0};
+    char leftover[600];
+    snprintf(leftover, sizeof leftover, "%s/.small.png.999999999.123456", fx->dir);
+    int fd = open(leftover, O_WRONLY | O_CREAT, 0644);
+    assert_true(fd >= 0);
+    close(fd);
+    assert_ok(plot_small(fx, &err), &err);
+    assert_missing(leftover);
+    assert_png(in_dir(fx, "small.png"));
+}
+
 int main(void)
 {
     const struct CMUnitTest tests[] = {
@@ -483,6 +551,9 @@ int main(void)
         cmocka_unit_test_setup_teardown(test_unwritable, setup, teardown),
         cmocka_unit_test_setup_teardown(test_gnuplot_missing, setup, teardown),
         cmocka_unit_test_setup_teardown(test_gnuplot_fails, setup, teardown),
+        cmocka_unit_test_setup_teardown(test_truncated_image_keeps_the_old_one, setup, teardown),
+        cmocka_unit_test_setup_teardown(test_size_limit_keeps_the_old_image, setup, teardown),
+        cmocka_unit_test_setup_teardown(test_leftover_of_a_killed_plot_is_removed, setup, teardown),
     };
     return cmocka_run_group_tests(tests, NULL, NULL);
 }

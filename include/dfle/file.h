@@ -32,11 +32,19 @@ typedef struct dfle_file {
     char *path; /* the target                                  */
     char *tmp;  /* the temporary file                          */
     const char *who; /* prefix of error messages, e.g. "model" */
+    int external;    /* written by another program (begin_external) */
 } dfle_file;
 
 /* Start writing `path`: open a temporary file beside it.  `who` prefixes
  * error messages ("model: cannot write 'x.csv': ..."). */
 int dfle_file_begin(dfle_file *f, const char *path, const char *who, dfle_error *err);
+
+/* The same for a file another program writes (gnuplot): *write_to
+ * receives the path it must write (the temporary file, or the target
+ * itself when that is a device), valid until commit or abort; f->fp is
+ * NULL.  Then dfle_file_commit or dfle_file_abort as usual. */
+int dfle_file_begin_external(dfle_file *f, const char *path, const char *who,
+                             const char **write_to, dfle_error *err);
 
 /* Finish: check for write errors, flush, fsync, close and rename over
  * the target.  On failure the target is untouched, the temporary file

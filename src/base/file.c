@@ -102,7 +102,7 @@ int dfle_file_begin(dfle_file *f, const char *path, const char *who, dfle_error 
     if (stat(path, &st) == 0 && !S_ISREG(st.st_mode)) {
         /* A device or a pipe: nothing to replace, write in place. */
         if (S_ISDIR(st.st_mode))
-            return dfle_error_set(err, DFLE_EINVAL, "%s: cannot write '%s': it is a directory",
+            return dfle_error_set(err, DFLE_EIO, "%s: cannot write '%s': it is a directory",
                                   who, path);
         if ((f->fp = fopen(path, "w")) == NULL)
             return dfle_error_set(err, DFLE_EIO, "%s: cannot write '%s': %s", who, path,
@@ -149,10 +149,50 @@ int dfle_file_begin(dfle_file *f, const char *path, const char *who, dfle_error 
     return DFLE_OK;
 }
 
+int dfle_file_begin_external(dfle_file *f, const char *path, const char *who,
+                             const char **write_to, dfle_error *err)
+{
+    int st = dfle_file_begin(f, path, who, err);
+    if (st != DFLE_OK)
+        return st;
+    /* The other program opens the file by name; ours goes (empty). */
+    fclose(f->fp);
+    f->fp = NULL;
+    f->external = 1;
+    *write_to = f->tmp != NULL ? f->tmp : f->path;
+    return DFLE_OK;
+}
+
+/* fsync a file another program wrote, by name. */
+static int sync_by_name(const char *path)
+{
+    int fd = open(path, O_RDONLY), e = 0;
+    if (fd < 0)
+        return errno;
+    if (fsync(fd) != 0 && errno != EINVAL && errno != EROFS)
+        e = errno;
+    close(fd);
+    return e;
+}
+
 int dfle_file_commit(dfle_file *f, dfle_error *err)
 {
     int e = 0;
 
+    if (f->external) {
+        if (f->tmp != NULL && (e = sync_by_name(f->tmp)) == 0 && rename(f->tmp, f->path) != 0)
+            e = errno;
+        if (e) {
+            int code = dfle_error_set(err, DFLE_EIO, "%s: cannot write '%s': %s", f->who, f->path,
+                                      strerror(e));
+            dfle_file_abort(f);
+            return code;
+        }
+        free(f->tmp);
+        free(f->path);
+        f->tmp = f->path = NULL;
+        return DFLE_OK;
+    }
     if (f->fp == NULL) {
         dfle_file_abort(f);
         return dfle_error_set(err, DFLE_ESTATE, "%s: no file is being written", f->who);

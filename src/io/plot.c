@@ -24,6 +24,8 @@
 #endif
 #include "dfle/plot.h"
 
+#include "dfle/file.h"
+
 #include <errno.h>
 #include <fcntl.h>
 #include <math.h>
@@ -97,8 +99,10 @@ static void sh_quote(char *dst, const char *s)
 typedef struct gp_run {
     FILE *f;
     const char *prog, *out;
-    int errfd;
-    char errpath[512];
+    const char *write_to; /* where gnuplot writes: a temporary file beside out */
+    dfle_file file;       /* renamed over out once the image is checked */
+    int fmt;
+    int errfd;            /* gnuplot's messages: an unlinked file */
     sigset_t pipeset, oldmask;
     int pipe_pending; /* SIGPIPE was pending before us: not ours to eat */
 } gp_run;
@@ -107,34 +111,35 @@ static int gp_begin(gp_run *r, const char *path, int fmt, int w, int h,
                     dfle_error *err)
 {
     const char *tmp = getenv("TMPDIR");
+    char errpath[512];
+    int rc;
     memset(r, 0, sizeof *r);
     r->out = path;
+    r->fmt = fmt;
     r->prog = getenv("DFLE_GNUPLOT");
     if (r->prog == NULL || r->prog[0] == '\0') r->prog = "gnuplot";
-    if (tmp == NULL || tmp[0] == '\0' || strlen(tmp) > sizeof r->errpath - 32)
+    if (tmp == NULL || tmp[0] == '\0' || strlen(tmp) > sizeof errpath - 32)
         tmp = "/tmp";
-    snprintf(r->errpath, sizeof r->errpath, "%s/dfle-gnuplot-XXXXXX", tmp);
-    if ((r->errfd = mkstemp(r->errpath)) < 0)
+    /* gnuplot's messages go to a file unlinked at once and inherited by
+     * descriptor: whatever kills us, nothing is left behind. */
+    snprintf(errpath, sizeof errpath, "%s/dfle-gnuplot-XXXXXX", tmp);
+    if ((r->errfd = mkstemp(errpath)) < 0)
         return dfle_error_set(err, DFLE_EIO, "plot: cannot create a temporary "
                               "file in %s: %s", tmp, strerror(errno));
-    /* Open (and truncate) the output ourselves: an unwritable path is
-     * then a clear DFLE_EIO, and afterwards a non-empty file proves that
-     * gnuplot wrote it. */
-    int rc = DFLE_OK, fd = open(path, O_WRONLY | O_CREAT | O_TRUNC, 0666);
-    int oerr = errno;
-    char *cmd = malloc(4 * (strlen(r->prog) + strlen(r->errpath)) + 32);
-    if (fd < 0) {
-        rc = dfle_error_set(err, DFLE_EIO, "plot: cannot write '%s': %s",
-                            path, strerror(oerr));
-    } else if (cmd == NULL) {
+    unlink(errpath);
+    /* gnuplot writes a temporary file beside the image, renamed over it
+     * only once gnuplot succeeded and the image is whole: an unwritable
+     * path is a clear DFLE_EIO now, and a failure later (a full disk, a
+     * size limit, a kill) leaves any old image as it was. */
+    rc = dfle_file_begin_external(&r->file, path, "plot", &r->write_to, err);
+    char *cmd = malloc(4 * strlen(r->prog) + 64);
+    if (rc == DFLE_OK && cmd == NULL) {
         rc = dfle_error_set(err, DFLE_ENOMEM, "plot: out of memory");
-    } else {
+    } else if (rc == DFLE_OK) {
         sigset_t pend;
         cmd[0] = '\0';
         sh_quote(cmd, r->prog);
-        strcat(cmd, " 2>");
-        sh_quote(cmd, r->errpath);
-        strcat(cmd, " 1>&2");
+        snprintf(cmd + strlen(cmd), 64, " 2>&%d 1>&2", r->errfd);
         if ((r->f = popen(cmd, "w")) == NULL) {
             rc = dfle_error_set(err, DFLE_EEXTERNAL, "plot: gnuplot could not "
                                 "be run ('%s'): %s", r->prog, strerror(errno));
@@ -147,13 +152,12 @@ static int gp_begin(gp_run *r, const char *path, int fmt, int w, int h,
         }
     }
     free(cmd);
-    if (fd >= 0) close(fd);
     if (rc < 0) {
-        if (fd >= 0) unlink(path);
+        dfle_file_abort(&r->file);
         close(r->errfd);
-        unlink(r->errpath);
         return rc;
     }
+    path = r->write_to;
     fprintf(r->f, "set terminal %s size %d,%d enhanced font 'sans,12' "
             "linewidth 1.2 background '#ffffff'\nset encoding utf8\n"
             "set output %s", fmt == FMT_PNG ? "pngcairo" : "svg", w, h,
@@ -187,6 +191,39 @@ static void err_text(int fd, char *out, size_t cap)
     if (lines == 0) snprintf(out, cap, "no message");
 }
 
+/* A complete image ends as its format says: a PNG with its IEND chunk
+ * (12 fixed bytes), an SVG with its closing tag.  A disk that filled up
+ * or a size limit leaves a file that does not, whatever gnuplot's exit
+ * status says. */
+static int image_complete(const char *path, int fmt)
+{
+    static const unsigned char iend[12] = {0, 0, 0, 0, 'I', 'E', 'N', 'D',
+                                           0xAE, 0x42, 0x60, 0x82};
+    unsigned char tail[64];
+    struct stat sb;
+    size_t want;
+    int fd = open(path, O_RDONLY), ok = 0;
+    if (fd < 0)
+        return 0;
+    if (fstat(fd, &sb) == 0 && S_ISREG(sb.st_mode) && sb.st_size > 0) {
+        want = (size_t)sb.st_size < sizeof tail ? (size_t)sb.st_size : sizeof tail;
+        if (lseek(fd, sb.st_size - (off_t)want, SEEK_SET) >= 0 &&
+            read(fd, tail, want) == (ssize_t)want) {
+            if (fmt == FMT_PNG)
+                ok = want >= 12 && memcmp(tail + want - 12, iend, 12) == 0;
+            else /* the tag, then at most white space */
+                for (size_t k = 0; k + 6 <= want && !ok; k++)
+                    ok = memcmp(tail + k, "</svg>", 6) == 0 &&
+                         strspn((const char *)tail + k + 6, " \t\r\n") ==
+                             want - k - 6;
+        }
+    } else if (fstat(fd, &sb) == 0 && !S_ISREG(sb.st_mode)) {
+        ok = 1; /* a device or a pipe: nothing to check */
+    }
+    close(fd);
+    return ok;
+}
+
 static int gp_end(gp_run *r, dfle_error *err)
 {
     char msg[300];
@@ -204,35 +241,44 @@ static int gp_end(gp_run *r, dfle_error *err)
     pthread_sigmask(SIG_SETMASK, &r->oldmask, NULL);
     err_text(r->errfd, msg, sizeof msg);
     close(r->errfd);
-    unlink(r->errpath);
 
+    /* sh reports a program it cannot run as 126 or 127, and one killed
+     * by signal n as 128 + n (a size limit is SIGXFSZ, not a missing
+     * gnuplot). */
     if (st == -1)
         rc = dfle_error_set(err, DFLE_EEXTERNAL, "plot: could not wait for "
                             "gnuplot ('%s'): %s", r->prog, strerror(perr));
-    else if (WIFEXITED(st) && WEXITSTATUS(st) >= 126) /* sh: cannot run */
+    else if (WIFEXITED(st) && (WEXITSTATUS(st) == 126 || WEXITSTATUS(st) == 127))
         rc = dfle_error_set(err, DFLE_EEXTERNAL, "plot: gnuplot could not be "
                             "run (%s); install it (apt-get install "
                             "gnuplot-nox) or set DFLE_GNUPLOT to the gnuplot "
                             "program", msg);
-    else if (WIFSIGNALED(st))
+    else if (WIFSIGNALED(st) || (WIFEXITED(st) && WEXITSTATUS(st) > 128))
         rc = dfle_error_set(err, DFLE_EEXTERNAL, "plot: gnuplot ('%s') was "
-                            "killed by signal %d", r->prog, WTERMSIG(st));
+                            "killed by signal %d (%s) making '%s'", r->prog,
+                            WIFSIGNALED(st) ? WTERMSIG(st) : WEXITSTATUS(st) - 128,
+                            strsignal(WIFSIGNALED(st) ? WTERMSIG(st) : WEXITSTATUS(st) - 128),
+                            r->out);
     else if (WEXITSTATUS(st) != 0)
         rc = dfle_error_set(err, DFLE_EEXTERNAL, "plot: gnuplot ('%s') failed "
                             "making '%s': %s", r->prog, r->out, msg);
     else if (werr)
         rc = dfle_error_set(err, DFLE_EEXTERNAL, "plot: could not send the "
                             "script to gnuplot ('%s')", r->prog);
-    else if (stat(r->out, &sb) != 0)
-        rc = dfle_error_set(err, DFLE_EIO, "plot: gnuplot finished but '%s' "
-                            "is gone: %s", r->out, strerror(errno));
-    else if (S_ISREG(sb.st_mode) && sb.st_size == 0)
+    else if (stat(r->write_to, &sb) == 0 && S_ISREG(sb.st_mode) && sb.st_size == 0)
         rc = dfle_error_set(err, DFLE_EEXTERNAL, "plot: gnuplot finished but "
                             "wrote nothing to '%s'", r->out);
-    /* No truncated or empty image is left behind on failure. */
-    if (rc != DFLE_OK && stat(r->out, &sb) == 0 && S_ISREG(sb.st_mode))
-        unlink(r->out);
-    return rc;
+    else if (!image_complete(r->write_to, r->fmt))
+        rc = dfle_error_set(err, DFLE_EIO, "plot: gnuplot finished but '%s' is "
+                            "incomplete (a full disk or a file-size limit?)%s%s",
+                            r->out, strcmp(msg, "no message") ? ": " : "",
+                            strcmp(msg, "no message") ? msg : "");
+    /* No truncated or empty image replaces a good one. */
+    if (rc != DFLE_OK) {
+        dfle_file_abort(&r->file);
+        return rc;
+    }
+    return dfle_file_commit(&r->file, err);
 }
 
 static int usable(double x, double y, int logx, int logy)
