@@ -1,5 +1,6 @@
 /* test_router_empirical.c - Sect. 2.3: flow properties and runout. */
 #include <math.h>
+#include <stdlib.h>
 #include <string.h>
 
 #include "dfle_test.h"
@@ -175,6 +176,34 @@ static void bad_parameters_are_named(void **state)
     }
 }
 
+/* Each parameter valid, the flow not: c2 = 2.5e6 makes Q = c1 M^c2
+ * overflow.  Routing (and the one-node flow the solvers use) must fail
+ * naming the term, never hand out h = inf and NaN stresses. */
+static void parameters_without_a_finite_flow_are_named(void **state)
+{
+    fixture *f = *state;
+    dfle_empirical_opts o;
+    dfle_router *rt;
+    dfle_error err;
+    double *S = malloc(dfle_channel_size(f->ch) * sizeof *S);
+    int goes_on = 1;
+    assert_non_null(S);
+    for (size_t i = 0; i < dfle_channel_size(f->ch); i++)
+        S[i] = 0.5;
+    dfle_empirical_opts_default(&o);
+    o.c2 = 2.5e6;
+    o.g = 1e-7;
+    assert_ok(dfle_router_new_empirical(&o, &rt, &err), &err);
+    assert_int_equal(dfle_router_route(rt, f->ch, S, &f->flow, &err), DFLE_EINVAL);
+    assert_msg_contains(err.msg, "peak discharge Q = c1 M^c2");
+    assert_msg_contains(err.msg, "c2 = 2.5e+06");
+    assert_int_equal(dfle_router_node_flow(rt, f->ch, 3, 0.5, &f->flow, &goes_on, &err),
+                     DFLE_EINVAL);
+    assert_int_equal(goes_on, 0);
+    dfle_router_free(rt);
+    free(S);
+}
+
 int main(void)
 {
     const struct CMUnitTest tests[] = {
@@ -184,6 +213,7 @@ int main(void)
         cmocka_unit_test(zero_yield_strength_reaches_everywhere),
         cmocka_unit_test(cache_follows_the_channel),
         cmocka_unit_test(bad_parameters_are_named),
+        cmocka_unit_test(parameters_without_a_finite_flow_are_named),
     };
     return cmocka_run_group_tests(tests, setup, teardown);
 }

@@ -68,6 +68,28 @@ static int empirical_fill_cache(empirical *e, const dfle_channel *ch,
         e->Q[i] = o->c1 * pow(e->M[i], o->c2);
         e->t_p[i] = e->M[i] / e->Q[i];
         e->h3_coef[i] = 3.0 * o->mu * e->Q[i] / (o->rho_b * o->g * w[i]);
+        /* Every parameter may be valid on its own and the flow still not
+         * exist (c2 = 2.5e6 makes M^c2 overflow): say which term and why,
+         * rather than route infinities the model reports as "E_df". */
+        if (!(isfinite(e->M[i]) && e->M[i] > 0 && isfinite(e->Q[i]) && e->Q[i] > 0 &&
+              isfinite(e->t_p[i]) && e->t_p[i] > 0 && isfinite(e->h3_coef[i]) &&
+              e->h3_coef[i] > 0)) {
+            const char *what = !(isfinite(e->M[i]) && e->M[i] > 0)   ? "volume M = M0 (1e-6 A)^gamma"
+                               : !(isfinite(e->Q[i]) && e->Q[i] > 0) ? "peak discharge Q = c1 M^c2"
+                               : !(isfinite(e->t_p[i]) && e->t_p[i] > 0) ? "passage time t_p = M/Q"
+                                                                  : "depth term 3 mu Q / (rho_b g w)";
+            int st = dfle_error_set(
+                err, DFLE_EINVAL,
+                "router.empirical: the %s is %g at node %zu (A = %g m^2, w = %g m): with M0 = %g, "
+                "gamma = %g, c1 = %g, c2 = %g, mu = %g, rho_b = %g, g = %g the flow has no finite "
+                "properties",
+                what, !(isfinite(e->M[i]) && e->M[i] > 0) ? e->M[i]
+                      : !(isfinite(e->Q[i]) && e->Q[i] > 0) ? e->Q[i]
+                      : !(isfinite(e->t_p[i]) && e->t_p[i] > 0) ? e->t_p[i] : e->h3_coef[i],
+                i + 1, A[i], w[i], o->M0, o->gamma, o->c1, o->c2, o->mu, o->rho_b, o->g);
+            empirical_drop_cache(e);
+            return st;
+        }
     }
     e->cached_for = dfle_channel_id(ch);
     e->n = n;
@@ -123,6 +145,11 @@ static int empirical_route(void *state, const dfle_channel *ch,
         /* No flow on a flat or reverse slope, nor where tau < tau_y. */
         if (!(S[i] > 0) || empirical_at(e, w, i, S[i], flow, i) < e->opts.tau_y)
             break;
+        if (!(isfinite(flow->h[i]) && isfinite(flow->v[i]) && isfinite(flow->tau[i])))
+            return dfle_error_set(err, DFLE_ENUMERIC,
+                                  "router.empirical: the flow at node %zu (S = %g) is not finite "
+                                  "(h = %g m, v = %g m/s, tau = %g Pa)",
+                                  i + 1, S[i], flow->h[i], flow->v[i], flow->tau[i]);
     }
     flow->runout_end = i;
     /* Beyond the runout nothing flows; zero so every field reads honestly. */
