@@ -239,6 +239,40 @@ static void test_malformed_files(void **state)
     assert_int_equal(dfle_ens_table_read(p, &t, &err), DFLE_EIO);
 }
 
+/* Two runs with one `out` once interleaved their rows (duplicates, a
+ * torn line): the second must stop at once, saying why, and the first
+ * must write on unharmed.  A device as `out` must be refused, never read
+ * without end (/dev/zero) nor written into (/dev/full). */
+static void test_one_writer_per_file(void **state)
+{
+    char p[128], r[64];
+    dfle_ens_file *a, *b = NULL;
+    dfle_error err;
+    (void)state;
+    path(p, sizeof p, "locked.csv");
+    assert_ok(dfle_ens_file_open(p, META, HEADER, 6, 1, &a, &err), &err);
+    row(r, sizeof r, 1);
+    assert_ok(dfle_ens_file_append(a, 1, r, &err), &err);
+    assert_int_equal(dfle_ens_file_open(p, META, HEADER, 6, 1, &b, &err), DFLE_EIO);
+    assert_null(b);
+    assert_msg_contains(err.msg, "being written by another run");
+    row(r, sizeof r, 2);
+    assert_ok(dfle_ens_file_append(a, 2, r, &err), &err);
+    assert_ok(dfle_ens_file_close(a, 0, &err), &err);
+    /* Once the first has finished, the file is free again and resumes. */
+    assert_ok(dfle_ens_file_open(p, META, HEADER, 6, 1, &b, &err), &err);
+    assert_int_equal(dfle_ens_file_ndone(b), 2);
+    assert_ok(dfle_ens_file_close(b, 0, &err), &err);
+    for (int k = 0; k < 2; k++) {
+        const char *dev = k ? "/dev/full" : "/dev/zero";
+        assert_int_equal(dfle_ens_file_open(dev, META, HEADER, 6, 1, &b, &err), DFLE_EINVAL);
+        assert_msg_contains(err.msg, "regular file");
+        dfle_ens_table *t;
+        assert_int_equal(dfle_ens_table_read(dev, &t, &err), DFLE_EIO);
+        assert_msg_contains(err.msg, "not a regular file");
+    }
+}
+
 int main(void)
 {
     const struct CMUnitTest tests[] = {
@@ -246,6 +280,7 @@ int main(void)
         cmocka_unit_test(test_gather_shards),
         cmocka_unit_test(test_queue_threads_limit),
         cmocka_unit_test(test_malformed_files),
+        cmocka_unit_test(test_one_writer_per_file),
     };
     return cmocka_run_group_tests(tests, setup, teardown);
 }

@@ -697,6 +697,30 @@ static void test_csv_basic(void **state)
     dfle_csv_free(NULL);
 }
 
+/* Hostile bytes: a NUL ends a C string, so "7\0junk" once read as 7;
+ * a UTF-8 byte-order mark once became part of the first name ("no
+ * column 'x1'"); a device such as /dev/zero was read without end. */
+static void test_csv_hostile_bytes(void **state)
+{
+    static const char nul[] = "x1,y\n1,2\n7\0junk,3\n";
+    dfle_csv *c = NULL;
+    const double *col;
+    dfle_error err;
+    (void)state;
+    assert_int_equal(dfle_csv_parse(nul, sizeof nul - 1, "t.csv", &c, &err), DFLE_EINVAL);
+    assert_null(c);
+    assert_msg_contains(err.msg, "t.csv:3:");
+    assert_msg_contains(err.msg, "NUL");
+    c = parse_ok("\xEF\xBB\xBFx1,y\n1,2\n");
+    assert_ok(dfle_csv_column(c, "x1", &col, &err), &err);
+    assert_true(col[0] == 1);
+    dfle_csv_free(c);
+    assert_int_equal(dfle_csv_read("/dev/zero", &c, &err), DFLE_EIO);
+    assert_msg_contains(err.msg, "not a regular file");
+    assert_int_equal(dfle_csv_read("/", &c, &err), DFLE_EIO);
+    assert_msg_contains(err.msg, "directory");
+}
+
 static void test_csv_text_column(void **state)
 {
     dfle_csv *c;
@@ -753,6 +777,7 @@ int main(void)
         cmocka_unit_test(test_bootstrap_reproducible),
         cmocka_unit_test(test_csv_basic),
         cmocka_unit_test(test_csv_text_column),
+        cmocka_unit_test(test_csv_hostile_bytes),
         cmocka_unit_test(test_csv_errors),
     };
     return cmocka_run_group_tests(tests, NULL, NULL);

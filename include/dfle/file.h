@@ -54,6 +54,16 @@ int dfle_file_commit(dfle_file *f, dfle_error *err);
 /* Give up: close and remove the temporary file (f may be unbegun). */
 void dfle_file_abort(dfle_file *f);
 
+/* Largest file dfle_file_read_all reads by default [bytes]. */
+#define DFLE_FILE_READ_MAX ((size_t)4 << 30)
+
+/* Read the whole file at `path` into *text (malloc'd, NUL-terminated;
+ * *len bytes before the NUL).  Only a regular file is read: a device, a
+ * FIFO or a directory is refused (/dev/zero never ends), and so is a file
+ * of more than max_bytes.  Messages start with the path. */
+int dfle_file_read_all(const char *path, size_t max_bytes, char **text, size_t *len,
+                       dfle_error *err);
+
 #ifdef __cplusplus
 }
 #endif

@@ -232,3 +232,52 @@ void dfle_file_abort(dfle_file *f)
     f->fp = NULL;
     f->tmp = f->path = NULL;
 }
+
+int dfle_file_read_all(const char *path, size_t max_bytes, char **text, size_t *len,
+                       dfle_error *err)
+{
+    struct stat sb;
+    char *buf;
+    size_t n = 0;
+    int fd;
+
+    *text = NULL;
+    *len = 0;
+    if ((fd = open(path, O_RDONLY | O_NONBLOCK)) < 0)
+        return dfle_error_set(err, DFLE_EIO, "%s: cannot open: %s", path, strerror(errno));
+    if (fstat(fd, &sb) != 0 || !S_ISREG(sb.st_mode)) {
+        close(fd);
+        return dfle_error_set(err, DFLE_EIO, "%s: not a regular file (%s)", path,
+                              S_ISDIR(sb.st_mode) ? "a directory" : "a device, pipe or socket");
+    }
+    if ((size_t)sb.st_size > max_bytes) {
+        close(fd);
+        return dfle_error_set(err, DFLE_EIO, "%s: %lld bytes, more than the %zu read at most",
+                              path, (long long)sb.st_size, max_bytes);
+    }
+    if ((buf = malloc((size_t)sb.st_size + 1)) == NULL) {
+        close(fd);
+        return dfle_error_set(err, DFLE_ENOMEM, "%s: out of memory", path);
+    }
+    /* Up to the size seen: a file that grows meanwhile (a writer still
+     * appending) is read as it was, never without end. */
+    while (n < (size_t)sb.st_size) {
+        ssize_t got = read(fd, buf + n, (size_t)sb.st_size - n);
+        if (got < 0 && errno == EINTR)
+            continue;
+        if (got < 0) {
+            int e = errno;
+            free(buf);
+            close(fd);
+            return dfle_error_set(err, DFLE_EIO, "%s: read error: %s", path, strerror(e));
+        }
+        if (got == 0)
+            break; /* it shrank */
+        n += (size_t)got;
+    }
+    close(fd);
+    buf[n] = '\0';
+    *text = buf;
+    *len = n;
+    return DFLE_OK;
+}

@@ -10,6 +10,8 @@
  */
 #include "dfle/csv.h"
 
+#include "dfle/file.h"
+
 #include <errno.h>
 #include <math.h>
 #include <stdio.h>
@@ -288,11 +290,21 @@ int dfle_csv_parse(const char *text, size_t len, const char *source, dfle_csv **
         dfle_csv_free(ps.csv);
         return dfle_error_set(err, DFLE_ENOMEM, "csv: out of memory");
     }
+    /* A UTF-8 byte-order mark (spreadsheets write one) is not part of
+     * the first column's name. */
+    if (stop - p >= 3 && memcmp(p, "\xEF\xBB\xBF", 3) == 0)
+        p += 3;
     while (p < stop && st == DFLE_OK) {
         const char *nl = memchr(p, '\n', (size_t)(stop - p));
         const char *end = nl != NULL ? nl : stop;
         const char *next = nl != NULL ? nl + 1 : stop;
         lineno++;
+        /* C strings end at NUL: a field "7\0junk" would read as 7. */
+        if (memchr(p, '\0', (size_t)(end - p)) != NULL) {
+            st = dfle_error_set(err, DFLE_EINVAL, "%s:%zu: contains a NUL byte (a binary or "
+                                "damaged file?)", ps.csv->source, lineno);
+            break;
+        }
         if (end > p && end[-1] == '\r')
             end--;
         if (!skip_line(p, end)) {
@@ -319,9 +331,8 @@ int dfle_csv_parse(const char *text, size_t len, const char *source, dfle_csv **
 
 int dfle_csv_read(const char *path, dfle_csv **out, dfle_error *err)
 {
-    FILE *f;
-    char *text = NULL;
-    size_t len = 0, cap = 0;
+    char *text;
+    size_t len;
     int st;
 
     if (out == NULL)
@@ -329,33 +340,8 @@ int dfle_csv_read(const char *path, dfle_csv **out, dfle_error *err)
     *out = NULL;
     if (path == NULL)
         return dfle_error_set(err, DFLE_EINVAL, "csv: path is NULL");
-    f = fopen(path, "rb");
-    if (f == NULL)
-        return dfle_error_set(err, DFLE_EIO, "%s: cannot open: %s", path, strerror(errno));
-    for (;;) {
-        size_t got;
-        if (len == cap) {
-            size_t ncap = cap ? 2 * cap : 65536;
-            char *t = realloc(text, ncap);
-            if (t == NULL) {
-                free(text);
-                fclose(f);
-                return dfle_error_set(err, DFLE_ENOMEM, "%s: out of memory", path);
-            }
-            text = t;
-            cap = ncap;
-        }
-        got = fread(text + len, 1, cap - len, f);
-        len += got;
-        if (got == 0)
-            break;
-    }
-    if (ferror(f)) {
-        free(text);
-        fclose(f);
-        return dfle_error_set(err, DFLE_EIO, "%s: read error", path);
-    }
-    fclose(f);
+    if ((st = dfle_file_read_all(path, DFLE_FILE_READ_MAX, &text, &len, err)) != DFLE_OK)
+        return st;
     st = dfle_csv_parse(text, len, path, out, err);
     free(text);
     return st;

@@ -7,7 +7,12 @@
  */
 #include "dfle/ensemble.h"
 
+#include "dfle/file.h"
+
 #include <errno.h>
+#include <fcntl.h>
+#include <sys/file.h>
+#include <sys/stat.h>
 #include <pthread.h>
 #include <stdio.h>
 #include <stdlib.h>
@@ -54,42 +59,11 @@ void dfle_ens_table_free(dfle_ens_table *t)
     free(t);
 }
 
-/* Whole file into memory. */
+/* Whole file into memory: a regular file only (a device such as
+ * /dev/zero would be read without end). */
 static int slurp(const char *path, char **text, size_t *len, dfle_error *err)
 {
-    FILE *fp = fopen(path, "rb");
-    char *buf = NULL;
-    size_t cap = 0, n = 0;
-
-    if (fp == NULL)
-        return dfle_error_set(err, DFLE_EIO, "%s: cannot open: %s", path, strerror(errno));
-    for (;;) {
-        size_t got;
-        if (cap - n < 65536) {
-            char *nb = realloc(buf, cap * 2 + 65536);
-            if (nb == NULL) {
-                free(buf);
-                fclose(fp);
-                return dfle_error_set(err, DFLE_ENOMEM, "%s: out of memory", path);
-            }
-            buf = nb;
-            cap = cap * 2 + 65536;
-        }
-        got = fread(buf + n, 1, cap - n - 1, fp);
-        n += got;
-        if (got == 0)
-            break;
-    }
-    if (ferror(fp)) {
-        free(buf);
-        fclose(fp);
-        return dfle_error_set(err, DFLE_EIO, "%s: read error", path);
-    }
-    fclose(fp);
-    buf[n] = '\0';
-    *text = buf;
-    *len = n;
-    return DFLE_OK;
+    return dfle_file_read_all(path, DFLE_FILE_READ_MAX, text, len, err);
 }
 
 typedef struct row_ref {
@@ -224,33 +198,17 @@ fail:
 
 int dfle_ens_table_write(const dfle_ens_table *t, const char *path, dfle_error *err)
 {
-    size_t plen = strlen(path);
-    char *tmp = malloc(plen + 5);
-    FILE *fp;
-    int bad;
+    dfle_file out;
+    int st;
 
-    if (tmp == NULL)
-        return dfle_error_set(err, DFLE_ENOMEM, "%s: out of memory", path);
-    memcpy(tmp, path, plen);
-    memcpy(tmp + plen, ".tmp", 5);
-    fp = fopen(tmp, "wb");
-    if (fp == NULL) {
-        int e = errno;
-        free(tmp);
-        return dfle_error_set(err, DFLE_EIO, "%s: cannot write: %s", path, strerror(e));
+    if ((st = dfle_file_begin(&out, path, "ensemble", err)) != DFLE_OK)
+        return st;
+    fprintf(out.fp, "%s\n%s\n", t->meta, t->header);
+    for (size_t i = 0; i < t->nrows; i++) {
+        fputs(t->rows[i], out.fp);
+        fputc('\n', out.fp);
     }
-    bad = fprintf(fp, "%s\n%s\n", t->meta, t->header) < 0;
-    for (size_t i = 0; i < t->nrows && !bad; i++)
-        bad = fputs(t->rows[i], fp) < 0 || fputc('\n', fp) == EOF;
-    bad |= fclose(fp) != 0;
-    if (bad || rename(tmp, path) != 0) {
-        int e = errno;
-        remove(tmp);
-        free(tmp);
-        return dfle_error_set(err, DFLE_EIO, "%s: cannot write: %s", path, strerror(e));
-    }
-    free(tmp);
-    return DFLE_OK;
+    return dfle_file_commit(&out, err);
 }
 
 static void file_free(dfle_ens_file *f)
@@ -270,7 +228,8 @@ int dfle_ens_file_open(const char *path, const char *meta, const char *header, s
 {
     dfle_ens_file *f;
     dfle_ens_table *t = NULL;
-    int st;
+    struct stat sb;
+    int st, fd = -1;
 
     *out = NULL;
     if (n == 0)
@@ -290,11 +249,32 @@ int dfle_ens_file_open(const char *path, const char *meta, const char *header, s
         file_free(f);
         return dfle_error_set(err, DFLE_ENOMEM, "%s: out of memory", path);
     }
-    if (resume && access(path, F_OK) == 0) {
-        if ((st = dfle_ens_table_read(path, &t, err)) != DFLE_OK) {
-            file_free(f);
-            return st;
-        }
+    /* The file is locked before anything is read or written: two runs
+     * with the same `out` would otherwise both resume from it and
+     * interleave their rows (duplicates and torn lines).  The lock is the
+     * descriptor's, so it goes with the process, however that ends. */
+    fd = open(path, O_RDWR | O_CREAT, 0666);
+    if (fd < 0) {
+        st = dfle_error_set(err, DFLE_EIO, "%s: cannot open for writing: %s", path,
+                            strerror(errno));
+        goto fail;
+    }
+    if (fstat(fd, &sb) != 0 || !S_ISREG(sb.st_mode)) {
+        st = dfle_error_set(err, DFLE_EINVAL, "%s: an ensemble's 'out' must be a regular file "
+                            "(rows are appended and read back to resume), not a device or a "
+                            "pipe", path);
+        goto fail;
+    }
+    if (flock(fd, LOCK_EX | LOCK_NB) != 0) {
+        st = errno == EWOULDBLOCK
+                 ? dfle_error_set(err, DFLE_EIO, "%s is being written by another run; wait for "
+                                  "it to finish, or choose another 'out'", path)
+                 : dfle_error_set(err, DFLE_EIO, "%s: cannot lock: %s", path, strerror(errno));
+        goto fail;
+    }
+    if (resume && sb.st_size > 0) {
+        if ((st = dfle_ens_table_read(path, &t, err)) != DFLE_OK)
+            goto fail;
         if (strcmp(t->meta, meta) != 0 || strcmp(t->header, header) != 0) {
             st = dfle_error_set(err, DFLE_EINVAL,
                                 "%s was written by a different ensemble (its first lines are "
@@ -312,28 +292,36 @@ int dfle_ens_file_open(const char *path, const char *meta, const char *header, s
             f->done[t->index[i] - 1] = 1;
         }
         f->ndone = t->nrows;
-        if (truncate(path, t->valid_bytes) != 0) {
+        if (ftruncate(fd, t->valid_bytes) != 0) {
             st = dfle_error_set(err, DFLE_EIO, "%s: cannot cut the truncated last line: %s", path,
                                 strerror(errno));
             goto fail;
         }
         dfle_ens_table_free(t);
         t = NULL;
-        f->fp = fopen(path, "ab");
+        if (lseek(fd, 0, SEEK_END) < 0 || (f->fp = fdopen(fd, "a")) == NULL) {
+            st = dfle_error_set(err, DFLE_EIO, "%s: cannot open for writing: %s", path,
+                                strerror(errno));
+            goto fail;
+        }
+        fd = -1; /* f->fp owns it */
     } else {
-        f->fp = fopen(path, "wb");
-        if (f->fp != NULL && (fprintf(f->fp, "%s\n%s\n", meta, header) < 0 || fflush(f->fp) != 0)) {
+        if (ftruncate(fd, 0) != 0 || (f->fp = fdopen(fd, "w")) == NULL) {
+            st = dfle_error_set(err, DFLE_EIO, "%s: cannot open for writing: %s", path,
+                                strerror(errno));
+            goto fail;
+        }
+        fd = -1;
+        if (fprintf(f->fp, "%s\n%s\n", meta, header) < 0 || fflush(f->fp) != 0) {
             st = dfle_error_set(err, DFLE_EIO, "%s: cannot write: %s", path, strerror(errno));
             goto fail;
         }
     }
-    if (f->fp == NULL) {
-        st = dfle_error_set(err, DFLE_EIO, "%s: cannot open for writing: %s", path, strerror(errno));
-        goto fail;
-    }
     *out = f;
     return DFLE_OK;
 fail:
+    if (fd >= 0)
+        close(fd);
     dfle_ens_table_free(t);
     file_free(f);
     return st;
