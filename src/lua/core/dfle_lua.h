@@ -101,6 +101,8 @@ lua_Integer dfle_lua_check_whole(lua_State *L, double v, const char *fn, const c
 size_t dfle_lua_slope_area(lua_State *L, int arg, const char *fn, const double **A,
                            const double **S);
 
+/* --- lua_state.c: what the binding keeps per lua_State --- */
+
 /* Progress reporting, installed by the CLI (library users get none). */
 typedef struct dfle_lua_progress {
     dfle_progress_fn update;
@@ -110,9 +112,18 @@ typedef struct dfle_lua_progress {
 void dfle_lua_set_progress(lua_State *L, const dfle_lua_progress *p);
 const dfle_lua_progress *dfle_lua_get_progress(lua_State *L);
 
-/* Push the dfle module table (kept in the registry by luaopen_dfle, so
- * it is found even if a script replaced the global or package.loaded). */
+/* The dfle module table: recorded by luaopen_dfle, pushed by the
+ * binding files, so it is found even if a script replaced the global or
+ * package.loaded. */
+void dfle_lua_set_module(lua_State *L, int idx);
 void dfle_lua_push_module(lua_State *L);
+
+/* The Lua epoch: a counter per lua_State that goes up whenever Lua code
+ * may have run (a binding given a model, a callback returned), so a
+ * compiled law (lua_trace.h) re-checks the values it baked in only then.
+ * Created by luaopen_dfle; dfle_lua_touch never allocates after that. */
+unsigned long *dfle_lua_epoch(lua_State *L);
+void dfle_lua_touch(lua_State *L);
 
 /* Shell types (laws and routers written in Lua) call user code from one
  * protected sweep on a Lua thread of their own. */
@@ -124,12 +135,6 @@ int dfle_lua_traceback(lua_State *T);
 int dfle_lua_shell_sweep(lua_State *T, int top, int sweep, int msgh, void *ud,
                          const char *who, const char *fallback, dfle_error *err);
 
-/* The Lua epoch: a counter per lua_State that goes up whenever Lua code
- * may have run (a binding given a model, a callback returned), so a
- * compiled law (lua_trace.h) re-checks the values it baked in only then.
- * Created by luaopen_dfle; dfle_lua_touch never allocates after that. */
-unsigned long *dfle_lua_epoch(lua_State *L);
-void dfle_lua_touch(lua_State *L);
 
 /* Each binding file adds its functions to the module table on the stack. */
 void dfle_lua_open_channel(lua_State *L);

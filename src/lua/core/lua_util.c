@@ -1,6 +1,6 @@
 /*
  * lua_util.c - the pieces every binding file uses: checked option
- * tables, error raising, typed userdata, arrays, progress hooks.
+ * tables, error raising, typed userdata, arrays.
  */
 #include "lua/core/dfle_lua.h"
 
@@ -194,23 +194,6 @@ double *dfle_lua_check_array(lua_State *L, int idx, const char *what, size_t *n)
     return v;
 }
 
-static const char progress_key = 'p';
-
-void dfle_lua_set_progress(lua_State *L, const dfle_lua_progress *p)
-{
-    lua_pushlightuserdata(L, (void *)p);
-    lua_rawsetp(L, LUA_REGISTRYINDEX, &progress_key);
-}
-
-const dfle_lua_progress *dfle_lua_get_progress(lua_State *L)
-{
-    const dfle_lua_progress *p;
-    lua_rawgetp(L, LUA_REGISTRYINDEX, &progress_key);
-    p = lua_touserdata(L, -1);
-    lua_pop(L, 1);
-    return p;
-}
-
 const char *dfle_lua_typename(lua_State *L, int idx)
 {
     if (luaL_getmetafield(L, idx, "__name") == LUA_TSTRING)
@@ -304,22 +287,3 @@ int dfle_lua_shell_sweep(lua_State *T, int top, int sweep, int msgh, void *ud,
     lua_settop(T, top);
     return DFLE_OK;
 }
-
-static const char epoch_key = 0;
-
-unsigned long *dfle_lua_epoch(lua_State *L)
-{
-    unsigned long *e;
-    if (lua_rawgetp(L, LUA_REGISTRYINDEX, &epoch_key) == LUA_TUSERDATA) {
-        e = lua_touserdata(L, -1);
-        lua_pop(L, 1);
-        return e;
-    }
-    lua_pop(L, 1);
-    e = lua_newuserdatauv(L, sizeof *e, 0);
-    *e = 1;
-    lua_rawsetp(L, LUA_REGISTRYINDEX, &epoch_key);
-    return e;
-}
-
-void dfle_lua_touch(lua_State *L) { ++*dfle_lua_epoch(L); }
