@@ -84,6 +84,10 @@ const char *dfle_lua_typename(lua_State *L, int idx);
 /* Push and return v as text: "NaN", "inf", or the number. */
 const char *dfle_lua_number_text(lua_State *L, double v);
 
+/* Copy every key and value of the table at src into the table at dst
+ * (a shallow copy: raw, metatables ignored). */
+void dfle_lua_copy_table(lua_State *L, int src, int dst);
+
 /* Push a Lua array (1-based) of n doubles. */
 void dfle_lua_push_array(lua_State *L, const double *v, size_t n);
 

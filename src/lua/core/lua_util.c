@@ -163,6 +163,18 @@ dfle_model *dfle_lua_check_model(lua_State *L, int arg)
     return check_object(L, arg, DFLE_LUA_MODEL);
 }
 
+void dfle_lua_copy_table(lua_State *L, int src, int dst)
+{
+    src = lua_absindex(L, src);
+    dst = lua_absindex(L, dst);
+    lua_pushnil(L);
+    while (lua_next(L, src) != 0) {
+        lua_pushvalue(L, -2);
+        lua_insert(L, -2);
+        lua_rawset(L, dst);
+    }
+}
+
 void dfle_lua_push_array(lua_State *L, const double *v, size_t n)
 {
     lua_createtable(L, (int)n, 0);

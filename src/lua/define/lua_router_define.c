@@ -251,12 +251,7 @@ static int l_router_define(lua_State *L)
         if (t != LUA_TTABLE)
             luaL_error(L, "dfle.router.define: 'params' must be a table, got %s",
                        dfle_lua_typename(L, -1));
-        lua_pushnil(L);
-        while (lua_next(L, -2) != 0) {
-            lua_pushvalue(L, -2);
-            lua_insert(L, -2);
-            lua_settable(L, -5);
-        }
+        dfle_lua_copy_table(L, -1, -2);
     }
     lua_pop(L, 1);
     lua_pushvalue(L, -1);

@@ -90,12 +90,7 @@ static int l_law_params(lua_State *L)
         set_field(L, "p", eo->p);
     } else if (lua_getiuservalue(L, 1, 2) == LUA_TTABLE) {
         /* A Lua-defined law keeps its params as user value 2: copy them. */
-        lua_pushnil(L);
-        while (lua_next(L, -2) != 0) {
-            lua_pushvalue(L, -2);
-            lua_insert(L, -2);
-            lua_settable(L, -5);
-        }
+        dfle_lua_copy_table(L, -1, -2);
         lua_pop(L, 1);
     } else {
         lua_pop(L, 1);

@@ -113,14 +113,8 @@ static void push_params(lua_State *L, dfle_router *rt)
     } else {
         lua_newtable(L);
         /* A Lua-defined router keeps its params as user value 2: copy. */
-        if (lua_getiuservalue(L, 1, 2) == LUA_TTABLE) {
-            lua_pushnil(L);
-            while (lua_next(L, -2) != 0) {
-                lua_pushvalue(L, -2);
-                lua_insert(L, -2);
-                lua_settable(L, -5);
-            }
-        }
+        if (lua_getiuservalue(L, 1, 2) == LUA_TTABLE)
+            dfle_lua_copy_table(L, -1, -2);
         lua_pop(L, 1);
     }
 }
