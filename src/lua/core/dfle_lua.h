@@ -42,6 +42,47 @@ typedef struct { dfle_router *rt; } dfle_lua_router;
 typedef struct { dfle_law *law; } dfle_lua_law;
 typedef struct { dfle_model *m; } dfle_lua_model;
 
+/* --- lua_type.c: object types --- */
+
+/* What an object type supplies; everything else (__gc, __close,
+ * __tostring of a closed object, __index, the protected metatable) is
+ * generic.  The descriptor must outlive every lua_State (a static). */
+typedef struct dfle_lua_type {
+    const char *name;                       /* metatable name, "dfle.channel" */
+    void (*free)(void *obj);                /* release the C object         */
+    /* Push the description tostring() gives of the live object obj (the
+     * userdata is at index 1). */
+    void (*describe)(lua_State *L, void *obj);
+    const luaL_Reg *methods;                /* may be NULL                  */
+    /* Read-only fields such as m.time: called as __index(obj, key), key
+     * a string that is not a method.  May be NULL. */
+    lua_CFunction property;
+    const luaL_Reg *meta;                   /* more metamethods (__len), or NULL */
+    int closable;                           /* __close frees it too (local x <close>) */
+} dfle_lua_type;
+
+/* Create the metatable of type t (once per lua_State). */
+void dfle_lua_register(lua_State *L, const dfle_lua_type *t);
+
+/* New userdata of `size` bytes, zeroed (its pointer NULL: valid and
+ * empty), with metatable `tname` and `nuv` user values. */
+void *dfle_lua_newobject(lua_State *L, size_t size, const char *tname, int nuv);
+
+/* The pointer of object arg of type tname; raises a type error if arg is
+ * not one, or was already closed. */
+void *dfle_lua_check_object(lua_State *L, int arg, const char *tname);
+dfle_channel *dfle_lua_check_channel(lua_State *L, int arg);
+dfle_fluvial *dfle_lua_check_fluvial(lua_State *L, int arg);
+dfle_router *dfle_lua_check_router(lua_State *L, int arg);
+dfle_law *dfle_lua_check_law(lua_State *L, int arg);
+dfle_model *dfle_lua_check_model(lua_State *L, int arg);
+
+/* The type of the value at idx as a user would name it: the __name of
+ * its metatable ("dfle.law") if it has one, else the Lua type. */
+const char *dfle_lua_typename(lua_State *L, int idx);
+
+/* --- lua_util.c: options, errors, numbers, tables --- */
+
 /* A numeric parameter read from an options table into *dst. */
 typedef struct dfle_lua_param {
     const char *name;
@@ -59,28 +100,6 @@ void dfle_lua_read_params(lua_State *L, int idx, const char *fn,
 /* Raise err's message as "dfle.<message>" at the caller's file:line. */
 int dfle_lua_raise(lua_State *L, const dfle_error *err);
 
-/* New userdata of `size` bytes, zeroed, with metatable `tname` and
- * `nuv` user values. */
-void *dfle_lua_newobject(lua_State *L, size_t size, const char *tname, int nuv);
-
-/* Create the metatable `tname`: metamethods `meta`, and an __index that
- * finds `methods` first, then calls `property(obj, key)` (may be NULL)
- * for read-only fields such as m.time. */
-void dfle_lua_register_type(lua_State *L, const char *tname,
-                            const luaL_Reg *methods, const luaL_Reg *meta,
-                            lua_CFunction property);
-
-/* Checked accessors: raise a type error if arg is not of the type or was
- * already closed. */
-dfle_channel *dfle_lua_check_channel(lua_State *L, int arg);
-dfle_fluvial *dfle_lua_check_fluvial(lua_State *L, int arg);
-dfle_router *dfle_lua_check_router(lua_State *L, int arg);
-dfle_law *dfle_lua_check_law(lua_State *L, int arg);
-dfle_model *dfle_lua_check_model(lua_State *L, int arg);
-
-/* The type of the value at idx as a user would name it: the __name of
- * its metatable ("dfle.law") if it has one, else the Lua type. */
-const char *dfle_lua_typename(lua_State *L, int idx);
 /* Push and return v as text: "NaN", "inf", or the number. */
 const char *dfle_lua_number_text(lua_State *L, double v);
 

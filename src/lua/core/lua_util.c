@@ -1,6 +1,7 @@
 /*
  * lua_util.c - the pieces every binding file uses: checked option
- * tables, error raising, typed userdata, arrays.
+ * tables, error raising, numbers as text, tables and arrays, slope-area
+ * data.
  */
 #include "lua/core/dfle_lua.h"
 
@@ -90,79 +91,6 @@ int dfle_lua_raise(lua_State *L, const dfle_error *err)
     return luaL_error(L, "dfle.%s", err->msg);
 }
 
-void *dfle_lua_newobject(lua_State *L, size_t size, const char *tname, int nuv)
-{
-    void *p = lua_newuserdatauv(L, size, nuv);
-    memset(p, 0, size);
-    luaL_setmetatable(L, tname);
-    return p;
-}
-
-/* __index: methods first, then the type's read-only properties. */
-static int object_index(lua_State *L)
-{
-    lua_CFunction property = lua_tocfunction(L, lua_upvalueindex(2));
-    lua_pushvalue(L, 2);
-    if (lua_rawget(L, lua_upvalueindex(1)) != LUA_TNIL)
-        return 1;
-    lua_pop(L, 1);
-    if (property != NULL && lua_type(L, 2) == LUA_TSTRING)
-        return property(L);
-    return 0;
-}
-
-void dfle_lua_register_type(lua_State *L, const char *tname, const luaL_Reg *methods,
-                            const luaL_Reg *meta, lua_CFunction property)
-{
-    if (luaL_newmetatable(L, tname)) {
-        luaL_setfuncs(L, meta, 0);
-        lua_newtable(L);
-        if (methods != NULL)
-            luaL_setfuncs(L, methods, 0);
-        if (property != NULL)
-            lua_pushcfunction(L, property);
-        else
-            lua_pushnil(L);
-        lua_pushcclosure(L, object_index, 2);
-        lua_setfield(L, -2, "__index");
-        /* Scripts must not reach __gc: freeing a component a model still
-         * uses would leave the model reading freed memory. */
-        lua_pushliteral(L, "dfle objects do not share their metatable");
-        lua_setfield(L, -2, "__metatable");
-    }
-    lua_pop(L, 1);
-}
-
-static void *check_object(lua_State *L, int arg, const char *tname)
-{
-    void **p = luaL_checkudata(L, arg, tname);
-    if (*p == NULL)
-        luaL_argerror(L, arg, lua_pushfstring(L, "%s has been closed", tname));
-    return *p;
-}
-
-dfle_channel *dfle_lua_check_channel(lua_State *L, int arg)
-{
-    return check_object(L, arg, DFLE_LUA_CHANNEL);
-}
-dfle_fluvial *dfle_lua_check_fluvial(lua_State *L, int arg)
-{
-    return check_object(L, arg, DFLE_LUA_FLUVIAL);
-}
-dfle_router *dfle_lua_check_router(lua_State *L, int arg)
-{
-    return check_object(L, arg, DFLE_LUA_ROUTER);
-}
-dfle_law *dfle_lua_check_law(lua_State *L, int arg)
-{
-    return check_object(L, arg, DFLE_LUA_LAW);
-}
-dfle_model *dfle_lua_check_model(lua_State *L, int arg)
-{
-    dfle_lua_touch(L); /* the script may have changed what a compiled law read */
-    return check_object(L, arg, DFLE_LUA_MODEL);
-}
-
 void dfle_lua_copy_table(lua_State *L, int src, int dst)
 {
     src = lua_absindex(L, src);
@@ -204,13 +132,6 @@ double *dfle_lua_check_array(lua_State *L, int idx, const char *what, size_t *n)
     }
     *n = (size_t)len;
     return v;
-}
-
-const char *dfle_lua_typename(lua_State *L, int idx)
-{
-    if (luaL_getmetafield(L, idx, "__name") == LUA_TSTRING)
-        return lua_tostring(L, -1); /* left on the stack, so it stays valid */
-    return luaL_typename(L, idx);
 }
 
 const char *dfle_lua_number_text(lua_State *L, double v)

@@ -129,9 +129,9 @@ static int l_law_property(lua_State *L)
     return 1;
 }
 
-static int l_law_tostring(lua_State *L)
+static void law_describe(lua_State *L, void *obj)
 {
-    dfle_law *law = dfle_lua_check_law(L, 1);
+    dfle_law *law = obj;
     const dfle_power_law_opts *o = dfle_law_power_opts(law);
     const dfle_inertial_law_opts *io = dfle_law_inertial_opts(law);
     const dfle_excess_stress_law_opts *eo = dfle_law_excess_stress_opts(law);
@@ -148,24 +148,18 @@ static int l_law_tostring(lua_State *L)
     else
         snprintf(buf, sizeof buf, "dfle.law.%s", dfle_law_name(law));
     lua_pushstring(L, buf);
-    return 1;
 }
 
-static int l_law_gc(lua_State *L)
-{
-    dfle_lua_law *u = luaL_checkudata(L, 1, DFLE_LUA_LAW);
-    dfle_law_free(u->law);
-    u->law = NULL;
-    return 0;
-}
+static void law_free(void *obj) { dfle_law_free(obj); }
 
 void dfle_lua_open_law(lua_State *L)
 {
     static const luaL_Reg methods[] = {{"params", l_law_params}, {NULL, NULL}};
-    static const luaL_Reg meta[] = {
-        {"__gc", l_law_gc}, {"__tostring", l_law_tostring},
-        {NULL, NULL}};
-    dfle_lua_register_type(L, DFLE_LUA_LAW, methods, meta, l_law_property);
+    static const dfle_lua_type type = {
+        .name = DFLE_LUA_LAW, .free = law_free, .describe = law_describe,
+        .methods = methods, .property = l_law_property,
+    };
+    dfle_lua_register(L, &type);
     lua_newtable(L);
     lua_pushcfunction(L, l_law_power);
     lua_setfield(L, -2, "power");

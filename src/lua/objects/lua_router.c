@@ -227,9 +227,9 @@ static int l_router_property(lua_State *L)
     return 1;
 }
 
-static int l_router_tostring(lua_State *L)
+static void router_describe(lua_State *L, void *obj)
 {
-    dfle_router *rt = dfle_lua_check_router(L, 1);
+    dfle_router *rt = obj;
     const dfle_empirical_opts *o = dfle_router_empirical_opts(rt);
     const dfle_process_opts *po = dfle_router_process_opts(rt);
     char buf[200];
@@ -244,25 +244,19 @@ static int l_router_tostring(lua_State *L)
     else
         snprintf(buf, sizeof buf, "dfle.router.%s", dfle_router_name(rt));
     lua_pushstring(L, buf);
-    return 1;
 }
 
-static int l_router_gc(lua_State *L)
-{
-    dfle_lua_router *u = luaL_checkudata(L, 1, DFLE_LUA_ROUTER);
-    dfle_router_free(u->rt);
-    u->rt = NULL;
-    return 0;
-}
+static void router_free(void *obj) { dfle_router_free(obj); }
 
 void dfle_lua_open_router(lua_State *L)
 {
     static const luaL_Reg methods[] = {
         {"params", l_router_params}, {"route", l_router_route}, {NULL, NULL}};
-    static const luaL_Reg meta[] = {
-        {"__gc", l_router_gc},
-        {"__tostring", l_router_tostring}, {NULL, NULL}};
-    dfle_lua_register_type(L, DFLE_LUA_ROUTER, methods, meta, l_router_property);
+    static const dfle_lua_type type = {
+        .name = DFLE_LUA_ROUTER, .free = router_free, .describe = router_describe,
+        .methods = methods, .property = l_router_property,
+    };
+    dfle_lua_register(L, &type);
     lua_newtable(L);
     lua_pushcfunction(L, l_router_empirical);
     lua_setfield(L, -2, "empirical");
