@@ -148,17 +148,6 @@ void dfle_lua_push_module(lua_State *L);
 unsigned long *dfle_lua_epoch(lua_State *L);
 void dfle_lua_touch(lua_State *L);
 
-/* Shell types (laws and routers written in Lua) call user code from one
- * protected sweep on a Lua thread of their own. */
-/* Message handler for those calls: appends a traceback. */
-int dfle_lua_traceback(lua_State *T);
-/* Call the sweep closure at index `sweep` of T with `ud` as its argument,
- * protected by the handler at `msgh`; T's top returns to `top`.  A Lua
- * error becomes DFLE_ECALLBACK with "<who>: message" (or `fallback`). */
-int dfle_lua_shell_sweep(lua_State *T, int top, int sweep, int msgh, void *ud,
-                         const char *who, const char *fallback, dfle_error *err);
-
-
 /* Each binding file adds its functions to the module table on the stack. */
 void dfle_lua_open_channel(lua_State *L);
 void dfle_lua_open_fluvial(lua_State *L);

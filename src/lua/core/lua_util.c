@@ -192,31 +192,3 @@ size_t dfle_lua_slope_area(lua_State *L, int arg, const char *fn, const double *
         luaL_error(L, "dfle.%s: A has %d values but S has %d", fn, (int)n, (int)nS);
     return n;
 }
-
-int dfle_lua_traceback(lua_State *T)
-{
-    const char *msg = lua_tostring(T, 1);
-    if (msg == NULL)
-        msg = lua_pushfstring(T, "(error object is a %s value)", luaL_typename(T, 1));
-    luaL_traceback(T, T, msg, 1);
-    return 1;
-}
-
-int dfle_lua_shell_sweep(lua_State *T, int top, int sweep, int msgh, void *ud,
-                         const char *who, const char *fallback, dfle_error *err)
-{
-    int st;
-    lua_settop(T, top);
-    lua_pushvalue(T, sweep);
-    lua_pushlightuserdata(T, ud);
-    st = lua_pcall(T, 1, 0, msgh);
-    dfle_lua_touch(T);
-    if (st != LUA_OK) {
-        const char *msg = lua_tostring(T, -1);
-        dfle_error_set(err, DFLE_ECALLBACK, "%s: %s", who, msg != NULL ? msg : fallback);
-        lua_settop(T, top);
-        return DFLE_ECALLBACK;
-    }
-    lua_settop(T, top);
-    return DFLE_OK;
-}
