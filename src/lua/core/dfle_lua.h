@@ -124,6 +124,24 @@ lua_Integer dfle_lua_check_whole(lua_State *L, double v, const char *fn, const c
 size_t dfle_lua_slope_area(lua_State *L, int arg, const char *fn, const double **A,
                            const double **S);
 
+/* --- lua_params.c: a router's or law's parameters in Lua --- */
+
+/* The params op of a kind of component (dfle_router_params,
+ * dfle_law_params) behind one signature. */
+typedef size_t (*dfle_lua_params_fn)(const void *component, dfle_param *out, size_t cap);
+
+/* Push x:params() of the component object at obj (pointer comp): a new
+ * table from its params op, a switch as a boolean and any other value a
+ * number; or, when it has no params op, a copy of the table its object
+ * keeps as user value 2 (a component written in Lua). */
+void dfle_lua_push_params(lua_State *L, int obj, dfle_lua_params_fn fn, const void *comp);
+
+/* Push tostring(x): "<prefix>.<name>(k = v unit, ...)", the parameters
+ * in the params op's order, or sorted by key for a Lua component's own
+ * table. */
+void dfle_lua_push_described(lua_State *L, int obj, const char *prefix, const char *name,
+                             dfle_lua_params_fn fn, const void *comp);
+
 /* --- lua_state.c: what the binding keeps per lua_State --- */
 
 /* Progress reporting, installed by the CLI (library users get none). */

@@ -62,39 +62,15 @@ static int l_law_excess_stress(lua_State *L)
     return 1;
 }
 
-static void set_field(lua_State *L, const char *k, double v)
+/* The law's params op, as the binding's parameter helpers take it. */
+static size_t law_params(const void *law, dfle_param *out, size_t cap)
 {
-    lua_pushnumber(L, v);
-    lua_setfield(L, -2, k);
+    return dfle_law_params(law, out, cap);
 }
 
 static int l_law_params(lua_State *L)
 {
-    dfle_law *law = dfle_lua_check_law(L, 1);
-    const dfle_power_law_opts *o = dfle_law_power_opts(law);
-    const dfle_inertial_law_opts *io = dfle_law_inertial_opts(law);
-    const dfle_excess_stress_law_opts *eo = dfle_law_excess_stress_opts(law);
-    lua_newtable(L);
-    if (o != NULL) {
-        set_field(L, "k_df", o->k_df);
-        set_field(L, "alpha", o->alpha);
-        set_field(L, "beta", o->beta);
-    } else if (io != NULL) {
-        set_field(L, "k", io->k);
-        set_field(L, "D", io->D);
-        set_field(L, "rho_s", io->rho_s);
-        set_field(L, "alpha", io->alpha);
-    } else if (eo != NULL) {
-        set_field(L, "k", eo->k);
-        set_field(L, "tau_c", eo->tau_c);
-        set_field(L, "p", eo->p);
-    } else if (lua_getiuservalue(L, 1, 2) == LUA_TTABLE) {
-        /* A Lua-defined law keeps its params as user value 2: copy them. */
-        dfle_lua_copy_table(L, -1, -2);
-        lua_pop(L, 1);
-    } else {
-        lua_pop(L, 1);
-    }
+    dfle_lua_push_params(L, 1, law_params, dfle_lua_check_law(L, 1));
     return 1;
 }
 
@@ -122,32 +98,14 @@ static int l_law_property(lua_State *L)
         lua_pushcfunction(L, l_law_compiled);
         return 1;
     }
-    lua_pushcfunction(L, l_law_params);
-    lua_pushvalue(L, 1);
-    lua_call(L, 1, 1);
+    dfle_lua_push_params(L, 1, law_params, law);
     lua_getfield(L, -1, key);
     return 1;
 }
 
 static void law_describe(lua_State *L, void *obj)
 {
-    dfle_law *law = obj;
-    const dfle_power_law_opts *o = dfle_law_power_opts(law);
-    const dfle_inertial_law_opts *io = dfle_law_inertial_opts(law);
-    const dfle_excess_stress_law_opts *eo = dfle_law_excess_stress_opts(law);
-    char buf[160];
-    if (o != NULL)
-        snprintf(buf, sizeof buf, "dfle.law.power(k_df = %g, alpha = %g, beta = %g)", o->k_df,
-                 o->alpha, o->beta);
-    else if (io != NULL)
-        snprintf(buf, sizeof buf, "dfle.law.inertial(k = %g, D = %g m, rho_s = %g kg/m^3, "
-                 "alpha = %g)", io->k, io->D, io->rho_s, io->alpha);
-    else if (eo != NULL)
-        snprintf(buf, sizeof buf, "dfle.law.excess_stress(k = %g, tau_c = %g Pa, p = %g)", eo->k,
-                 eo->tau_c, eo->p);
-    else
-        snprintf(buf, sizeof buf, "dfle.law.%s", dfle_law_name(law));
-    lua_pushstring(L, buf);
+    dfle_lua_push_described(L, 1, "dfle.law", dfle_law_name(obj), law_params, obj);
 }
 
 static void law_free(void *obj) { dfle_law_free(obj); }

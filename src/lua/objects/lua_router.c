@@ -3,8 +3,9 @@
  * dfle.router.define{...} (lua_router_define.c): debris-flow routers.
  *
  * A router object from Lua is just the C router handle; the model takes
- * it through the ops table, whatever its kind.  rt:params() returns the
- * parameters so scripts can record what they ran.
+ * it through the ops table, whatever its kind.  rt:params(), rt.<param>
+ * and tostring(rt) come from its params op (lua_params.c), so scripts
+ * can record what they ran.
  */
 #include "lua/core/dfle_lua.h"
 
@@ -31,19 +32,6 @@ static int l_router_empirical(lua_State *L)
     if (dfle_router_new_empirical(&o, &u->rt, &err) != DFLE_OK)
         return dfle_lua_raise(L, &err);
     return 1;
-}
-
-static void push_empirical_params(lua_State *L, const dfle_empirical_opts *o)
-{
-    lua_createtable(L, 0, 8);
-    lua_pushnumber(L, o->M0), lua_setfield(L, -2, "M0");
-    lua_pushnumber(L, o->gamma), lua_setfield(L, -2, "gamma");
-    lua_pushnumber(L, o->mu), lua_setfield(L, -2, "mu");
-    lua_pushnumber(L, o->tau_y), lua_setfield(L, -2, "tau_y");
-    lua_pushnumber(L, o->c1), lua_setfield(L, -2, "c1");
-    lua_pushnumber(L, o->c2), lua_setfield(L, -2, "c2");
-    lua_pushnumber(L, o->rho_b), lua_setfield(L, -2, "rho_b");
-    lua_pushnumber(L, o->g), lua_setfield(L, -2, "g");
 }
 
 static int l_router_process(lua_State *L)
@@ -80,43 +68,10 @@ static int l_router_process(lua_State *L)
     return 1;
 }
 
-static void push_process_params(lua_State *L, const dfle_process_opts *o)
+/* The router's params op, as the binding's parameter helpers take it. */
+static size_t router_params(const void *rt, dfle_param *out, size_t cap)
 {
-    const struct { const char *k; double v; } f[] = {
-        {"M0", o->M0}, {"eta", o->flow.eta}, {"mu2", o->flow.mu_2}, {"mu_s", o->flow.mu_s},
-        {"I0", o->flow.I0}, {"D", o->flow.D}, {"D_eff", o->flow.D_eff},
-        {"lambda0", o->flow.lambda0}, {"v_f", o->flow.v_f}, {"rho_b", o->flow.rho},
-        {"rho_s", o->flow.rho_s}, {"g", o->flow.g}, {"cfl", o->flow.cfl},
-        {"h_dry", o->flow.h_dry}, {"n_ghost", o->n_ghost}, {"reroute_dS", o->reroute_dS},
-        {"q_erode", o->q_erode}, {"q_rest", o->q_rest}, {"volume_tol", o->volume_tol},
-        {"t_max", o->t_max}, {"gamma", o->gamma},
-    };
-    lua_createtable(L, 0, (int)(sizeof f / sizeof f[0]) + 1);
-    for (size_t i = 0; i < sizeof f / sizeof f[0]; i++) {
-        lua_pushnumber(L, f[i].v);
-        lua_setfield(L, -2, f[i].k);
-    }
-    lua_pushboolean(L, o->frequency_scaling);
-    lua_setfield(L, -2, "frequency_scaling");
-}
-
-/* Push the parameters of any router kind as a table (the router object
- * is at index 1). */
-static void push_params(lua_State *L, dfle_router *rt)
-{
-    const dfle_empirical_opts *eo = dfle_router_empirical_opts(rt);
-    const dfle_process_opts *po = dfle_router_process_opts(rt);
-    if (eo != NULL) {
-        push_empirical_params(L, eo);
-    } else if (po != NULL) {
-        push_process_params(L, po);
-    } else {
-        lua_newtable(L);
-        /* A Lua-defined router keeps its params as user value 2: copy. */
-        if (lua_getiuservalue(L, 1, 2) == LUA_TTABLE)
-            dfle_lua_copy_table(L, -1, -2);
-        lua_pop(L, 1);
-    }
+    return dfle_router_params(rt, out, cap);
 }
 
 static void set_array(lua_State *L, const char *key, const double *v, size_t n)
@@ -209,7 +164,7 @@ static int l_router_route(lua_State *L)
 
 static int l_router_params(lua_State *L)
 {
-    push_params(L, dfle_lua_check_router(L, 1));
+    dfle_lua_push_params(L, 1, router_params, dfle_lua_check_router(L, 1));
     return 1;
 }
 
@@ -222,28 +177,14 @@ static int l_router_property(lua_State *L)
         lua_pushstring(L, dfle_router_name(rt));
         return 1;
     }
-    push_params(L, rt);
+    dfle_lua_push_params(L, 1, router_params, rt);
     lua_getfield(L, -1, key);
     return 1;
 }
 
 static void router_describe(lua_State *L, void *obj)
 {
-    dfle_router *rt = obj;
-    const dfle_empirical_opts *o = dfle_router_empirical_opts(rt);
-    const dfle_process_opts *po = dfle_router_process_opts(rt);
-    char buf[200];
-    if (o != NULL)
-        snprintf(buf, sizeof buf,
-                 "dfle.router.empirical(M0 = %g, gamma = %g, mu = %g Pa s, tau_y = %g Pa)",
-                 o->M0, o->gamma, o->mu, o->tau_y);
-    else if (po != NULL)
-        snprintf(buf, sizeof buf,
-                 "dfle.router.process(M0 = %g m^3, eta = %g Pa s, mu2 = %g, D = %g m^2/s)",
-                 po->M0, po->flow.eta, po->flow.mu_2, po->flow.D);
-    else
-        snprintf(buf, sizeof buf, "dfle.router.%s", dfle_router_name(rt));
-    lua_pushstring(L, buf);
+    dfle_lua_push_described(L, 1, "dfle.router", dfle_router_name(obj), router_params, obj);
 }
 
 static void router_free(void *obj) { dfle_router_free(obj); }
