@@ -109,13 +109,9 @@ static int l_router_route(lua_State *L)
     if ((S = dfle_model_field(m, DFLE_FIELD_S, &err)) == NULL)
         return dfle_lua_raise(L, &err);
     /* The flow's arrays live in a userdata: nothing to free if we raise. */
-    block = lua_newuserdatauv(L, 8 * n * sizeof *block, 0);
-    memset(block, 0, 8 * n * sizeof *block);
-    memset(&flow, 0, sizeof flow);
-    flow.n = n;
-    flow.M = block, flow.Q = block + n, flow.h = block + 2 * n, flow.v = block + 3 * n;
-    flow.t_p = block + 4 * n, flow.tau = block + 5 * n, flow.Theta = block + 6 * n;
-    flow.integral = block + 7 * n;
+    block = lua_newuserdatauv(L, DFLE_FLOW_ARRAYS * n * sizeof *block, 0);
+    memset(block, 0, DFLE_FLOW_ARRAYS * n * sizeof *block);
+    dfle_flow_bind(&flow, block, n);
     flow.integrand = dfle_law_get_ops(dfle_model_law(m))->integrand;
     flow.integrand_state = dfle_law_state(dfle_model_law(m));
     if (times != NULL && dfle_router_process_set_snapshots(rt, ntimes, times, &err) != DFLE_OK)
