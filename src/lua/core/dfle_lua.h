@@ -136,6 +136,11 @@ typedef size_t (*dfle_lua_params_fn)(const void *component, dfle_param *out, siz
  * keeps as user value 2 (a component written in Lua). */
 void dfle_lua_push_params(lua_State *L, int obj, dfle_lua_params_fn fn, const void *comp);
 
+/* The __index property of a component (the object at 1, a string key
+ * at 2): x.name, else x.<param> (nil if it has none); returns 1. */
+int dfle_lua_push_param_field(lua_State *L, const char *name, dfle_lua_params_fn fn,
+                              const void *comp);
+
 /* Push tostring(x): "<prefix>.<name>(k = v unit, ...)", the parameters
  * in the params op's order, or sorted by key for a Lua component's own
  * table. */
@@ -143,6 +148,11 @@ void dfle_lua_push_described(lua_State *L, int obj, const char *prefix, const ch
                              dfle_lua_params_fn fn, const void *comp);
 
 /* --- lua_state.c: what the binding keeps per lua_State --- */
+
+/* A C pointer (host data that outlives the state) in the registry under
+ * key (the address of a static); NULL removes it, and reads as NULL. */
+void dfle_lua_set_pointer(lua_State *L, const void *key, const void *p);
+void *dfle_lua_get_pointer(lua_State *L, const void *key);
 
 /* Progress reporting, installed by the CLI (library users get none). */
 typedef struct dfle_lua_progress {

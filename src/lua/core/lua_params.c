@@ -50,6 +50,19 @@ void dfle_lua_push_params(lua_State *L, int obj, dfle_lua_params_fn fn, const vo
     lua_pop(L, 1); /* the list */
 }
 
+int dfle_lua_push_param_field(lua_State *L, const char *name, dfle_lua_params_fn fn,
+                              const void *comp)
+{
+    const char *key = lua_tostring(L, 2);
+    if (strcmp(key, "name") == 0) {
+        lua_pushstring(L, name);
+        return 1;
+    }
+    dfle_lua_push_params(L, 1, fn, comp);
+    lua_getfield(L, -1, key);
+    return 1;
+}
+
 /* A number as tostring(x) shows parameters: short, like the C library's
  * messages. */
 static void format_number(char *buf, size_t len, double v)

@@ -1,6 +1,7 @@
 /*
  * lua_state.c - what the binding keeps per lua_State, in the registry:
- * the module table, the Lua epoch and the progress hooks.
+ * the module table, the Lua epoch, the progress hooks, and the way other
+ * files keep a C pointer there (the ensemble's host).
  *
  * It sits below every binding file: luaopen_dfle (lua_module.c) records
  * the module here, and the files it opens read it back from here, so no
@@ -25,19 +26,32 @@ void dfle_lua_push_module(lua_State *L)
         luaL_error(L, "dfle: module table missing (was luaopen_dfle called?)");
 }
 
+void dfle_lua_set_pointer(lua_State *L, const void *key, const void *p)
+{
+    if (p != NULL)
+        lua_pushlightuserdata(L, (void *)p);
+    else
+        lua_pushnil(L);
+    lua_rawsetp(L, LUA_REGISTRYINDEX, key);
+}
+
+void *dfle_lua_get_pointer(lua_State *L, const void *key)
+{
+    void *p;
+    lua_rawgetp(L, LUA_REGISTRYINDEX, key);
+    p = lua_touserdata(L, -1);
+    lua_pop(L, 1);
+    return p;
+}
+
 void dfle_lua_set_progress(lua_State *L, const dfle_lua_progress *p)
 {
-    lua_pushlightuserdata(L, (void *)p);
-    lua_rawsetp(L, LUA_REGISTRYINDEX, &progress_key);
+    dfle_lua_set_pointer(L, &progress_key, p);
 }
 
 const dfle_lua_progress *dfle_lua_get_progress(lua_State *L)
 {
-    const dfle_lua_progress *p;
-    lua_rawgetp(L, LUA_REGISTRYINDEX, &progress_key);
-    p = lua_touserdata(L, -1);
-    lua_pop(L, 1);
-    return p;
+    return dfle_lua_get_pointer(L, &progress_key);
 }
 
 unsigned long *dfle_lua_epoch(lua_State *L)

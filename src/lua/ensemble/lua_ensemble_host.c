@@ -16,20 +16,12 @@ const char dfle_lua_ens_spec_key = 's';
 
 void dfle_lua_set_ensemble_host(lua_State *L, const dfle_lua_ensemble_host *h)
 {
-    if (h != NULL)
-        lua_pushlightuserdata(L, (void *)h);
-    else
-        lua_pushnil(L);
-    lua_rawsetp(L, LUA_REGISTRYINDEX, &host_key);
+    dfle_lua_set_pointer(L, &host_key, h);
 }
 
 const dfle_lua_ensemble_host *dfle_lua_ens_host(lua_State *L)
 {
-    const dfle_lua_ensemble_host *h;
-    lua_rawgetp(L, LUA_REGISTRYINDEX, &host_key);
-    h = lua_touserdata(L, -1);
-    lua_pop(L, 1);
-    return h;
+    return dfle_lua_get_pointer(L, &host_key);
 }
 
 double dfle_lua_ens_now(void)

@@ -8,8 +8,6 @@
  */
 #include "lua/core/dfle_lua.h"
 
-#include <stdio.h>
-#include <string.h>
 
 #include "dfle/law_excess_stress.h"
 #include "dfle/law_inertial.h"
@@ -87,20 +85,7 @@ static int l_law_compiled(lua_State *L)
 static int l_law_property(lua_State *L)
 {
     dfle_law *law = dfle_lua_check_law(L, 1);
-    const char *key = lua_type(L, 2) == LUA_TSTRING ? lua_tostring(L, 2) : NULL;
-    if (key == NULL)
-        return 0;
-    if (strcmp(key, "name") == 0) {
-        lua_pushstring(L, dfle_law_name(law));
-        return 1;
-    }
-    if (strcmp(key, "compiled") == 0) {
-        lua_pushcfunction(L, l_law_compiled);
-        return 1;
-    }
-    dfle_lua_push_params(L, 1, law_params, law);
-    lua_getfield(L, -1, key);
-    return 1;
+    return dfle_lua_push_param_field(L, dfle_law_name(law), law_params, law);
 }
 
 static void law_describe(lua_State *L, void *obj)
@@ -112,7 +97,8 @@ static void law_free(void *obj) { dfle_law_free(obj); }
 
 void dfle_lua_open_law(lua_State *L)
 {
-    static const luaL_Reg methods[] = {{"params", l_law_params}, {NULL, NULL}};
+    static const luaL_Reg methods[] = {
+        {"params", l_law_params}, {"compiled", l_law_compiled}, {NULL, NULL}};
     static const dfle_lua_type type = {
         .name = DFLE_LUA_LAW, .free = law_free, .describe = law_describe,
         .methods = methods, .property = l_law_property,

@@ -9,7 +9,6 @@
  */
 #include "lua/core/dfle_lua.h"
 
-#include <stdio.h>
 #include <string.h>
 
 #include "dfle/router_empirical.h"
@@ -167,15 +166,7 @@ static int l_router_params(lua_State *L)
 static int l_router_property(lua_State *L)
 {
     dfle_router *rt = dfle_lua_check_router(L, 1);
-    const char *key = lua_tostring(L, 2);
-
-    if (strcmp(key, "name") == 0) {
-        lua_pushstring(L, dfle_router_name(rt));
-        return 1;
-    }
-    dfle_lua_push_params(L, 1, router_params, rt);
-    lua_getfield(L, -1, key);
-    return 1;
+    return dfle_lua_push_param_field(L, dfle_router_name(rt), router_params, rt);
 }
 
 static void router_describe(lua_State *L, void *obj)
