@@ -12,6 +12,13 @@
  *    such as a fit that does not converge, return nil, message;
  *  - no malloc'd memory is held across a call that can raise: scratch
  *    arrays are userdata, collected if an error unwinds the stack.
+ *
+ * The core below every binding file: lua_type.c (object types),
+ * lua_util.c (options, errors, numbers, tables), lua_params.c (a
+ * router's or law's parameters), lua_state.c (what a lua_State keeps in
+ * its registry), and lua_shell.h (components written in Lua).  The open
+ * functions at the end are called from above only: by luaopen_dfle
+ * (lua_module.c), the define ones by the file of their kind.
  */
 #ifndef DFLE_LUA_INTERNAL_H
 #define DFLE_LUA_INTERNAL_H

@@ -23,7 +23,8 @@ static const dfle_param *param_list(lua_State *L, dfle_lua_params_fn fn, const v
     if (count == (size_t)-1)
         return NULL;
     p = lua_newuserdatauv(L, (count ? count : 1) * sizeof *p, 0);
-    *n = fn(comp, p, count);
+    fn(comp, p, count);
+    *n = count;
     return p;
 }
 
