@@ -1,4 +1,4 @@
--- test_compile.lua - Lua laws run compiled (src/lua/lua_trace.c): a law
+-- test_compile.lua - Lua laws run compiled (src/lua/trace/): a law
 -- that is a formula is traced once and evaluated in C.  The compiled form
 -- must give exactly (bit for bit) what the same law gives run as Lua
 -- (compile = false), for every operation and math function it accepts;
