@@ -237,7 +237,9 @@ static void router_defaults(void **state)
     assert_string_equal(eval_string(L, "return rt.name", buf), "empirical");
     eval_string(L, "return tostring(rt)", buf);
     assert_string_equal(buf,
-                        "dfle.router.empirical(M0 = 3000, gamma = 0.5, mu = 500 Pa s, tau_y = 300 Pa)");
+                        "dfle.router.empirical(M0 = 3000 m^(3-2 gamma), gamma = 0.5, mu = 500 Pa s, "
+                        "tau_y = 300 Pa, c1 = 0.135, c2 = 0.78, rho_b = 1800 kg/m^3, "
+                        "g = 9.81 m/s^2)");
 }
 
 static void law_defaults(void **state)

@@ -291,6 +291,12 @@ tests["tostring: every object describes itself"] = function()
     T.match(tostring(dfle.fluvial.stream_power{ K = 1, m = 0.5, n = 1 }), "^dfle%.fluvial%.stream_power%(")
     T.match(tostring(dfle.router.empirical{ tau_y = 123 }), "^dfle%.router%.empirical%(.*tau_y = 123")
     T.match(tostring(dfle.law.power{ alpha = 4 }), "^dfle%.law%.power%(.*alpha = 4")
+    -- every parameter, in the component's order, each with its unit
+    T.eq(tostring(dfle.law.excess_stress{ tau_c = 40 }),
+         "dfle.law.excess_stress(k = 1e-09, tau_c = 40 Pa, p = 1.5)")
+    local rt = tostring(dfle.router.process{ M0 = 250, frequency_scaling = true })
+    T.match(rt, "^dfle%.router%.process%(M0 = 250 m%^3, eta = 60 Pa s, ")
+    T.match(rt, ", t_max = 3600 s, gamma = 0, frequency_scaling = true%)$")
     T.match(tostring(small_model{ router = false }), "^dfle%.model%(n = 45.*router = off")
 end
 

@@ -80,7 +80,7 @@ tests["define: name, params and errors in the definition"] = function()
     T.eq(law.name, "eq6")
     T.eq(law.k_df, 2e-4)
     T.eq(law:params().alpha, 5)
-    T.eq(tostring(law), "dfle.law.eq6")
+    T.eq(tostring(law), "dfle.law.eq6(alpha = 5, beta = 1.5, k_df = 0.0002)")
     -- The law keeps its own copy of params.
     local p = { k = 1 }
     local l2 = dfle.law.define{ params = p, rate = function(c, q) return q.k end }
@@ -389,7 +389,8 @@ tests["router.define: a Lua empirical router matches the built-in one, every met
     T.eq(rt.name, "empirical_lua")
     T.eq(rt.mu, 500)
     T.eq(rt:params().tau_y, 300)
-    T.eq(tostring(rt), "dfle.router.empirical_lua")
+    T.eq(tostring(rt), "dfle.router.empirical_lua(M0 = 3000, c1 = 0.135, c2 = 0.78, g = 9.81, "
+                       .. "gamma = 0.5, mu = 500, rho_b = 1800, tau_y = 300)")
     for _, method in ipairs{ "explicit", "implicit", "direct" } do
         local ref = steady_z(dfle.law.power{}, { method = method, router = dfle.router.empirical{} })
         same_profile(steady_z(dfle.law.power{}, { method = method, router = rt }), ref, 1e-9,

@@ -31,18 +31,12 @@ typedef struct { dfle_profile *p; } dfle_lua_profile;
 
 static dfle_dem *check_dem(lua_State *L, int arg)
 {
-    dfle_lua_dem *u = luaL_checkudata(L, arg, DFLE_LUA_DEM);
-    if (u->dem == NULL)
-        luaL_argerror(L, arg, "dfle.dem has been closed");
-    return u->dem;
+    return dfle_lua_check_object(L, arg, DFLE_LUA_DEM);
 }
 
 static dfle_profile *check_profile(lua_State *L, int arg)
 {
-    dfle_lua_profile *u = luaL_checkudata(L, arg, DFLE_LUA_PROFILE);
-    if (u->p == NULL)
-        luaL_argerror(L, arg, "dfle.profile has been closed");
-    return u->p;
+    return dfle_lua_check_object(L, arg, DFLE_LUA_PROFILE);
 }
 
 static void set_number(lua_State *L, const char *k, double v)
@@ -328,32 +322,20 @@ static int l_dem_property(lua_State *L)
     return 1;
 }
 
-static int l_dem_tostring(lua_State *L)
+static void dem_describe(lua_State *L, void *obj)
 {
-    dfle_lua_dem *u = luaL_checkudata(L, 1, DFLE_LUA_DEM);
+    const dfle_dem *dem = obj;
     char buf[512];
     double e[4];
-    if (u->dem == NULL) {
-        lua_pushliteral(L, "dfle.dem (closed)");
-        return 1;
-    }
-    dfle_dem_extent(u->dem, e);
+    dfle_dem_extent(dem, e);
     snprintf(buf, sizeof buf, "dfle.dem(%zu x %zu cells of %g x %g m, E %.0f..%.0f, N %.0f..%.0f, "
-             "%s%s)", dfle_dem_nx(u->dem), dfle_dem_ny(u->dem), dfle_dem_dx(u->dem),
-             dfle_dem_dy(u->dem), e[0], e[1], e[2], e[3],
-             dfle_dem_crs_name(u->dem) ? dfle_dem_crs_name(u->dem) : "no CRS",
-             dfle_dem_is_filled(u->dem) ? ", filled" : "");
+             "%s%s)", dfle_dem_nx(dem), dfle_dem_ny(dem), dfle_dem_dx(dem), dfle_dem_dy(dem),
+             e[0], e[1], e[2], e[3], dfle_dem_crs_name(dem) ? dfle_dem_crs_name(dem) : "no CRS",
+             dfle_dem_is_filled(dem) ? ", filled" : "");
     lua_pushstring(L, buf);
-    return 1;
 }
 
-static int l_dem_gc(lua_State *L)
-{
-    dfle_lua_dem *u = luaL_checkudata(L, 1, DFLE_LUA_DEM);
-    dfle_dem_free(u->dem);
-    u->dem = NULL;
-    return 0;
-}
+static void dem_free(void *obj) { dfle_dem_free(obj); }
 
 /* ---------------------------------------------------------------- */
 /* dfle.profile                                                     */
@@ -497,63 +479,53 @@ static int l_profile_len(lua_State *L)
     return 1;
 }
 
-static int l_profile_tostring(lua_State *L)
+static void profile_describe(lua_State *L, void *obj)
 {
-    dfle_lua_profile *u = luaL_checkudata(L, 1, DFLE_LUA_PROFILE);
-    const double *A, *D;
+    const dfle_profile *p = obj;
+    const size_t n = dfle_profile_size(p);
+    const double *A = dfle_profile_field(p, DFLE_PROFILE_A);
+    const double *D = dfle_profile_field(p, DFLE_PROFILE_D);
     double Amin, Amax, len = 0;
-    size_t n;
     char buf[256];
     dfle_slope_opts s;
 
-    if (u->p == NULL) {
-        lua_pushliteral(L, "dfle.profile (closed)");
-        return 1;
-    }
-    n = dfle_profile_size(u->p);
-    A = dfle_profile_field(u->p, DFLE_PROFILE_A);
-    D = dfle_profile_field(u->p, DFLE_PROFILE_D);
     Amin = Amax = A[0];
     for (size_t i = 0; i < n; i++) {
         Amin = A[i] < Amin ? A[i] : Amin;
         Amax = A[i] > Amax ? A[i] : Amax;
         len = D[i] > len ? D[i] : len;
     }
-    s = dfle_profile_slope(u->p);
+    s = dfle_profile_slope(p);
     snprintf(buf, sizeof buf, "dfle.profile(%s, %zu cells, %g m, A = %.4g..%.4g m^2, slope over "
-             "%s = %g m)", dfle_profile_is_network(u->p) ? "network" : "profile", n, len, Amin,
+             "%s = %g m)", dfle_profile_is_network(p) ? "network" : "profile", n, len, Amin,
              Amax, s.ds > 0 ? "ds" : "dz", s.ds > 0 ? s.ds : s.dz);
     lua_pushstring(L, buf);
-    return 1;
 }
 
-static int l_profile_gc(lua_State *L)
-{
-    dfle_lua_profile *u = luaL_checkudata(L, 1, DFLE_LUA_PROFILE);
-    dfle_profile_free(u->p);
-    u->p = NULL;
-    return 0;
-}
+static void profile_free(void *obj) { dfle_profile_free(obj); }
 
 void dfle_lua_open_dem(lua_State *L)
 {
     static const luaL_Reg dem_methods[] = {
         {"fill", l_dem_fill}, {"flow", l_dem_flow}, {"at", l_dem_at},
         {"profile", l_dem_profile}, {"network", l_dem_network}, {NULL, NULL}};
-    static const luaL_Reg dem_meta[] = {
-        {"__gc", l_dem_gc}, {"__close", l_dem_gc}, {"__tostring", l_dem_tostring},
-        {NULL, NULL}};
     static const luaL_Reg profile_methods[] = {
         {"get", l_profile_get}, {"slope_area", l_profile_slope_area},
         {"write_csv", l_profile_write_csv}, {"channel", l_profile_channel}, {NULL, NULL}};
-    static const luaL_Reg profile_meta[] = {
-        {"__gc", l_profile_gc}, {"__close", l_profile_gc}, {"__len", l_profile_len},
-        {"__tostring", l_profile_tostring}, {NULL, NULL}};
+    static const luaL_Reg profile_meta[] = {{"__len", l_profile_len}, {NULL, NULL}};
+    static const dfle_lua_type dem_type = {
+        .name = DFLE_LUA_DEM, .free = dem_free, .describe = dem_describe,
+        .methods = dem_methods, .property = l_dem_property, .closable = 1,
+    };
+    static const dfle_lua_type profile_type = {
+        .name = DFLE_LUA_PROFILE, .free = profile_free, .describe = profile_describe,
+        .methods = profile_methods, .property = l_profile_property, .meta = profile_meta,
+        .closable = 1,
+    };
     static const luaL_Reg funcs[] = {{"read", l_dem_read}, {NULL, NULL}};
 
-    dfle_lua_register_type(L, DFLE_LUA_DEM, dem_methods, dem_meta, l_dem_property);
-    dfle_lua_register_type(L, DFLE_LUA_PROFILE, profile_methods, profile_meta,
-                           l_profile_property);
+    dfle_lua_register(L, &dem_type);
+    dfle_lua_register(L, &profile_type);
     lua_newtable(L);
     luaL_setfuncs(L, funcs, 0);
     lua_setfield(L, -2, "dem");

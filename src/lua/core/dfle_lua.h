@@ -12,6 +12,13 @@
  *    such as a fit that does not converge, return nil, message;
  *  - no malloc'd memory is held across a call that can raise: scratch
  *    arrays are userdata, collected if an error unwinds the stack.
+ *
+ * The core below every binding file: lua_type.c (object types),
+ * lua_util.c (options, errors, numbers, tables), lua_params.c (a
+ * router's or law's parameters), lua_state.c (what a lua_State keeps in
+ * its registry), and lua_shell.h (components written in Lua).  The open
+ * functions at the end are called from above only: by luaopen_dfle
+ * (lua_module.c), the define ones by the file of their kind.
  */
 #ifndef DFLE_LUA_INTERNAL_H
 #define DFLE_LUA_INTERNAL_H
@@ -42,6 +49,47 @@ typedef struct { dfle_router *rt; } dfle_lua_router;
 typedef struct { dfle_law *law; } dfle_lua_law;
 typedef struct { dfle_model *m; } dfle_lua_model;
 
+/* --- lua_type.c: object types --- */
+
+/* What an object type supplies; everything else (__gc, __close,
+ * __tostring of a closed object, __index, the protected metatable) is
+ * generic.  The descriptor must outlive every lua_State (a static). */
+typedef struct dfle_lua_type {
+    const char *name;                       /* metatable name, "dfle.channel" */
+    void (*free)(void *obj);                /* release the C object         */
+    /* Push the description tostring() gives of the live object obj (the
+     * userdata is at index 1). */
+    void (*describe)(lua_State *L, void *obj);
+    const luaL_Reg *methods;                /* may be NULL                  */
+    /* Read-only fields such as m.time: called as __index(obj, key), key
+     * a string that is not a method.  May be NULL. */
+    lua_CFunction property;
+    const luaL_Reg *meta;                   /* more metamethods (__len), or NULL */
+    int closable;                           /* __close frees it too (local x <close>) */
+} dfle_lua_type;
+
+/* Create the metatable of type t (once per lua_State). */
+void dfle_lua_register(lua_State *L, const dfle_lua_type *t);
+
+/* New userdata of `size` bytes, zeroed (its pointer NULL: valid and
+ * empty), with metatable `tname` and `nuv` user values. */
+void *dfle_lua_newobject(lua_State *L, size_t size, const char *tname, int nuv);
+
+/* The pointer of object arg of type tname; raises a type error if arg is
+ * not one, or was already closed. */
+void *dfle_lua_check_object(lua_State *L, int arg, const char *tname);
+dfle_channel *dfle_lua_check_channel(lua_State *L, int arg);
+dfle_fluvial *dfle_lua_check_fluvial(lua_State *L, int arg);
+dfle_router *dfle_lua_check_router(lua_State *L, int arg);
+dfle_law *dfle_lua_check_law(lua_State *L, int arg);
+dfle_model *dfle_lua_check_model(lua_State *L, int arg);
+
+/* The type of the value at idx as a user would name it: the __name of
+ * its metatable ("dfle.law") if it has one, else the Lua type. */
+const char *dfle_lua_typename(lua_State *L, int idx);
+
+/* --- lua_util.c: options, errors, numbers, tables --- */
+
 /* A numeric parameter read from an options table into *dst. */
 typedef struct dfle_lua_param {
     const char *name;
@@ -59,30 +107,12 @@ void dfle_lua_read_params(lua_State *L, int idx, const char *fn,
 /* Raise err's message as "dfle.<message>" at the caller's file:line. */
 int dfle_lua_raise(lua_State *L, const dfle_error *err);
 
-/* New userdata of `size` bytes, zeroed, with metatable `tname` and
- * `nuv` user values. */
-void *dfle_lua_newobject(lua_State *L, size_t size, const char *tname, int nuv);
-
-/* Create the metatable `tname`: metamethods `meta`, and an __index that
- * finds `methods` first, then calls `property(obj, key)` (may be NULL)
- * for read-only fields such as m.time. */
-void dfle_lua_register_type(lua_State *L, const char *tname,
-                            const luaL_Reg *methods, const luaL_Reg *meta,
-                            lua_CFunction property);
-
-/* Checked accessors: raise a type error if arg is not of the type or was
- * already closed. */
-dfle_channel *dfle_lua_check_channel(lua_State *L, int arg);
-dfle_fluvial *dfle_lua_check_fluvial(lua_State *L, int arg);
-dfle_router *dfle_lua_check_router(lua_State *L, int arg);
-dfle_law *dfle_lua_check_law(lua_State *L, int arg);
-dfle_model *dfle_lua_check_model(lua_State *L, int arg);
-
-/* The type of the value at idx as a user would name it: the __name of
- * its metatable ("dfle.law") if it has one, else the Lua type. */
-const char *dfle_lua_typename(lua_State *L, int idx);
 /* Push and return v as text: "NaN", "inf", or the number. */
 const char *dfle_lua_number_text(lua_State *L, double v);
+
+/* Copy every key and value of the table at src into the table at dst
+ * (a shallow copy: raw, metatables ignored). */
+void dfle_lua_copy_table(lua_State *L, int src, int dst);
 
 /* Push a Lua array (1-based) of n doubles. */
 void dfle_lua_push_array(lua_State *L, const double *v, size_t n);
@@ -101,6 +131,36 @@ lua_Integer dfle_lua_check_whole(lua_State *L, double v, const char *fn, const c
 size_t dfle_lua_slope_area(lua_State *L, int arg, const char *fn, const double **A,
                            const double **S);
 
+/* --- lua_params.c: a router's or law's parameters in Lua --- */
+
+/* The params op of a kind of component (dfle_router_params,
+ * dfle_law_params) behind one signature. */
+typedef size_t (*dfle_lua_params_fn)(const void *component, dfle_param *out, size_t cap);
+
+/* Push x:params() of the component object at obj (pointer comp): a new
+ * table from its params op, a switch as a boolean and any other value a
+ * number; or, when it has no params op, a copy of the table its object
+ * keeps as user value 2 (a component written in Lua). */
+void dfle_lua_push_params(lua_State *L, int obj, dfle_lua_params_fn fn, const void *comp);
+
+/* The __index property of a component (the object at 1, a string key
+ * at 2): x.name, else x.<param> (nil if it has none); returns 1. */
+int dfle_lua_push_param_field(lua_State *L, const char *name, dfle_lua_params_fn fn,
+                              const void *comp);
+
+/* Push tostring(x): "<prefix>.<name>(k = v unit, ...)", the parameters
+ * in the params op's order, or sorted by key for a Lua component's own
+ * table. */
+void dfle_lua_push_described(lua_State *L, int obj, const char *prefix, const char *name,
+                             dfle_lua_params_fn fn, const void *comp);
+
+/* --- lua_state.c: what the binding keeps per lua_State --- */
+
+/* A C pointer (host data that outlives the state) in the registry under
+ * key (the address of a static); NULL removes it, and reads as NULL. */
+void dfle_lua_set_pointer(lua_State *L, const void *key, const void *p);
+void *dfle_lua_get_pointer(lua_State *L, const void *key);
+
 /* Progress reporting, installed by the CLI (library users get none). */
 typedef struct dfle_lua_progress {
     dfle_progress_fn update;
@@ -110,19 +170,11 @@ typedef struct dfle_lua_progress {
 void dfle_lua_set_progress(lua_State *L, const dfle_lua_progress *p);
 const dfle_lua_progress *dfle_lua_get_progress(lua_State *L);
 
-/* Push the dfle module table (kept in the registry by luaopen_dfle, so
- * it is found even if a script replaced the global or package.loaded). */
+/* The dfle module table: recorded by luaopen_dfle, pushed by the
+ * binding files, so it is found even if a script replaced the global or
+ * package.loaded. */
+void dfle_lua_set_module(lua_State *L, int idx);
 void dfle_lua_push_module(lua_State *L);
-
-/* Shell types (laws and routers written in Lua) call user code from one
- * protected sweep on a Lua thread of their own. */
-/* Message handler for those calls: appends a traceback. */
-int dfle_lua_traceback(lua_State *T);
-/* Call the sweep closure at index `sweep` of T with `ud` as its argument,
- * protected by the handler at `msgh`; T's top returns to `top`.  A Lua
- * error becomes DFLE_ECALLBACK with "<who>: message" (or `fallback`). */
-int dfle_lua_shell_sweep(lua_State *T, int top, int sweep, int msgh, void *ud,
-                         const char *who, const char *fallback, dfle_error *err);
 
 /* The Lua epoch: a counter per lua_State that goes up whenever Lua code
  * may have run (a binding given a model, a callback returned), so a
@@ -148,5 +200,6 @@ void dfle_lua_open_plot(lua_State *L);
 void dfle_lua_open_sampling(lua_State *L);
 void dfle_lua_open_dem(lua_State *L);
 void dfle_lua_open_ensemble(lua_State *L); /* after sampling: wraps dfle.pawn */
+void dfle_lua_open_trace_hook(lua_State *L); /* a test hook, in the registry */
 
 #endif

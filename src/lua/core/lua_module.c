@@ -1,9 +1,10 @@
 /*
- * lua_dfle.c - luaopen_dfle: assembles the `dfle` module table.
+ * lua_module.c - luaopen_dfle: assembles the `dfle` module table.
  *
- * Each concern's binding file adds its own entries; this file only
- * creates the table, records the version and keeps a registry reference
- * so that bindings can reach the module without going through globals.
+ * The top of the binding: each concern's file adds its own entries, and
+ * this file only creates the table, records the version and hands the
+ * table to lua_state.c, where the binding files find it again without
+ * going through globals (and without calling back up here).
  */
 #include "lua/core/dfle_lua.h"
 
@@ -14,14 +15,6 @@
 #ifndef DFLE_VERSION
 #define DFLE_VERSION "unknown"
 #endif
-
-static const char module_key = 'm';
-
-void dfle_lua_push_module(lua_State *L)
-{
-    if (lua_rawgetp(L, LUA_REGISTRYINDEX, &module_key) != LUA_TTABLE)
-        luaL_error(L, "dfle: module table missing (was luaopen_dfle called?)");
-}
 
 int luaopen_dfle(lua_State *L)
 {
@@ -43,7 +36,7 @@ int luaopen_dfle(lua_State *L)
     dfle_lua_open_sampling(L);
     dfle_lua_open_dem(L);
     dfle_lua_open_ensemble(L);
-    lua_pushvalue(L, -1);
-    lua_rawsetp(L, LUA_REGISTRYINDEX, &module_key);
+    dfle_lua_open_trace_hook(L);
+    dfle_lua_set_module(L, -1);
     return 1;
 }

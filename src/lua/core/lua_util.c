@@ -1,6 +1,7 @@
 /*
  * lua_util.c - the pieces every binding file uses: checked option
- * tables, error raising, typed userdata, arrays, progress hooks.
+ * tables, error raising, numbers as text, tables and arrays, slope-area
+ * data.
  */
 #include "lua/core/dfle_lua.h"
 
@@ -90,77 +91,16 @@ int dfle_lua_raise(lua_State *L, const dfle_error *err)
     return luaL_error(L, "dfle.%s", err->msg);
 }
 
-void *dfle_lua_newobject(lua_State *L, size_t size, const char *tname, int nuv)
+void dfle_lua_copy_table(lua_State *L, int src, int dst)
 {
-    void *p = lua_newuserdatauv(L, size, nuv);
-    memset(p, 0, size);
-    luaL_setmetatable(L, tname);
-    return p;
-}
-
-/* __index: methods first, then the type's read-only properties. */
-static int object_index(lua_State *L)
-{
-    lua_CFunction property = lua_tocfunction(L, lua_upvalueindex(2));
-    lua_pushvalue(L, 2);
-    if (lua_rawget(L, lua_upvalueindex(1)) != LUA_TNIL)
-        return 1;
-    lua_pop(L, 1);
-    if (property != NULL && lua_type(L, 2) == LUA_TSTRING)
-        return property(L);
-    return 0;
-}
-
-void dfle_lua_register_type(lua_State *L, const char *tname, const luaL_Reg *methods,
-                            const luaL_Reg *meta, lua_CFunction property)
-{
-    if (luaL_newmetatable(L, tname)) {
-        luaL_setfuncs(L, meta, 0);
-        lua_newtable(L);
-        if (methods != NULL)
-            luaL_setfuncs(L, methods, 0);
-        if (property != NULL)
-            lua_pushcfunction(L, property);
-        else
-            lua_pushnil(L);
-        lua_pushcclosure(L, object_index, 2);
-        lua_setfield(L, -2, "__index");
-        /* Scripts must not reach __gc: freeing a component a model still
-         * uses would leave the model reading freed memory. */
-        lua_pushliteral(L, "dfle objects do not share their metatable");
-        lua_setfield(L, -2, "__metatable");
+    src = lua_absindex(L, src);
+    dst = lua_absindex(L, dst);
+    lua_pushnil(L);
+    while (lua_next(L, src) != 0) {
+        lua_pushvalue(L, -2);
+        lua_insert(L, -2);
+        lua_rawset(L, dst);
     }
-    lua_pop(L, 1);
-}
-
-static void *check_object(lua_State *L, int arg, const char *tname)
-{
-    void **p = luaL_checkudata(L, arg, tname);
-    if (*p == NULL)
-        luaL_argerror(L, arg, lua_pushfstring(L, "%s has been closed", tname));
-    return *p;
-}
-
-dfle_channel *dfle_lua_check_channel(lua_State *L, int arg)
-{
-    return check_object(L, arg, DFLE_LUA_CHANNEL);
-}
-dfle_fluvial *dfle_lua_check_fluvial(lua_State *L, int arg)
-{
-    return check_object(L, arg, DFLE_LUA_FLUVIAL);
-}
-dfle_router *dfle_lua_check_router(lua_State *L, int arg)
-{
-    return check_object(L, arg, DFLE_LUA_ROUTER);
-}
-dfle_law *dfle_lua_check_law(lua_State *L, int arg)
-{
-    return check_object(L, arg, DFLE_LUA_LAW);
-}
-dfle_model *dfle_lua_check_model(lua_State *L, int arg)
-{
-    dfle_lua_touch(L); /* the script may have changed what a compiled law read */
-    return check_object(L, arg, DFLE_LUA_MODEL);
 }
 
 void dfle_lua_push_array(lua_State *L, const double *v, size_t n)
@@ -192,30 +132,6 @@ double *dfle_lua_check_array(lua_State *L, int idx, const char *what, size_t *n)
     }
     *n = (size_t)len;
     return v;
-}
-
-static const char progress_key = 'p';
-
-void dfle_lua_set_progress(lua_State *L, const dfle_lua_progress *p)
-{
-    lua_pushlightuserdata(L, (void *)p);
-    lua_rawsetp(L, LUA_REGISTRYINDEX, &progress_key);
-}
-
-const dfle_lua_progress *dfle_lua_get_progress(lua_State *L)
-{
-    const dfle_lua_progress *p;
-    lua_rawgetp(L, LUA_REGISTRYINDEX, &progress_key);
-    p = lua_touserdata(L, -1);
-    lua_pop(L, 1);
-    return p;
-}
-
-const char *dfle_lua_typename(lua_State *L, int idx)
-{
-    if (luaL_getmetafield(L, idx, "__name") == LUA_TSTRING)
-        return lua_tostring(L, -1); /* left on the stack, so it stays valid */
-    return luaL_typename(L, idx);
 }
 
 const char *dfle_lua_number_text(lua_State *L, double v)
@@ -276,50 +192,3 @@ size_t dfle_lua_slope_area(lua_State *L, int arg, const char *fn, const double *
         luaL_error(L, "dfle.%s: A has %d values but S has %d", fn, (int)n, (int)nS);
     return n;
 }
-
-int dfle_lua_traceback(lua_State *T)
-{
-    const char *msg = lua_tostring(T, 1);
-    if (msg == NULL)
-        msg = lua_pushfstring(T, "(error object is a %s value)", luaL_typename(T, 1));
-    luaL_traceback(T, T, msg, 1);
-    return 1;
-}
-
-int dfle_lua_shell_sweep(lua_State *T, int top, int sweep, int msgh, void *ud,
-                         const char *who, const char *fallback, dfle_error *err)
-{
-    int st;
-    lua_settop(T, top);
-    lua_pushvalue(T, sweep);
-    lua_pushlightuserdata(T, ud);
-    st = lua_pcall(T, 1, 0, msgh);
-    dfle_lua_touch(T);
-    if (st != LUA_OK) {
-        const char *msg = lua_tostring(T, -1);
-        dfle_error_set(err, DFLE_ECALLBACK, "%s: %s", who, msg != NULL ? msg : fallback);
-        lua_settop(T, top);
-        return DFLE_ECALLBACK;
-    }
-    lua_settop(T, top);
-    return DFLE_OK;
-}
-
-static const char epoch_key = 0;
-
-unsigned long *dfle_lua_epoch(lua_State *L)
-{
-    unsigned long *e;
-    if (lua_rawgetp(L, LUA_REGISTRYINDEX, &epoch_key) == LUA_TUSERDATA) {
-        e = lua_touserdata(L, -1);
-        lua_pop(L, 1);
-        return e;
-    }
-    lua_pop(L, 1);
-    e = lua_newuserdatauv(L, sizeof *e, 0);
-    *e = 1;
-    lua_rawsetp(L, LUA_REGISTRYINDEX, &epoch_key);
-    return e;
-}
-
-void dfle_lua_touch(lua_State *L) { ++*dfle_lua_epoch(L); }

@@ -1,15 +1,17 @@
 /*
- * lua_law_compiled.c - dfle.law.define laws run as compiled programs.
+ * lua_law_compiled.c - dfle.law.define laws run as compiled programs
+ * (lua_law_compiled.h), the layer between the Lua sweep below
+ * (lua_law_sweep.c) and the law's ops above (lua_law_define.c).
  *
- * lua_law_define.c asks here first for every op call: each of the law's
- * functions is traced once (lua_trace.h) and, if the tracer accepts it,
- * evaluated in C over all the nodes of the call; the program is checked
- * bit for bit against the Lua sweep on its first use.  Whatever this file
- * cannot do (a refused function, a non-finite value, an area not in the
- * frequency memo yet) it hands back with TRY_LUA, and the Lua sweep does
- * it, with its own error messages.  law:compiled() reports the state.
+ * The ops ask here first for every call: each of the law's functions is
+ * traced once (lua_trace.h) and, if the tracer accepts it, evaluated in
+ * C over all the nodes of the call; the program is checked bit for bit
+ * against the Lua sweep on its first use.  Whatever this file cannot do
+ * (a refused function, a non-finite value, an area not in the frequency
+ * memo yet) it hands back with TRY_LUA, and the Lua sweep does it, with
+ * its own error messages.  law:compiled() reports the state.
  */
-#include "lua/define/lua_law_define.h"
+#include "lua/define/lua_law_compiled.h"
 
 #include <math.h>
 #include <stdio.h>
@@ -32,9 +34,9 @@ static unsigned op_fields(const lua_law *ll, int op)
  * usual way), or a frequency(A) is not memoised yet.  A program is
  * checked against the Lua sweep, bit for bit, on its first use. */
 int ll_compiled_sweep(lua_law *ll, int op, const dfle_law_ctx *ctx, const double *F_in,
-                          double *out, dfle_error *err)
+                      double *out, dfle_error *err)
 {
-    lua_State *T = ll->T;
+    lua_State *T = ll->sh.T;
     const size_t n = ctx->n;
     const double *src[N_IN];
     const double *val;
@@ -127,7 +129,7 @@ int ll_compiled_integrand(lua_law *ll, double h, double v, double lambda, double
                           dfle_error *err)
 {
     static const char *const names[] = {"h", "v", "lambda"};
-    lua_State *T = ll->T;
+    lua_State *T = ll->sh.T;
     const double in[3] = {h, v, lambda};
     double gc, gl;
     int st;
@@ -188,12 +190,9 @@ static void push_status(lua_State *L, const lua_law *ll, int state, const char *
         lua_pushboolean(L, 0);
 }
 
-int dfle_lua_law_compiled(lua_State *L, dfle_law *law)
+void ll_push_compiled(lua_State *L, const lua_law *ll)
 {
-    const lua_law *ll;
     int r;
-    if ((ll = ll_of(law)) == NULL)
-        return 0;
     lua_createtable(L, 0, 3);
     if (ll->has_factor) {
         push_status(L, ll, ll->cstate[OP_FACTOR], ll->why[OP_FACTOR]);
@@ -213,5 +212,4 @@ int dfle_lua_law_compiled(lua_State *L, dfle_law *law)
         push_status(L, ll, ll->gstate, ll->gwhy);
         lua_setfield(L, -2, "integrand");
     }
-    return 1;
 }

@@ -13,24 +13,22 @@
  *
  * Like the empirical router it is local (routed at every landscape step)
  * and gives node_flow, so the implicit and direct solvers work with it.
- * Same shell design as dfle.law.define (lua_law_define.c): a Lua thread
- * of its own, anchored to the router object, holds the function, the
- * params and a reused record; the state is a userdata on that thread, so
- * the collector owns everything; every op is one protected call, whose
+ * A shell like dfle.law.define (lua_shell.h): a Lua thread of its own,
+ * anchored to the router object, holds the function, the params and a
+ * reused record; the state is a userdata on that thread, so the
+ * collector owns everything; every op is one protected call, whose
  * error (with the user's file:line) the op returns.
  */
-#include "lua/core/dfle_lua.h"
+#include "lua/core/lua_shell.h"
 
 #include <math.h>
-#include <stdio.h>
-#include <string.h>
 
+/* Slots on the router thread's stack (lua_shell.h: the shell's own
+ * come first). */
 enum {
-    SLOT_FLOW = 1, /* flow(c, p)                  */
-    SLOT_PARAMS,   /* the router's copy of params */
-    SLOT_REC,      /* the node record c           */
-    SLOT_MSGH,     /* message handler             */
-    SLOT_STATE,    /* the lua_router userdata     */
+    SLOT_PARAMS = DFLE_SHELL_PARAMS, /* the router's copy of params */
+    SLOT_FLOW = DFLE_SHELL_SLOTS + 1, /* flow(c, p)                 */
+    SLOT_REC,      /* the node record c            */
     SLOT_SWEEP,    /* sweep closure over the slots */
     SLOT_COUNT = SLOT_SWEEP
 };
@@ -43,10 +41,8 @@ static const struct { const char *name; int required; } outputs[] = {
 enum { O_H, O_V, O_T_P, O_M, O_Q, O_TAU, O_THETA, N_OUT };
 
 typedef struct lua_router {
+    dfle_lua_shell sh;   /* the thread (user value 1 of the router), name, who */
     dfle_router_ops ops; /* named after the user's router */
-    lua_State *T;
-    char name[64];
-    char who[80]; /* "router.<name>": the prefix of its error messages */
     /* The call in progress. */
     int busy;
     const dfle_channel *ch;
@@ -67,7 +63,7 @@ static int bad_output(lua_State *T, const lua_router *r, size_t i, const char *f
     lua_pushvalue(T, UP(SLOT_FLOW));
     lua_getinfo(T, ">S", &ar);
     return luaL_error(T, "router '%s': flow (defined at %s:%d) set %s to %s, %s, at node %d "
-                         "(S = %f, A = %f m^2)", r->name, ar.short_src, ar.linedefined, field,
+                         "(S = %f, A = %f m^2)", r->sh.name, ar.short_src, ar.linedefined, field,
                       what, why, (int)i + 1, r->S[i - r->first], dfle_channel_A(r->ch)[i]);
 }
 
@@ -154,15 +150,13 @@ static int sweep(lua_State *T)
 
 static int run_sweep(lua_router *r, dfle_error *err)
 {
-    lua_State *T = r->T;
     int st;
     if (r->busy)
         return dfle_error_set(err, DFLE_ECALLBACK,
                               "router.%s: the router was used again from inside its own flow()",
-                              r->name);
+                              r->sh.name);
     r->busy = 1;
-    st = dfle_lua_shell_sweep(T, SLOT_COUNT, SLOT_SWEEP, SLOT_MSGH, r, r->who,
-                              "error in flow()", err);
+    st = dfle_lua_shell_sweep(&r->sh, SLOT_COUNT, SLOT_SWEEP, "error in flow()", err);
     r->busy = 0;
     return st;
 }
@@ -176,7 +170,7 @@ static int lr_route(void *state, const dfle_channel *ch, const double *S, dfle_f
 
     if (flow->n != n)
         return dfle_error_set(err, DFLE_EINVAL, "router.%s: flow has %zu nodes, channel %zu",
-                              r->name, flow->n, n);
+                              r->sh.name, flow->n, n);
     flow->time_resolved = 0;
     r->ch = ch, r->S = S, r->first = 0, r->n = n, r->flow = flow, r->j0 = 0;
     if ((st = run_sweep(r, err)) != DFLE_OK)
@@ -217,64 +211,24 @@ static const dfle_router_ops lua_router_ops = {
 static int l_router_define(lua_State *L)
 {
     static const char *const keys[] = {"name", "params", "flow", NULL};
-    dfle_lua_router *u;
+    static const dfle_lua_shell_def def = {
+        .kind = "router", .tname = DFLE_LUA_ROUTER, .object_size = sizeof(dfle_lua_router),
+        .state_size = sizeof(lua_router), .keys = keys, .stack = SLOT_COUNT,
+    };
     lua_router *r;
-    lua_State *T;
     dfle_error err;
-    const char *name = "lua";
-    int t;
 
-    luaL_checktype(L, 1, LUA_TTABLE);
-    lua_settop(L, 1);
-    dfle_lua_read_params(L, 1, "router.define", NULL, 0, keys);
-    if ((t = lua_getfield(L, 1, "name")) != LUA_TNIL) {
-        if (t != LUA_TSTRING)
-            luaL_error(L, "dfle.router.define: 'name' must be a string, got %s",
-                       dfle_lua_typename(L, -1));
-        name = lua_tostring(L, -1);
-    }
-    lua_pop(L, 1);
+    r = dfle_lua_shell_new(L, &def);
     if (lua_getfield(L, 1, "flow") != LUA_TFUNCTION)
         luaL_error(L, "dfle.router.define: 'flow' (a function of c, p) is required, got %s",
                    dfle_lua_typename(L, -1));
-    lua_pop(L, 1);
-
-    u = dfle_lua_newobject(L, sizeof *u, DFLE_LUA_ROUTER, 2); /* index 2 */
-    T = lua_newthread(L);
-    lua_setiuservalue(L, 2, 1);
-    if (!lua_checkstack(T, SLOT_COUNT + 8))
-        luaL_error(L, "dfle.router.define: out of memory");
-    lua_getfield(L, 1, "flow");
-    lua_xmove(L, T, 1); /* SLOT_FLOW */
-    lua_newtable(L);
-    if ((t = lua_getfield(L, 1, "params")) != LUA_TNIL) {
-        if (t != LUA_TTABLE)
-            luaL_error(L, "dfle.router.define: 'params' must be a table, got %s",
-                       dfle_lua_typename(L, -1));
-        lua_pushnil(L);
-        while (lua_next(L, -2) != 0) {
-            lua_pushvalue(L, -2);
-            lua_insert(L, -2);
-            lua_settable(L, -5);
-        }
-    }
-    lua_pop(L, 1);
-    lua_pushvalue(L, -1);
-    lua_setiuservalue(L, 2, 2); /* for rt.<param> and rt:params() */
-    lua_xmove(L, T, 1);         /* SLOT_PARAMS */
-    lua_createtable(T, 0, 12);  /* SLOT_REC */
-    lua_pushcfunction(T, dfle_lua_traceback); /* SLOT_MSGH */
-    r = lua_newuserdatauv(T, sizeof *r, 0); /* SLOT_STATE */
-    memset(r, 0, sizeof *r);
-    r->T = T;
-    snprintf(r->name, sizeof r->name, "%s", name);
-    snprintf(r->who, sizeof r->who, "router.%s", r->name);
+    lua_xmove(L, r->sh.T, 1);               /* SLOT_FLOW */
+    lua_createtable(r->sh.T, 0, 12);        /* SLOT_REC */
+    dfle_lua_shell_close(r->sh.T, sweep);   /* SLOT_SWEEP */
     r->ops = lua_router_ops;
-    r->ops.name = r->name;
-    for (int k = 1; k < SLOT_SWEEP; k++)
-        lua_pushvalue(T, k);
-    lua_pushcclosure(T, sweep, SLOT_SWEEP - 1); /* SLOT_SWEEP */
-    if (dfle_router_new(&r->ops, r, &u->rt, &err) != DFLE_OK)
+    r->ops.name = r->sh.name;
+    if (dfle_router_new(&r->ops, r, &((dfle_lua_router *)lua_touserdata(L, 2))->rt, &err) !=
+        DFLE_OK)
         return dfle_lua_raise(L, &err);
     lua_settop(L, 2);
     return 1;

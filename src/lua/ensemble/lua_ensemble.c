@@ -21,56 +21,28 @@
  *
  * This file holds the Lua entry points; the ensemble's table, one sample
  * and the rows (the same text whichever state ran the sample) are in
- * lua_ensemble_sample.c, the worker threads in lua_ensemble_pool.c, and
- * the file rules (streaming, resume, sorting, gather) in src/ensemble.c.
+ * lua_ensemble_sample.c, the worker threads in lua_ensemble_pool.c, the
+ * host and registry keys they share in lua_ensemble_host.c, and the file
+ * rules (streaming, resume, sorting, gather) in src/ensemble.c.
  */
 #include <math.h>
 #include <pthread.h>
 #include <stdio.h>
 #include <stdlib.h>
 #include <string.h>
-#include <time.h>
 #include <unistd.h>
 
 #include "lua/ensemble/lua_ensemble_internal.h"
 
-static const char host_key = 'h';
 static const char calls_key = 'c';
-const char dfle_lua_ens_worker_key = 'w';
-const char dfle_lua_ens_spec_key = 's';
 static const char stop_key = 'x'; /* the error value that stops a worker's script */
-
-void dfle_lua_set_ensemble_host(lua_State *L, const dfle_lua_ensemble_host *h)
-{
-    if (h != NULL)
-        lua_pushlightuserdata(L, (void *)h);
-    else
-        lua_pushnil(L);
-    lua_rawsetp(L, LUA_REGISTRYINDEX, &host_key);
-}
-
-static const dfle_lua_ensemble_host *get_host(lua_State *L)
-{
-    const dfle_lua_ensemble_host *h;
-    lua_rawgetp(L, LUA_REGISTRYINDEX, &host_key);
-    h = lua_touserdata(L, -1);
-    lua_pop(L, 1);
-    return h;
-}
-
-double dfle_lua_ens_now(void)
-{
-    struct timespec ts;
-    clock_gettime(CLOCK_MONOTONIC, &ts);
-    return (double)ts.tv_sec + 1e-9 * (double)ts.tv_nsec;
-}
 
 /* ------------------------------------------------------------------ */
 /* dfle.ensemble                                                       */
 
 static int l_ensemble(lua_State *L)
 {
-    const dfle_lua_ensemble_host *host = get_host(L);
+    const dfle_lua_ensemble_host *host = dfle_lua_ens_host(L);
     worker_mode *wm;
     lua_Integer call;
     spec s;

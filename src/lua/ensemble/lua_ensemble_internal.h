@@ -1,8 +1,9 @@
 /*
- * lua_ensemble_internal.h - what the three files of the dfle.ensemble
- * binding share (not installed): lua_ensemble.c (the Lua entry points),
+ * lua_ensemble_internal.h - what the files of the dfle.ensemble binding
+ * share (not installed): lua_ensemble.c (the Lua entry points),
  * lua_ensemble_sample.c (the ensemble's table, one sample, rows and
- * results) and lua_ensemble_pool.c (worker threads and their states).
+ * results), lua_ensemble_pool.c (worker threads and their states) and,
+ * below those, lua_ensemble_host.c (a state's host, registry keys, clock).
  */
 #ifndef DFLE_LUA_ENSEMBLE_INTERNAL_H
 #define DFLE_LUA_ENSEMBLE_INTERNAL_H
@@ -56,6 +57,8 @@ typedef struct worker_mode {
     lua_Integer target;
 } worker_mode;
 
+/* lua_ensemble_host.c; dfle_lua_set_ensemble_host is in lua_ensemble.h. */
+const dfle_lua_ensemble_host *dfle_lua_ens_host(lua_State *L);
 double dfle_lua_ens_now(void);
 int dfle_lua_ens_box_gc(lua_State *L);
 run_box *dfle_lua_ens_new_box(lua_State *L);

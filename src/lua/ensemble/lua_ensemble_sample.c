@@ -403,14 +403,8 @@ static int run_sample(lua_State *L)
     lua_getfield(L, m, "run_to_steady");
     lua_pushvalue(L, m);
     lua_newtable(L);
-    if (lua_getfield(L, 1, "run") == LUA_TTABLE) {
-        lua_pushnil(L);
-        while (lua_next(L, -2) != 0) {
-            lua_pushvalue(L, -2);
-            lua_insert(L, -2);
-            lua_settable(L, -5);
-        }
-    }
+    if (lua_getfield(L, 1, "run") == LUA_TTABLE)
+        dfle_lua_copy_table(L, -1, -2);
     lua_pop(L, 1);
     lua_pushboolean(L, 0), lua_setfield(L, -2, "progress");
     lua_call(L, 2, 1);

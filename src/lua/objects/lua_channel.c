@@ -183,35 +183,28 @@ static int l_channel_len(lua_State *L)
     return 1;
 }
 
-static int l_channel_tostring(lua_State *L)
+static void channel_describe(lua_State *L, void *obj)
 {
-    dfle_channel *ch = dfle_lua_check_channel(L, 1);
+    const dfle_channel *ch = obj;
     size_t n = dfle_channel_size(ch);
     char buf[160];
     snprintf(buf, sizeof buf, "dfle.channel(n = %zu, dx = %g m, length = %g m, A = %.4g..%.4g m^2)",
              n, dfle_channel_dx(ch), dfle_channel_x(ch)[n - 1], dfle_channel_A(ch)[0],
              dfle_channel_A(ch)[n - 1]);
     lua_pushstring(L, buf);
-    return 1;
 }
 
-static int l_channel_gc(lua_State *L)
-{
-    dfle_lua_channel *u = luaL_checkudata(L, 1, DFLE_LUA_CHANNEL);
-    dfle_channel_free(u->ch);
-    u->ch = NULL;
-    return 0;
-}
+static void channel_free(void *obj) { dfle_channel_free(obj); }
 
 void dfle_lua_open_channel(lua_State *L)
 {
     static const luaL_Reg methods[] = {{"get", l_channel_get}, {NULL, NULL}};
-    static const luaL_Reg meta[] = {
-        {"__gc", l_channel_gc},
-        {"__len", l_channel_len}, {"__tostring", l_channel_tostring},
-        {NULL, NULL},
+    static const luaL_Reg meta[] = {{"__len", l_channel_len}, {NULL, NULL}};
+    static const dfle_lua_type type = {
+        .name = DFLE_LUA_CHANNEL, .free = channel_free, .describe = channel_describe,
+        .methods = methods, .property = l_channel_property, .meta = meta,
     };
-    dfle_lua_register_type(L, DFLE_LUA_CHANNEL, methods, meta, l_channel_property);
+    dfle_lua_register(L, &type);
     lua_pushcfunction(L, l_channel_new);
     lua_setfield(L, -2, "channel");
 }

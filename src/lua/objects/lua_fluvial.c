@@ -108,37 +108,31 @@ static int l_fluvial_steady_slope(lua_State *L)
     return 1;
 }
 
-static int l_fluvial_tostring(lua_State *L)
+static void fluvial_describe(lua_State *L, void *obj)
 {
-    dfle_fluvial *fl = dfle_lua_check_fluvial(L, 1);
+    const dfle_fluvial *fl = obj;
     char buf[160];
     snprintf(buf, sizeof buf, "dfle.fluvial.%s(K = %.5g, m_s = %.5g, n_s = %.5g)",
              dfle_fluvial_name(fl), dfle_fluvial_K(fl), dfle_fluvial_m(fl),
              dfle_fluvial_n(fl));
     lua_pushstring(L, buf);
-    return 1;
 }
 
-static int l_fluvial_gc(lua_State *L)
-{
-    dfle_lua_fluvial *u = luaL_checkudata(L, 1, DFLE_LUA_FLUVIAL);
-    dfle_fluvial_free(u->fl);
-    u->fl = NULL;
-    return 0;
-}
+static void fluvial_free(void *obj) { dfle_fluvial_free(obj); }
 
 void dfle_lua_open_fluvial(lua_State *L)
 {
     static const luaL_Reg methods[] = {
         {"rate", l_fluvial_rate}, {"steady_slope", l_fluvial_steady_slope}, {NULL, NULL}};
-    static const luaL_Reg meta[] = {
-        {"__gc", l_fluvial_gc},
-        {"__tostring", l_fluvial_tostring}, {NULL, NULL}};
+    static const dfle_lua_type type = {
+        .name = DFLE_LUA_FLUVIAL, .free = fluvial_free, .describe = fluvial_describe,
+        .methods = methods, .property = l_fluvial_property,
+    };
     static const luaL_Reg funcs[] = {
         {"stochastic_threshold", l_stochastic_threshold},
         {"stream_power", l_stream_power},
         {NULL, NULL}};
-    dfle_lua_register_type(L, DFLE_LUA_FLUVIAL, methods, meta, l_fluvial_property);
+    dfle_lua_register(L, &type);
     lua_newtable(L);
     luaL_setfuncs(L, funcs, 0);
     lua_setfield(L, -2, "fluvial");

@@ -8,8 +8,6 @@
  */
 #include "lua/core/dfle_lua.h"
 
-#include <stdio.h>
-#include <string.h>
 
 #include "dfle/law_excess_stress.h"
 #include "dfle/law_inertial.h"
@@ -62,44 +60,15 @@ static int l_law_excess_stress(lua_State *L)
     return 1;
 }
 
-static void set_field(lua_State *L, const char *k, double v)
+/* The law's params op, as the binding's parameter helpers take it. */
+static size_t law_params(const void *law, dfle_param *out, size_t cap)
 {
-    lua_pushnumber(L, v);
-    lua_setfield(L, -2, k);
+    return dfle_law_params(law, out, cap);
 }
 
 static int l_law_params(lua_State *L)
 {
-    dfle_law *law = dfle_lua_check_law(L, 1);
-    const dfle_power_law_opts *o = dfle_law_power_opts(law);
-    const dfle_inertial_law_opts *io = dfle_law_inertial_opts(law);
-    const dfle_excess_stress_law_opts *eo = dfle_law_excess_stress_opts(law);
-    lua_newtable(L);
-    if (o != NULL) {
-        set_field(L, "k_df", o->k_df);
-        set_field(L, "alpha", o->alpha);
-        set_field(L, "beta", o->beta);
-    } else if (io != NULL) {
-        set_field(L, "k", io->k);
-        set_field(L, "D", io->D);
-        set_field(L, "rho_s", io->rho_s);
-        set_field(L, "alpha", io->alpha);
-    } else if (eo != NULL) {
-        set_field(L, "k", eo->k);
-        set_field(L, "tau_c", eo->tau_c);
-        set_field(L, "p", eo->p);
-    } else if (lua_getiuservalue(L, 1, 2) == LUA_TTABLE) {
-        /* A Lua-defined law keeps its params as user value 2: copy them. */
-        lua_pushnil(L);
-        while (lua_next(L, -2) != 0) {
-            lua_pushvalue(L, -2);
-            lua_insert(L, -2);
-            lua_settable(L, -5);
-        }
-        lua_pop(L, 1);
-    } else {
-        lua_pop(L, 1);
-    }
+    dfle_lua_push_params(L, 1, law_params, dfle_lua_check_law(L, 1));
     return 1;
 }
 
@@ -116,61 +85,25 @@ static int l_law_compiled(lua_State *L)
 static int l_law_property(lua_State *L)
 {
     dfle_law *law = dfle_lua_check_law(L, 1);
-    const char *key = lua_type(L, 2) == LUA_TSTRING ? lua_tostring(L, 2) : NULL;
-    if (key == NULL)
-        return 0;
-    if (strcmp(key, "name") == 0) {
-        lua_pushstring(L, dfle_law_name(law));
-        return 1;
-    }
-    if (strcmp(key, "compiled") == 0) {
-        lua_pushcfunction(L, l_law_compiled);
-        return 1;
-    }
-    lua_pushcfunction(L, l_law_params);
-    lua_pushvalue(L, 1);
-    lua_call(L, 1, 1);
-    lua_getfield(L, -1, key);
-    return 1;
+    return dfle_lua_push_param_field(L, dfle_law_name(law), law_params, law);
 }
 
-static int l_law_tostring(lua_State *L)
+static void law_describe(lua_State *L, void *obj)
 {
-    dfle_law *law = dfle_lua_check_law(L, 1);
-    const dfle_power_law_opts *o = dfle_law_power_opts(law);
-    const dfle_inertial_law_opts *io = dfle_law_inertial_opts(law);
-    const dfle_excess_stress_law_opts *eo = dfle_law_excess_stress_opts(law);
-    char buf[160];
-    if (o != NULL)
-        snprintf(buf, sizeof buf, "dfle.law.power(k_df = %g, alpha = %g, beta = %g)", o->k_df,
-                 o->alpha, o->beta);
-    else if (io != NULL)
-        snprintf(buf, sizeof buf, "dfle.law.inertial(k = %g, D = %g m, rho_s = %g kg/m^3, "
-                 "alpha = %g)", io->k, io->D, io->rho_s, io->alpha);
-    else if (eo != NULL)
-        snprintf(buf, sizeof buf, "dfle.law.excess_stress(k = %g, tau_c = %g Pa, p = %g)", eo->k,
-                 eo->tau_c, eo->p);
-    else
-        snprintf(buf, sizeof buf, "dfle.law.%s", dfle_law_name(law));
-    lua_pushstring(L, buf);
-    return 1;
+    dfle_lua_push_described(L, 1, "dfle.law", dfle_law_name(obj), law_params, obj);
 }
 
-static int l_law_gc(lua_State *L)
-{
-    dfle_lua_law *u = luaL_checkudata(L, 1, DFLE_LUA_LAW);
-    dfle_law_free(u->law);
-    u->law = NULL;
-    return 0;
-}
+static void law_free(void *obj) { dfle_law_free(obj); }
 
 void dfle_lua_open_law(lua_State *L)
 {
-    static const luaL_Reg methods[] = {{"params", l_law_params}, {NULL, NULL}};
-    static const luaL_Reg meta[] = {
-        {"__gc", l_law_gc}, {"__tostring", l_law_tostring},
-        {NULL, NULL}};
-    dfle_lua_register_type(L, DFLE_LUA_LAW, methods, meta, l_law_property);
+    static const luaL_Reg methods[] = {
+        {"params", l_law_params}, {"compiled", l_law_compiled}, {NULL, NULL}};
+    static const dfle_lua_type type = {
+        .name = DFLE_LUA_LAW, .free = law_free, .describe = law_describe,
+        .methods = methods, .property = l_law_property,
+    };
+    dfle_lua_register(L, &type);
     lua_newtable(L);
     lua_pushcfunction(L, l_law_power);
     lua_setfield(L, -2, "power");

@@ -422,30 +422,18 @@ static int l_model_property(lua_State *L)
     return 1;
 }
 
-static int l_model_tostring(lua_State *L)
+static void model_describe(lua_State *L, void *obj)
 {
-    dfle_lua_model *u = luaL_checkudata(L, 1, DFLE_LUA_MODEL);
-    dfle_model *m = u->m;
+    dfle_model *m = obj;
     char buf[200];
-    if (m == NULL) {
-        lua_pushliteral(L, "dfle.model (closed)");
-        return 1;
-    }
     snprintf(buf, sizeof buf, "dfle.model(n = %zu, U = %g m/yr, t = %g yr, fluvial = %s, router = %s)",
              dfle_model_size(m), dfle_model_U(m), dfle_model_time(m),
              dfle_model_fluvial(m) ? dfle_fluvial_name(dfle_model_fluvial(m)) : "off",
              dfle_model_router(m) ? dfle_router_name(dfle_model_router(m)) : "off");
     lua_pushstring(L, buf);
-    return 1;
 }
 
-static int l_model_gc(lua_State *L)
-{
-    dfle_lua_model *u = luaL_checkudata(L, 1, DFLE_LUA_MODEL);
-    dfle_model_free(u->m);
-    u->m = NULL;
-    return 0;
-}
+static void model_free(void *obj) { dfle_model_free(obj); }
 
 void dfle_lua_open_model(lua_State *L)
 {
@@ -459,10 +447,11 @@ void dfle_lua_open_model(lua_State *L)
         {"fields", l_model_fields},
         {"write_csv", l_model_write_csv},
         {NULL, NULL}};
-    static const luaL_Reg meta[] = {
-        {"__gc", l_model_gc}, {"__close", l_model_gc}, {"__tostring", l_model_tostring},
-        {NULL, NULL}};
-    dfle_lua_register_type(L, DFLE_LUA_MODEL, methods, meta, l_model_property);
+    static const dfle_lua_type type = {
+        .name = DFLE_LUA_MODEL, .free = model_free, .describe = model_describe,
+        .methods = methods, .property = l_model_property, .closable = 1,
+    };
+    dfle_lua_register(L, &type);
     lua_pushcfunction(L, l_model_new);
     lua_setfield(L, -2, "model");
 }

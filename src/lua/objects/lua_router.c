@@ -3,12 +3,12 @@
  * dfle.router.define{...} (lua_router_define.c): debris-flow routers.
  *
  * A router object from Lua is just the C router handle; the model takes
- * it through the ops table, whatever its kind.  rt:params() returns the
- * parameters so scripts can record what they ran.
+ * it through the ops table, whatever its kind.  rt:params(), rt.<param>
+ * and tostring(rt) come from its params op (lua_params.c), so scripts
+ * can record what they ran.
  */
 #include "lua/core/dfle_lua.h"
 
-#include <stdio.h>
 #include <string.h>
 
 #include "dfle/router_empirical.h"
@@ -31,19 +31,6 @@ static int l_router_empirical(lua_State *L)
     if (dfle_router_new_empirical(&o, &u->rt, &err) != DFLE_OK)
         return dfle_lua_raise(L, &err);
     return 1;
-}
-
-static void push_empirical_params(lua_State *L, const dfle_empirical_opts *o)
-{
-    lua_createtable(L, 0, 8);
-    lua_pushnumber(L, o->M0), lua_setfield(L, -2, "M0");
-    lua_pushnumber(L, o->gamma), lua_setfield(L, -2, "gamma");
-    lua_pushnumber(L, o->mu), lua_setfield(L, -2, "mu");
-    lua_pushnumber(L, o->tau_y), lua_setfield(L, -2, "tau_y");
-    lua_pushnumber(L, o->c1), lua_setfield(L, -2, "c1");
-    lua_pushnumber(L, o->c2), lua_setfield(L, -2, "c2");
-    lua_pushnumber(L, o->rho_b), lua_setfield(L, -2, "rho_b");
-    lua_pushnumber(L, o->g), lua_setfield(L, -2, "g");
 }
 
 static int l_router_process(lua_State *L)
@@ -80,49 +67,10 @@ static int l_router_process(lua_State *L)
     return 1;
 }
 
-static void push_process_params(lua_State *L, const dfle_process_opts *o)
+/* The router's params op, as the binding's parameter helpers take it. */
+static size_t router_params(const void *rt, dfle_param *out, size_t cap)
 {
-    const struct { const char *k; double v; } f[] = {
-        {"M0", o->M0}, {"eta", o->flow.eta}, {"mu2", o->flow.mu_2}, {"mu_s", o->flow.mu_s},
-        {"I0", o->flow.I0}, {"D", o->flow.D}, {"D_eff", o->flow.D_eff},
-        {"lambda0", o->flow.lambda0}, {"v_f", o->flow.v_f}, {"rho_b", o->flow.rho},
-        {"rho_s", o->flow.rho_s}, {"g", o->flow.g}, {"cfl", o->flow.cfl},
-        {"h_dry", o->flow.h_dry}, {"n_ghost", o->n_ghost}, {"reroute_dS", o->reroute_dS},
-        {"q_erode", o->q_erode}, {"q_rest", o->q_rest}, {"volume_tol", o->volume_tol},
-        {"t_max", o->t_max}, {"gamma", o->gamma},
-    };
-    lua_createtable(L, 0, (int)(sizeof f / sizeof f[0]) + 1);
-    for (size_t i = 0; i < sizeof f / sizeof f[0]; i++) {
-        lua_pushnumber(L, f[i].v);
-        lua_setfield(L, -2, f[i].k);
-    }
-    lua_pushboolean(L, o->frequency_scaling);
-    lua_setfield(L, -2, "frequency_scaling");
-}
-
-/* Push the parameters of any router kind as a table (the router object
- * is at index 1). */
-static void push_params(lua_State *L, dfle_router *rt)
-{
-    const dfle_empirical_opts *eo = dfle_router_empirical_opts(rt);
-    const dfle_process_opts *po = dfle_router_process_opts(rt);
-    if (eo != NULL) {
-        push_empirical_params(L, eo);
-    } else if (po != NULL) {
-        push_process_params(L, po);
-    } else {
-        lua_newtable(L);
-        /* A Lua-defined router keeps its params as user value 2: copy. */
-        if (lua_getiuservalue(L, 1, 2) == LUA_TTABLE) {
-            lua_pushnil(L);
-            while (lua_next(L, -2) != 0) {
-                lua_pushvalue(L, -2);
-                lua_insert(L, -2);
-                lua_settable(L, -5);
-            }
-        }
-        lua_pop(L, 1);
-    }
+    return dfle_router_params(rt, out, cap);
 }
 
 static void set_array(lua_State *L, const char *key, const double *v, size_t n)
@@ -160,13 +108,9 @@ static int l_router_route(lua_State *L)
     if ((S = dfle_model_field(m, DFLE_FIELD_S, &err)) == NULL)
         return dfle_lua_raise(L, &err);
     /* The flow's arrays live in a userdata: nothing to free if we raise. */
-    block = lua_newuserdatauv(L, 8 * n * sizeof *block, 0);
-    memset(block, 0, 8 * n * sizeof *block);
-    memset(&flow, 0, sizeof flow);
-    flow.n = n;
-    flow.M = block, flow.Q = block + n, flow.h = block + 2 * n, flow.v = block + 3 * n;
-    flow.t_p = block + 4 * n, flow.tau = block + 5 * n, flow.Theta = block + 6 * n;
-    flow.integral = block + 7 * n;
+    block = lua_newuserdatauv(L, DFLE_FLOW_ARRAYS * n * sizeof *block, 0);
+    memset(block, 0, DFLE_FLOW_ARRAYS * n * sizeof *block);
+    dfle_flow_bind(&flow, block, n);
     flow.integrand = dfle_law_get_ops(dfle_model_law(m))->integrand;
     flow.integrand_state = dfle_law_state(dfle_model_law(m));
     if (times != NULL && dfle_router_process_set_snapshots(rt, ntimes, times, &err) != DFLE_OK)
@@ -215,60 +159,32 @@ static int l_router_route(lua_State *L)
 
 static int l_router_params(lua_State *L)
 {
-    push_params(L, dfle_lua_check_router(L, 1));
+    dfle_lua_push_params(L, 1, router_params, dfle_lua_check_router(L, 1));
     return 1;
 }
 
 static int l_router_property(lua_State *L)
 {
     dfle_router *rt = dfle_lua_check_router(L, 1);
-    const char *key = lua_tostring(L, 2);
-
-    if (strcmp(key, "name") == 0) {
-        lua_pushstring(L, dfle_router_name(rt));
-        return 1;
-    }
-    push_params(L, rt);
-    lua_getfield(L, -1, key);
-    return 1;
+    return dfle_lua_push_param_field(L, dfle_router_name(rt), router_params, rt);
 }
 
-static int l_router_tostring(lua_State *L)
+static void router_describe(lua_State *L, void *obj)
 {
-    dfle_router *rt = dfle_lua_check_router(L, 1);
-    const dfle_empirical_opts *o = dfle_router_empirical_opts(rt);
-    const dfle_process_opts *po = dfle_router_process_opts(rt);
-    char buf[200];
-    if (o != NULL)
-        snprintf(buf, sizeof buf,
-                 "dfle.router.empirical(M0 = %g, gamma = %g, mu = %g Pa s, tau_y = %g Pa)",
-                 o->M0, o->gamma, o->mu, o->tau_y);
-    else if (po != NULL)
-        snprintf(buf, sizeof buf,
-                 "dfle.router.process(M0 = %g m^3, eta = %g Pa s, mu2 = %g, D = %g m^2/s)",
-                 po->M0, po->flow.eta, po->flow.mu_2, po->flow.D);
-    else
-        snprintf(buf, sizeof buf, "dfle.router.%s", dfle_router_name(rt));
-    lua_pushstring(L, buf);
-    return 1;
+    dfle_lua_push_described(L, 1, "dfle.router", dfle_router_name(obj), router_params, obj);
 }
 
-static int l_router_gc(lua_State *L)
-{
-    dfle_lua_router *u = luaL_checkudata(L, 1, DFLE_LUA_ROUTER);
-    dfle_router_free(u->rt);
-    u->rt = NULL;
-    return 0;
-}
+static void router_free(void *obj) { dfle_router_free(obj); }
 
 void dfle_lua_open_router(lua_State *L)
 {
     static const luaL_Reg methods[] = {
         {"params", l_router_params}, {"route", l_router_route}, {NULL, NULL}};
-    static const luaL_Reg meta[] = {
-        {"__gc", l_router_gc},
-        {"__tostring", l_router_tostring}, {NULL, NULL}};
-    dfle_lua_register_type(L, DFLE_LUA_ROUTER, methods, meta, l_router_property);
+    static const dfle_lua_type type = {
+        .name = DFLE_LUA_ROUTER, .free = router_free, .describe = router_describe,
+        .methods = methods, .property = l_router_property,
+    };
+    dfle_lua_register(L, &type);
     lua_newtable(L);
     lua_pushcfunction(L, l_router_empirical);
     lua_setfield(L, -2, "empirical");

@@ -36,7 +36,9 @@
  * dfle_trace_compile after the protected call, whatever happened.
  *
  * lua_trace_eval.c runs a record and checks its guards;
- * lua_trace_bytecode.c does the bytecode scan.
+ * lua_trace_bytecode.c does the bytecode scan; lua_trace_release.c
+ * lists the Lua releases all this was checked against (under any other
+ * nothing is compiled).
  */
 #include "lua/trace/lua_trace_internal.h"
 
@@ -671,6 +673,10 @@ dfle_trace_prog *dfle_trace_compile(lua_State *L, int fidx, int pidx, const dfle
     dfle_trace_prog *p;
     int base, st, result = -1;
 
+    if (!dfle_trace_release_checked(dfle_trace_release(), why, why_len)) {
+        lua_pushnil(L); /* this Lua's opcodes and arithmetic are unknown */
+        return NULL;
+    }
     fidx = lua_absindex(L, fidx);
     pidx = lua_absindex(L, pidx);
     if (!lua_checkstack(L, 40) || spec->n_inputs > DFLE_TRACE_MAX_INPUTS ||

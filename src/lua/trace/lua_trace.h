@@ -36,6 +36,16 @@ typedef struct dfle_trace_spec {
     int positional;           /* 1: fn(x_1, ..., x_n, p); 0: fn(c, p)   */
 } dfle_trace_spec;
 
+/* The release this build runs under, as LUA_VERSION_RELEASE_NUM gives
+ * it (50404 for 5.4.4). */
+long dfle_trace_release(void);
+
+/* 1 if the tracer was checked against Lua release `release`; else 0,
+ * with why it will not compile ("the tracer was not checked against Lua
+ * 5.4.6").  dfle_trace_compile refuses everything under a release that
+ * was not (lua_trace_release.c). */
+int dfle_trace_release_checked(long release, char *why, size_t why_len);
+
 /* Trace the function at index fidx, with the params table at pidx.
  * Returns the program and pushes its guard table, or returns NULL,
  * pushes nil and writes the reason (a sentence fragment such as

@@ -25,9 +25,11 @@ static double apply(int op, double a, double b)
     case T_SUB: return a - b;
     case T_MUL: return a * b;
     case T_DIV: return a / b;
-    case T_MOD: /* luai_nummod: the result takes the divisor's sign */
+    case T_MOD:
+        /* luai_nummod: fmod truncates the quotient, Lua floors it, so a
+         * remainder whose sign differs from the divisor's moves by b. */
         m = fmod(a, b);
-        if ((m > 0) ? b < 0 : (m < 0 && b != m))
+        if ((m > 0) ? b < 0 : (m < 0 && b > 0))
             m += b;
         return m;
     case T_IDIV: return floor(a / b);
@@ -39,8 +41,10 @@ static double apply(int op, double a, double b)
     case T_LOG: return log(a);
     case T_LOGB: return b == 2.0 ? log2(a) : b == 10.0 ? log10(a) : log(a) / log(b);
     case T_ABS: return fabs(a);
-    case T_FLOOR: return floor(a);
-    case T_CEIL: return ceil(a);
+    /* math.floor and math.ceil return an integer where it fits, and an
+     * integer has no -0: floor(-0.0) and ceil(-0.5) are 0, not -0.0. */
+    case T_FLOOR: m = floor(a); return m == 0 ? 0.0 : m;
+    case T_CEIL: m = ceil(a); return m == 0 ? 0.0 : m;
     case T_FMOD: return fmod(a, b);
     case T_MAX: return a < b ? b : a; /* math.max keeps the first of equals */
     case T_MIN: return b < a ? b : a;

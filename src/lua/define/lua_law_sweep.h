@@ -1,24 +1,27 @@
 /*
- * lua_law_define.h - what the two halves of a dfle.law.define law share:
- * lua_law_define.c (the object, its ops, and the Lua sweep that calls the
- * user's functions node by node) and lua_law_compiled.c (the same
- * functions run as compiled programs, lua_trace.h).  Internal to the
- * binding.
+ * lua_law_sweep.h - the state of a dfle.law.define law and the bottom
+ * of its three layers: the Lua sweep (lua_law_sweep.c), which runs the
+ * user's functions node by node.  Above it, lua_law_compiled.c runs them
+ * as compiled programs and checks those against the sweep; on top,
+ * lua_law_define.c builds the law and its ops dispatch between the two.
+ * Internal to the binding.
  */
-#ifndef DFLE_LUA_LAW_DEFINE_H
-#define DFLE_LUA_LAW_DEFINE_H
+#ifndef DFLE_LUA_LAW_SWEEP_H
+#define DFLE_LUA_LAW_SWEEP_H
 
-#include "lua/core/dfle_lua.h"
+#include "lua/core/lua_shell.h"
 #include "lua/trace/lua_trace.h"
 
-/* Fixed slots on the law thread's stack. */
+/* Fixed slots on the law thread's stack (lua_shell.h: the shell's own
+ * come first). */
 enum {
-    SLOT_RATE = 1,  /* rate(c, p)                         */
+    SLOT_PARAMS = DFLE_SHELL_PARAMS, /* p: the law's own copy of params */
+    SLOT_MSGH = DFLE_SHELL_MSGH,     /* message handler (traceback)      */
+    SLOT_STATE = DFLE_SHELL_STATE,   /* the lua_law (a userdata: collected with the law) */
+    SLOT_RATE,      /* rate(c, p)                         */
     SLOT_FACTOR,    /* factor(c, p) or nil                */
     SLOT_INTEGRAND, /* integrand(h, v, lambda, p) or nil  */
     SLOT_FREQUENCY, /* frequency(A, p) or nil             */
-    SLOT_PARAMS,    /* p: the law's own copy of params    */
-    SLOT_MSGH,      /* message handler (traceback)        */
     /* Lua arrays the drivers read (and `out`, which they write). */
     ARR_S, ARR_A, ARR_W, ARR_H, ARR_V, ARR_T_P, ARR_TAU, ARR_THETA, ARR_Q, ARR_M, ARR_I, ARR_F,
     ARR_OUT,
@@ -29,7 +32,6 @@ enum {
     SLOT_DRV_FACTOR, /* Lua loop calling factor per node  */
     SLOT_DRV_RATE,  /* Lua loop calling rate per node     */
     SLOT_DRV_RATE_TR, /* the same, time-resolved flows    */
-    SLOT_STATE,     /* the lua_law (a userdata: collected with the law) */
     SLOT_SWEEP,     /* the sweep closure over the slots above */
     /* Guard tables of the compiled functions (lua_trace.h), per op, and
      * of the integrand; nil while not compiled. */
@@ -37,8 +39,6 @@ enum {
     SLOT_COUNT = SLOT_GUARDS_G
 };
 #define N_IN (ARR_F - ARR_S + 1) /* input arrays, each with a C shadow */
-/* Inside the sweep the slots are its upvalues. */
-#define UP(slot) lua_upvalueindex(slot)
 
 /* Field names, in the order of the ARR_ slots (valid Lua names: the
  * generated drivers use them as local variables). */
@@ -56,12 +56,10 @@ enum { OP_FACTOR, OP_RATE, OP_RATE_TR, N_OPS };
 enum { G_NONE, G_POWER, G_LUA };
 
 typedef struct lua_law {
-    /* A copy of lua_law_ops named after the user's law, so dfle_law_name()
-     * and error messages say "inertial", not "lua". */
+    dfle_lua_shell sh; /* the thread (user value 1 of the law object), name, who */
+    /* A copy of the law's ops named after the user's law, so
+     * dfle_law_name() and error messages say "inertial", not "lua". */
     dfle_law_ops ops;
-    lua_State *T; /* the law's own thread (user value 1 of the law object) */
-    char name[64];
-    char who[80]; /* "law.<name>": the prefix of its error messages */
     int has_factor, has_frequency;
     int g_kind;             /* G_NONE, G_POWER (h^gh v^gv lambda^gl), G_LUA */
     double gh, gv, gl;
@@ -102,11 +100,11 @@ typedef struct lua_law {
     double *out;
 } lua_law;
 
-/* Field names, in the order of the F_ enum. */
-extern const char *const ll_field_names[N_IN];
+/* Push the slots the sweep needs, from the arrays to the drivers, then
+ * the sweep closure (SLOT_SWEEP): the thread holds SLOT_FREQUENCY slots
+ * and ll is the state at SLOT_STATE. */
+void ll_sweep_slots(lua_State *T, lua_law *ll);
 
-/* lua_law_define.c */
-const lua_law *ll_of(const dfle_law *law); /* NULL: not a dfle.law.define law */
 /* The C array behind field f for the op in progress (NULL: zeros). */
 const double *ll_field_source(const lua_law *ll, int f);
 /* Where drainage area A is, or would go, in the frequency(A) memo; 1 if
@@ -119,16 +117,5 @@ int ll_interpreted_sweep(lua_law *ll, int op, const dfle_law_ctx *ctx, const dou
  * fails like an op. */
 int ll_lua_integrand(lua_law *ll, double h, double v, double lambda, double *g,
                      dfle_error *err);
-
-/* lua_law_compiled.c */
-enum { TRY_LUA = 1 };
-/* Run `op` compiled: 0, a negative dfle_status, or TRY_LUA when the Lua
- * sweep must do it instead. */
-int ll_compiled_sweep(lua_law *ll, int op, const dfle_law_ctx *ctx, const double *F_in,
-                      double *out, dfle_error *err);
-/* The integrand compiled: 0 with *g set, a negative dfle_status, or
- * TRY_LUA when the Lua call must do it. */
-int ll_compiled_integrand(lua_law *ll, double h, double v, double lambda, double *g,
-                          dfle_error *err);
 
 #endif
