@@ -296,7 +296,7 @@ tests["tostring: every object describes itself"] = function()
          "dfle.law.excess_stress(k = 1e-09, tau_c = 40 Pa, p = 1.5)")
     local rt = tostring(dfle.router.process{ M0 = 250, frequency_scaling = true })
     T.match(rt, "^dfle%.router%.process%(M0 = 250 m%^3, eta = 60 Pa s, ")
-    T.match(rt, ", t_max = 3600 s, gamma = 0, frequency_scaling = true%)$")
+    T.match(rt, ", t_max = 3600 s, max_steps = 1e%+06, gamma = 0, frequency_scaling = true%)$")
     T.match(tostring(small_model{ router = false }), "^dfle%.model%(n = 45.*router = off")
 end
 

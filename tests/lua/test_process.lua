@@ -59,6 +59,17 @@ tests["process: one router shared by two models gives each what its own would"] 
     end
 end
 
+tests["process: a routing is bounded and says why it stopped"] = function()
+    -- cfl = 1e-5 is accepted but would need ~1e8 flow steps: the routing
+    -- must stop at max_steps with a reason, not run for hours; and a tiny
+    -- first step must not pass for a flow "at rest".
+    local rt = dfle.router.process{ cfl = 1e-5, max_steps = 3000 }
+    T.eq(rt.max_steps, 3000)
+    local m = small_model(rt)
+    T.raises_here(function() return rt:route(m) end, "max_steps = 3000", "raise cfl or max_steps")
+    T.raises_here(function() return dfle.router.process{ max_steps = 0 } end, "max_steps must be > 0")
+end
+
 tests["process: route returns the flow and balances its volume"] = function()
     local rt = dfle.router.process{}
     local m = small_model(rt)
