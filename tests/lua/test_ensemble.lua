@@ -312,14 +312,20 @@ tests["CLI: a killed parallel run resumes without losing or repeating a row"] = 
     write_sweep(dir)
     run(dir, "-j 1", "ref.csv")
     -- each build busy-waits (CPU time: about 25 ms of wall time with two
-    -- threads); kill after 0.2 s, in the middle of the run
+    -- threads); kill -9 as soon as the first row is on disk, which is
+    -- always mid-run (31 more rows take >= 0.4 s), however busy the
+    -- machine: a fixed delay once killed it before any row was written.
+    -- The wait is bounded (30 s), so a run that never writes fails here.
     local delay = "local c = os.clock() while os.clock() - c < 0.05 do end"
-    sh("cd " .. q(dir) .. " && timeout -s KILL 0.2 " .. q(T.dfle) ..
-       " -q -j 2 sweep.lua k.csv " .. q(delay))
+    sh("cd " .. q(dir) .. " && { " .. q(T.dfle) .. " -q -j 2 sweep.lua k.csv " .. q(delay) ..
+       " & pid=$!; i=0; while [ $i -lt 3000 ]; do" ..
+       " [ \"$(grep -c '' k.csv 2>/dev/null)\" -ge 3 ] 2>/dev/null && break;" ..
+       " sleep 0.01; i=$((i+1)); done; kill -9 $pid; wait $pid; }")
     local partial = T.read_file(dir .. "/k.csv")
     T.ok(partial ~= nil, "the killed run left a file")
     local _, lines = partial:gsub("\n", "")
     local rows = lines - 2 -- complete rows (a cut last line has no newline)
+    T.ok(rows >= 1 and rows < 32, "killed mid-run after " .. rows .. " rows")
     local out = run(dir, "-j 2", "k.csv")
     local ran = tonumber(out:match("ran=(%d+)"))
     T.eq(ran, 32 - rows, "resumed exactly the missing rows")
