@@ -26,8 +26,8 @@
 #define DFLE_LUA_DEM "dfle.dem"
 #define DFLE_LUA_PROFILE "dfle.profile"
 
-typedef struct { dfle_dem *dem; } dfle_lua_dem;
-typedef struct { dfle_profile *p; } dfle_lua_profile;
+typedef struct { dfle_dem *dem; DFLE_LUA_IN_USE; } dfle_lua_dem;
+typedef struct { dfle_profile *p; DFLE_LUA_IN_USE; } dfle_lua_profile;
 
 static dfle_dem *check_dem(lua_State *L, int arg)
 {

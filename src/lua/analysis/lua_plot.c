@@ -120,10 +120,9 @@ static int l_plot_profile(lua_State *L)
 
     check_opts(L, 3, "plot.profile", NULL, 0);
     title = opt_string(L, 3, "title", "plot.profile");
-    if ((x = dfle_model_field(m, DFLE_FIELD_X, &err)) == NULL ||
-        (z = dfle_model_field(m, DFLE_FIELD_Z, &err)) == NULL ||
-        (S = dfle_model_field(m, DFLE_FIELD_S, &err)) == NULL)
-        return dfle_lua_raise(L, &err);
+    x = dfle_lua_model_field(L, 1, DFLE_FIELD_X, "dfle.plot.profile");
+    z = dfle_lua_model_field(L, 1, DFLE_FIELD_Z, "dfle.plot.profile");
+    S = dfle_lua_model_field(L, 1, DFLE_FIELD_S, "dfle.plot.profile");
     if (dfle_plot_profile(path, title, dfle_model_size(m), x, z, S, &err) != DFLE_OK)
         return dfle_lua_raise(L, &err);
     return 0;
@@ -151,9 +150,8 @@ static int l_plot_flow(lua_State *L)
     check_opts(L, 4, "plot.flow", params, 1);
     if (!(e > 0))
         luaL_error(L, "dfle.plot.flow: exaggeration must be > 0 (got %s)", dfle_lua_number_text(L, e));
-    if ((x = dfle_model_field(m, DFLE_FIELD_X, &err)) == NULL ||
-        (z = dfle_model_field(m, DFLE_FIELD_Z, &err)) == NULL)
-        return dfle_lua_raise(L, &err);
+    x = dfle_lua_model_field(L, 1, DFLE_FIELD_X, "dfle.plot.flow");
+    z = dfle_lua_model_field(L, 1, DFLE_FIELD_Z, "dfle.plot.flow");
     if (lua_getfield(L, 2, "snapshots") != LUA_TTABLE || lua_rawlen(L, -1) == 0)
         luaL_error(L, "dfle.plot.flow: the routing has no snapshots; route with "
                       "rt:route(m, {snapshots = {t1, t2, ...}})");

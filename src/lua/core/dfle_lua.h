@@ -42,12 +42,19 @@
 #define DFLE_LUA_LAW "dfle.law"
 #define DFLE_LUA_MODEL "dfle.model"
 
-/* Userdata payloads. */
-typedef struct { dfle_channel *ch; } dfle_lua_channel;
-typedef struct { dfle_fluvial *fl; } dfle_lua_fluvial;
-typedef struct { dfle_router *rt; } dfle_lua_router;
-typedef struct { dfle_law *law; } dfle_lua_law;
-typedef struct { dfle_model *m; } dfle_lua_model;
+/* Userdata payloads: the C object, then how it is in use (lua_type.c).
+ * Every payload has this layout, so generic code reads any of them as
+ * a dfle_lua_object. */
+#define DFLE_LUA_IN_USE                                                       \
+    unsigned busy;    /* calls on it running now (they may run Lua code)  */ \
+    unsigned holders; /* models that hold it                              */ \
+    int doomed        /* __gc/__close came while in use: free when unused */
+typedef struct dfle_lua_object { void *ptr; DFLE_LUA_IN_USE; } dfle_lua_object;
+typedef struct { dfle_channel *ch; DFLE_LUA_IN_USE; } dfle_lua_channel;
+typedef struct { dfle_fluvial *fl; DFLE_LUA_IN_USE; } dfle_lua_fluvial;
+typedef struct { dfle_router *rt; DFLE_LUA_IN_USE; } dfle_lua_router;
+typedef struct { dfle_law *law; DFLE_LUA_IN_USE; } dfle_lua_law;
+typedef struct { dfle_model *m; DFLE_LUA_IN_USE; } dfle_lua_model;
 
 /* --- lua_type.c: object types --- */
 
@@ -66,7 +73,33 @@ typedef struct dfle_lua_type {
     lua_CFunction property;
     const luaL_Reg *meta;                   /* more metamethods (__len), or NULL */
     int closable;                           /* __close frees it too (local x <close>) */
+    /* After the C object is freed: let go of what it held (the userdata
+     * is at index idx).  May be NULL. */
+    void (*release)(lua_State *L, int idx);
 } dfle_lua_type;
+
+/* Lifetime while in use (C objects point at each other, and Lua code
+ * runs in the middle of C calls: U(t), laws and routers written in Lua).
+ * An object is freed only when nothing uses it: __gc and __close of an
+ * object that a model holds, or that a running call uses, only mark it,
+ * and the last user frees it.  __close of a busy object raises (a model
+ * closed from inside its own U(t) or law).
+ *
+ * dfle_lua_begin_use marks the object at idx busy for a call that may run
+ * Lua code, raising if it is busy already (re-entry: m:run inside its own
+ * U(t)); `what` names the call in that message.  dfle_lua_end_use undoes
+ * it (never raises) and frees a doomed object.  Between the two, nothing
+ * may raise: collect the error status and raise after end_use. */
+dfle_lua_object *dfle_lua_begin_use(lua_State *L, int idx, const char *what);
+void dfle_lua_end_use(lua_State *L, int idx);
+/* The n values of field `field` of the model at idx, evaluated if need
+ * be (which may run Lua laws and routers: the model is in use meanwhile);
+ * raises on error, naming `what`. */
+const double *dfle_lua_model_field(lua_State *L, int idx, int field, const char *what);
+
+/* A model takes/leaves component idx. */
+void dfle_lua_hold(lua_State *L, int idx);
+void dfle_lua_unhold(lua_State *L, int idx);
 
 /* Create the metatable of type t (once per lua_State). */
 void dfle_lua_register(lua_State *L, const dfle_lua_type *t);

@@ -17,22 +17,115 @@
 
 void *dfle_lua_newobject(lua_State *L, size_t size, const char *tname, int nuv)
 {
-    void *p = lua_newuserdatauv(L, size, nuv);
+    void *p;
+    /* Every payload starts like a dfle_lua_object (dfle_lua.h). */
+    if (size < sizeof(dfle_lua_object))
+        size = sizeof(dfle_lua_object);
+    p = lua_newuserdatauv(L, size, nuv);
     memset(p, 0, size);
     luaL_setmetatable(L, tname);
     return p;
 }
 
-/* __gc and __close: upvalue 1 is the type. */
+/* Free the C object of the payload at idx now, and let go of what it held. */
+static void free_now(lua_State *L, int idx, const dfle_lua_type *t, dfle_lua_object *o)
+{
+    void *p = o->ptr;
+    o->ptr = NULL;
+    o->doomed = 0;
+    t->free(p);
+    if (t->release != NULL)
+        t->release(L, idx);
+}
+
+/* The type of the object at idx (its metatable's __dfle_type field). */
+static const dfle_lua_type *type_of(lua_State *L, int idx)
+{
+    const dfle_lua_type *t = NULL;
+    if (lua_getmetatable(L, idx)) {
+        lua_getfield(L, -1, "__dfle_type");
+        t = lua_touserdata(L, -1);
+        lua_pop(L, 2);
+    }
+    return t;
+}
+
+/* Free it if it was doomed and nothing uses it any more. */
+static void free_if_unused(lua_State *L, int idx, dfle_lua_object *o)
+{
+    const dfle_lua_type *t;
+    if (o->doomed && o->ptr != NULL && o->busy == 0 && o->holders == 0 &&
+        (t = type_of(L, idx)) != NULL)
+        free_now(L, idx, t, o);
+}
+
+/* __gc: upvalue 1 is the type.  Never raises (it may run as a finalizer);
+ * an object still in use is only marked, and its last user frees it. */
 static int object_gc(lua_State *L)
 {
     const dfle_lua_type *t = lua_touserdata(L, lua_upvalueindex(1));
-    void **p = luaL_checkudata(L, 1, t->name);
-    if (*p != NULL) {
-        t->free(*p);
-        *p = NULL;
+    dfle_lua_object *o = luaL_checkudata(L, 1, t->name);
+    if (o->ptr == NULL)
+        return 0;
+    if (o->busy > 0 || o->holders > 0) {
+        o->doomed = 1;
+        return 0;
     }
+    free_now(L, 1, t, o);
     return 0;
+}
+
+/* __close (local x <close>): as __gc, but closing an object while a call
+ * on it runs is a mistake worth an error. */
+static int object_close(lua_State *L)
+{
+    const dfle_lua_type *t = lua_touserdata(L, lua_upvalueindex(1));
+    dfle_lua_object *o = luaL_checkudata(L, 1, t->name);
+    if (o->ptr != NULL && o->busy > 0)
+        return luaL_error(L, "%s: cannot close it while it is running (it was closed from "
+                             "inside its own U(t), law or router); close it after the run",
+                          t->name);
+    return object_gc(L);
+}
+
+dfle_lua_object *dfle_lua_begin_use(lua_State *L, int idx, const char *what)
+{
+    dfle_lua_object *o = lua_touserdata(L, idx);
+    const dfle_lua_type *t = type_of(L, idx);
+    if (o == NULL || t == NULL)
+        luaL_error(L, "dfle: %s: not a dfle object", what);
+    if (o->ptr == NULL)
+        luaL_error(L, "%s: %s has been closed", what, t->name);
+    if (o->busy > 0)
+        luaL_error(L, "%s: the %s is running already: it cannot be used from inside its own "
+                      "U(t), law or router", what, t->name + 5);
+    o->busy++;
+    return o;
+}
+
+void dfle_lua_end_use(lua_State *L, int idx)
+{
+    dfle_lua_object *o = lua_touserdata(L, idx);
+    if (o != NULL && o->busy > 0) {
+        o->busy--;
+        free_if_unused(L, idx, o);
+    }
+}
+
+void dfle_lua_hold(lua_State *L, int idx)
+{
+    dfle_lua_object *o = lua_touserdata(L, idx);
+    if (o != NULL)
+        o->holders++;
+}
+
+void dfle_lua_unhold(lua_State *L, int idx)
+{
+    dfle_lua_object *o = lua_touserdata(L, idx);
+    if (o != NULL && o->holders > 0) {
+        o->holders--;
+        free_if_unused(L, idx, o);
+    }
 }
 
 /* __tostring: upvalue 1 is the type. */
@@ -71,12 +164,15 @@ void dfle_lua_register(lua_State *L, const dfle_lua_type *t)
     if (t->meta != NULL)
         luaL_setfuncs(L, t->meta, 0);
     lua_pushlightuserdata(L, (void *)t);
+    lua_setfield(L, -2, "__dfle_type");
+    lua_pushlightuserdata(L, (void *)t);
     lua_pushcclosure(L, object_gc, 1);
-    if (t->closable) {
-        lua_pushvalue(L, -1);
-        lua_setfield(L, -3, "__close");
-    }
     lua_setfield(L, -2, "__gc");
+    if (t->closable) {
+        lua_pushlightuserdata(L, (void *)t);
+        lua_pushcclosure(L, object_close, 1);
+        lua_setfield(L, -2, "__close");
+    }
     lua_pushlightuserdata(L, (void *)t);
     lua_pushcclosure(L, object_tostring, 1);
     lua_setfield(L, -2, "__tostring");
@@ -128,4 +224,19 @@ const char *dfle_lua_typename(lua_State *L, int idx)
     if (luaL_getmetafield(L, idx, "__name") == LUA_TSTRING)
         return lua_tostring(L, -1); /* left on the stack, so it stays valid */
     return luaL_typename(L, idx);
+}
+
+const double *dfle_lua_model_field(lua_State *L, int idx, int field, const char *what)
+{
+    dfle_lua_model *u;
+    const double *v;
+    dfle_error err;
+    idx = lua_absindex(L, idx);
+    dfle_lua_check_model(L, idx);
+    u = (dfle_lua_model *)dfle_lua_begin_use(L, idx, what);
+    v = dfle_model_field(u->m, field, &err);
+    dfle_lua_end_use(L, idx);
+    if (v == NULL)
+        dfle_lua_raise(L, &err);
+    return v;
 }

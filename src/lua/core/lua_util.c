@@ -162,10 +162,10 @@ size_t dfle_lua_slope_area(lua_State *L, int arg, const char *fn, const double *
     arg = lua_absindex(L, arg);
     if (luaL_testudata(L, arg, DFLE_LUA_MODEL) != NULL) {
         dfle_model *m = dfle_lua_check_model(L, arg);
-        dfle_error err;
-        if ((*A = dfle_model_field(m, DFLE_FIELD_A, &err)) == NULL ||
-            (*S = dfle_model_field(m, DFLE_FIELD_S, &err)) == NULL)
-            dfle_lua_raise(L, &err);
+        char caller[96];
+        snprintf(caller, sizeof caller, "dfle.%s", fn);
+        *A = dfle_lua_model_field(L, arg, DFLE_FIELD_A, caller);
+        *S = dfle_lua_model_field(L, arg, DFLE_FIELD_S, caller);
         /* The outlet is held at base level; its slope only repeats its
          * neighbour's, so it is not a data point. */
         return dfle_model_size(m) - 1;

@@ -137,7 +137,20 @@ static int l_model_new(lua_State *L)
     }
     if (dfle_model_new(&o, &u->m, &err) != DFLE_OK)
         return dfle_lua_raise(L, &err);
+    /* The components now serve this model: a __gc or close of one of
+     * them waits until the model is gone (model_release). */
+    for (int k = UV_CHANNEL; k <= UV_LAW; k++)
+        if (!lua_isnil(L, base + k))
+            dfle_lua_hold(L, base + k);
     return 1;
+}
+
+/* Raise unless the model at 1 is idle: its state must not change under
+ * a run (a call from inside its own U(t), law or router). */
+static void check_idle(lua_State *L, const char *what)
+{
+    dfle_lua_begin_use(L, 1, what);
+    dfle_lua_end_use(L, 1);
 }
 
 static int l_model_init_fluvial_steady(lua_State *L)
@@ -145,6 +158,7 @@ static int l_model_init_fluvial_steady(lua_State *L)
     dfle_model *m = dfle_lua_check_model(L, 1);
     const dfle_fluvial *fl = lua_isnoneornil(L, 2) ? NULL : dfle_lua_check_fluvial(L, 2);
     dfle_error err;
+    check_idle(L, "dfle.model:init_fluvial_steady");
     if (dfle_model_init_fluvial_steady(m, fl, &err) != DFLE_OK)
         return dfle_lua_raise(L, &err);
     lua_settop(L, 1);
@@ -157,6 +171,7 @@ static int l_model_set_z(lua_State *L)
     size_t n;
     double *z = dfle_lua_check_array(L, 2, "model:set_z: z", &n);
     dfle_error err;
+    check_idle(L, "dfle.model:set_z");
     if (dfle_model_set_z(m, z, n, &err) != DFLE_OK)
         return dfle_lua_raise(L, &err);
     lua_settop(L, 1);
@@ -167,6 +182,7 @@ static int l_model_set_U(lua_State *L)
 {
     dfle_model *m = dfle_lua_check_model(L, 1);
     dfle_error err;
+    check_idle(L, "dfle.model:set_U");
     if (dfle_model_set_U(m, luaL_checknumber(L, 2), &err) != DFLE_OK)
         return dfle_lua_raise(L, &err);
     lua_pushnil(L); /* a constant U replaces a U(t) function */
@@ -319,7 +335,11 @@ static int model_run(lua_State *L, int steady)
         o.uplift = lua_uplift;
         o.uplift_ud = &uc;
     }
+    /* In use for the run: U(t), laws and routers written in Lua run in
+     * the middle of it, and may neither free the model nor run it again. */
+    dfle_lua_begin_use(L, 1, steady ? "dfle.model:run_to_steady" : "dfle.model:run");
     st = dfle_solver_run(m, &o, &res, &err);
+    dfle_lua_end_use(L, 1);
     if (prog != NULL && prog->finish != NULL)
         prog->finish(prog->ud);
     if (st != DFLE_OK)
@@ -360,16 +380,13 @@ static int l_model_get(lua_State *L)
     const char *name = luaL_checkstring(L, 2);
     int f = dfle_field_lookup(name);
     const double *v;
-    dfle_error err;
 
     if (f < 0) {
         push_field_names(L);
         return luaL_error(L, "dfle.model:get: no field '%s' (fields: %s)", name,
                           lua_tostring(L, -1));
     }
-    v = dfle_model_field(m, f, &err);
-    if (v == NULL)
-        return dfle_lua_raise(L, &err);
+    v = dfle_lua_model_field(L, 1, f, "dfle.model:get");
     dfle_lua_push_array(L, v, dfle_model_size(m));
     return 1;
 }
@@ -389,7 +406,11 @@ static int l_model_write_csv(lua_State *L)
     dfle_model *m = dfle_lua_check_model(L, 1);
     const char *path = luaL_checkstring(L, 2);
     dfle_error err;
-    if (dfle_model_write_csv(m, path, &err) != DFLE_OK)
+    int st;
+    dfle_lua_begin_use(L, 1, "dfle.model:write_csv");
+    st = dfle_model_write_csv(m, path, &err);
+    dfle_lua_end_use(L, 1);
+    if (st != DFLE_OK)
         return dfle_lua_raise(L, &err);
     lua_settop(L, 1);
     return 1;
@@ -435,6 +456,16 @@ static void model_describe(lua_State *L, void *obj)
 
 static void model_free(void *obj) { dfle_model_free(obj); }
 
+/* The model is freed: its components are free to go too. */
+static void model_release(lua_State *L, int idx)
+{
+    for (int k = UV_CHANNEL; k <= UV_LAW; k++) {
+        if (lua_getiuservalue(L, idx, k) == LUA_TUSERDATA)
+            dfle_lua_unhold(L, lua_gettop(L));
+        lua_pop(L, 1);
+    }
+}
+
 void dfle_lua_open_model(lua_State *L)
 {
     static const luaL_Reg methods[] = {
@@ -450,6 +481,7 @@ void dfle_lua_open_model(lua_State *L)
     static const dfle_lua_type type = {
         .name = DFLE_LUA_MODEL, .free = model_free, .describe = model_describe,
         .methods = methods, .property = l_model_property, .closable = 1,
+        .release = model_release,
     };
     dfle_lua_register(L, &type);
     lua_pushcfunction(L, l_model_new);

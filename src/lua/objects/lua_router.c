@@ -106,8 +106,7 @@ static int l_router_route(lua_State *L)
     }
     if (dfle_model_law(m) == NULL)
         luaL_error(L, "dfle.router:route: the model has no erosion law (router = false)");
-    if ((S = dfle_model_field(m, DFLE_FIELD_S, &err)) == NULL)
-        return dfle_lua_raise(L, &err);
+    S = dfle_lua_model_field(L, 2, DFLE_FIELD_S, "dfle.router:route");
     /* The flow's arrays live in a userdata: nothing to free if we raise. */
     block = lua_newuserdatauv(L, DFLE_FLOW_ARRAYS * n * sizeof *block, 0);
     memset(block, 0, DFLE_FLOW_ARRAYS * n * sizeof *block);
@@ -116,7 +115,14 @@ static int l_router_route(lua_State *L)
     flow.integrand_state = dfle_law_state(dfle_model_law(m));
     if (times != NULL && dfle_router_process_set_snapshots(rt, ntimes, times, &err) != DFLE_OK)
         return dfle_lua_raise(L, &err);
+    /* The law's integrand may be Lua: neither object may go meanwhile. */
+    dfle_lua_begin_use(L, 2, "dfle.router:route"); /* raises if busy: pins nothing */
+    dfle_lua_end_use(L, 2);
+    dfle_lua_begin_use(L, 1, "dfle.router:route");
+    dfle_lua_begin_use(L, 2, "dfle.router:route"); /* idle, just checked: cannot raise */
     st = dfle_router_route(rt, ch, S, &flow, &err);
+    dfle_lua_end_use(L, 2);
+    dfle_lua_end_use(L, 1);
     rep = dfle_router_process_report(rt);
     lua_createtable(L, 0, 24);
     set_array(L, "h", flow.h, n);

@@ -1,0 +1,99 @@
+-- test_lifetime.lua - objects in use stay alive: a model closed from
+-- inside its own U(t) or law, components collected by hand while a model
+-- holds them, a model run again from inside its own U(t).  Each of these
+-- once freed memory that was still in use, or left the model's time
+-- disagreeing with what its run reported.
+local tests = {}
+
+local function small(opts)
+    opts = opts or {}
+    opts.channel = opts.channel or dfle.channel{ dx = 20 }
+    return dfle.model(opts)
+end
+
+tests["a model closed from inside its own U(t) is an error, not freed memory"] = function()
+    local m, once = nil, true
+    m = small{ U = function(t)
+        if t > 0 and once then
+            once = false
+            local closing <close> = m
+        end
+        return 5e-4
+    end }
+    T.raises_here(function() return m:run{ years = 10 } end, "U(t) failed",
+                  "cannot close it while it is running")
+    -- still whole and usable afterwards
+    T.ok(m.time > 0 and m.time < 10)
+    T.eq(#m:get("z"), m.n)
+    local r = m:run{ years = 1 }
+    T.eq(r.reason, "time")
+end
+
+tests["a model closed from inside its own Lua law is an error, not freed memory"] = function()
+    local m, once
+    for _, compile in ipairs{ false, true } do
+        once = true
+        local law = dfle.law.define{ compile = compile, rate = function(c, p)
+            if once then
+                once = false
+                local closing <close> = m
+            end
+            return 1e-4 * c.S^6 * c.F
+        end }
+        m = small{ law = law }
+        T.raises_here(function() return m:run{ years = 10 } end,
+                      "cannot close it while it is running")
+        T.eq(#m:get("S"), m.n)
+    end
+end
+
+tests["components freed by hand while a model holds them stay usable until it goes"] = function()
+    local ch, fl = dfle.channel{ dx = 20 }, dfle.fluvial.stochastic_threshold{}
+    local rt, law = dfle.router.empirical{}, dfle.law.power{}
+    local m = dfle.model{ channel = ch, fluvial = fl, router = rt, law = law }
+    local ref = dfle.model{ channel = dfle.channel{ dx = 20 } }
+    for _, o in ipairs{ ch, fl, rt, law } do
+        local gc = debug.getmetatable(o).__gc
+        gc(o)
+        gc(o) -- idempotent
+    end
+    local r, rr = m:run{ years = 200 }, ref:run{ years = 200 }
+    T.eq(r.steps, rr.steps)
+    local z, zr = m:get("z"), ref:get("z")
+    for i = 1, m.n do T.eq(z[i], zr[i]) end
+    T.eq(rt.tau_y, 300)        -- the script's handle still reads
+    m = nil
+    collectgarbage()
+    collectgarbage()
+    T.has(tostring(rt), "closed") -- freed once the model let go
+    T.raises_here(function() return rt:params() end, "closed")
+end
+
+tests["U(t) may not run its own model again; the model's time stays honest"] = function()
+    local m
+    m = small{ U = function(t)
+        if t > 1 then m:run{ years = 5 } end
+        return 5e-4
+    end }
+    local msg = T.raises_here(function() return m:run{ years = 10 } end, "is running already")
+    T.ok(msg:find("U(t)", 1, true))
+    -- the failed run simulated a little over 1 yr, and m.time says so
+    T.ok(m.time > 1 and m.time < 2, m.time)
+    for _, call in ipairs{
+        function() m:set_z(m:get("z")) end, function() m:set_U(1e-3) end,
+    } do
+        m = small{ U = function(t) if t > 0 then call() end return 5e-4 end }
+        T.raises_here(function() return m:run{ years = 10 } end, "is running already")
+    end
+end
+
+tests["a router may not be routed again from inside its own routing"] = function()
+    local rt = dfle.router.process{}
+    local m
+    local law = dfle.law.define{ rate = function(c, p) return 1e-4 * c.S^6 * c.F end,
+        integrand = function(h, v, lambda, p) rt:route(m); return h end }
+    m = small{ router = rt, law = law }
+    T.raises_here(function() return rt:route(m) end, "is running already")
+end
+
+return tests
