@@ -207,6 +207,43 @@ tests["model: a fluvial law with no finite steady profile is refused, not run to
            "n_s = 0.0014")
 end
 
+tests["strings with a NUL byte are refused, not cut short"] = function()
+    -- C strings end at NUL: "nul\0.csv" once wrote "nul", "direct\0junk"
+    -- selected the direct method, a parameter named "a\0b" crashed dfle.lhs.
+    local m = dfle.model{ channel = dfle.channel{ dx = 20 } }
+    local path = T.tmpname("nul") .. "\0.csv"
+    raises(function() return m:write_csv(path) end, "the path contains a NUL byte", "\\000")
+    T.eq(io.open(path:match("^[^%z]*")), nil) -- nothing was written under the cut name
+    raises(function() return m:run_to_steady{ method = "direct\0junk" } end,
+           "method contains a NUL byte")
+    raises(function() return m:get("S\0x") end, "field name contains a NUL byte")
+    raises(function() return m["time\0x"] end, "no field", "NUL byte")
+    raises(function() return dfle.model{ ["U\0x"] = 1 } end, "unknown parameter 'U\\000x'")
+    raises(function() return dfle.lhs{ n = 10, params = { ["a\0b"] = {0, 1} } } end,
+           "parameter name contains a NUL byte")
+    raises(function() return dfle.pawn{ file = "x\0.csv", inputs = {"a"}, output = "y" } end,
+           "file contains a NUL byte")
+    raises(function() return dfle.plot.profile(m, "p\0.png") end, "path contains a NUL byte")
+    raises(function() return dfle.law.define{ name = "a\0b", rate = function() return 0 end } end,
+           "name contains a NUL byte")
+end
+
+tests["an unknown key is shown short, however long it is"] = function()
+    local key = string.rep("k", 100000)
+    local msg = raises(function() return dfle.model{ [key] = 1 } end, "unknown parameter",
+                       "(100000 characters)")
+    T.ok(#msg < 1000, "message of " .. #msg .. " bytes")
+end
+
+tests["fluvial:rate and steady_slope refuse areas that give NaN"] = function()
+    local fl = dfle.fluvial.stochastic_threshold{}
+    raises(function() return fl:rate(-1e6, 0.1) end, "A (drainage area, m^2) must be a finite number > 0")
+    raises(function() return fl:rate(1e6, 0 / 0) end, "S (slope) must be a finite number")
+    raises(function() return fl:steady_slope(5e-4, -1) end, "A (drainage area")
+    raises(function() return fl:steady_slope(-5e-4, 1e6) end, "U (uplift rate")
+    T.close(fl:rate(1e6, 0.1), 2.4539e-10 * 1e6^1.4 * 0.1^(7 / 3), 1e-3)
+end
+
 tests["channel: geometry errors name the parameter"] = function()
     raises(function() return dfle.channel{ A0 = -5 } end, "A0")
     raises(function() return dfle.channel{ hack_exp = 0 } end, "hack_exp")

@@ -109,7 +109,7 @@ static double check_radius(lua_State *L, double radius, const char *fn)
 static int l_dem_read(lua_State *L)
 {
     static const char *const other[] = {"crs", NULL};
-    const char *path = luaL_checkstring(L, 1);
+    const char *path = dfle_lua_check_string(L, 1, "dem.read", "the path");
     double nodata = NAN, band = 1;
     const dfle_lua_param params[] = {{"nodata", &nodata}, {"band", &band}};
     dfle_dem_read_opts o;
@@ -130,7 +130,8 @@ static int l_dem_read(lua_State *L)
         if (t != LUA_TNIL && t != LUA_TSTRING)
             luaL_error(L, "dfle.dem.read: parameter 'crs' must be a string such as "
                           "\"EPSG:32611\", got %s", dfle_lua_typename(L, -1));
-        o.crs = lua_tostring(L, -1); /* kept alive by the options table */
+        if (t == LUA_TSTRING) /* kept alive by the options table */
+            o.crs = dfle_lua_check_string(L, -1, "dem.read", "crs");
     }
     u = dfle_lua_newobject(L, sizeof *u, DFLE_LUA_DEM, 0);
     if (dfle_dem_read(path, &o, &u->dem, &err) != DFLE_OK)
@@ -347,7 +348,7 @@ static const char *const profile_fields[] = {"E", "N", "x", "d", "z", "A", "S", 
 static int l_profile_get(lua_State *L)
 {
     dfle_profile *p = check_profile(L, 1);
-    const char *name = luaL_checkstring(L, 2);
+    const char *name = dfle_lua_check_string(L, 2, "dem:get", "the field name");
     size_t n = dfle_profile_size(p);
 
     for (int k = 0; profile_fields[k] != NULL; k++) {
@@ -386,7 +387,7 @@ static int l_profile_slope_area(lua_State *L)
 static int l_profile_write_csv(lua_State *L)
 {
     dfle_profile *p = check_profile(L, 1);
-    const char *path = luaL_checkstring(L, 2);
+    const char *path = dfle_lua_check_string(L, 2, "profile:write_csv", "the path");
     dfle_error err;
     if (dfle_profile_write_csv(p, path, &err) != DFLE_OK)
         return dfle_lua_raise(L, &err);

@@ -25,7 +25,7 @@ static const char *opt_string(lua_State *L, int idx, const char *key, const char
         if (t != LUA_TNIL && t != LUA_TSTRING)
             luaL_error(L, "dfle.%s: parameter '%s' must be a string, got %s", fn, key,
                        luaL_typename(L, -1));
-        s = lua_tostring(L, -1); /* stays valid: the table holds it */
+        s = t == LUA_TNIL ? NULL : dfle_lua_check_string(L, -1, fn, key); /* the table holds it */
         lua_pop(L, 1);
     }
     return s;
@@ -78,7 +78,7 @@ static int l_plot_slope_area(lua_State *L)
     int st;
 
     lua_settop(L, 4); /* scratch arrays go above the arguments */
-    path = luaL_checkstring(L, 2);
+    path = dfle_lua_check_string(L, 2, "plot.slope_area", "the path");
     check_opts(L, 4, "plot.slope_area", params, 1);
     title = opt_string(L, 4, "title", "plot.slope_area");
     dfle_lua_check_whole(L, nbins, "plot.slope_area", "nbins", 1, 1e6);
@@ -113,7 +113,7 @@ static int l_plot_slope_area(lua_State *L)
 static int l_plot_profile(lua_State *L)
 {
     dfle_model *m = dfle_lua_check_model(L, 1);
-    const char *path = luaL_checkstring(L, 2);
+    const char *path = dfle_lua_check_string(L, 2, "plot.profile", "the path");
     const char *title;
     const double *x, *z, *S;
     dfle_error err;
@@ -134,7 +134,7 @@ static int l_plot_profile(lua_State *L)
 static int l_plot_flow(lua_State *L)
 {
     dfle_model *m = dfle_lua_check_model(L, 1);
-    const char *path = luaL_checkstring(L, 3);
+    const char *path = dfle_lua_check_string(L, 3, "plot.flow", "the path");
     double e = 50.0;
     const dfle_lua_param params[] = {{"exaggeration", &e}};
     const size_t n = dfle_model_size(m);

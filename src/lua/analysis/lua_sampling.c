@@ -121,6 +121,8 @@ static const char **design_order(lua_State *L, int idx, int order_idx, size_t *n
         if (lua_type(L, -2) != LUA_TSTRING)
             luaL_error(L, "dfle.lhs: params are named (params = { k_df = {lo, hi}, ... }); "
                           "got a %s key", luaL_typename(L, -2));
+        /* A name is looked up again as a C string: "a\0b" would be "a". */
+        dfle_lua_check_string(L, -2, "lhs", "a parameter name");
         if (!lua_istable(L, -1))
             luaL_error(L, "dfle.lhs: parameter '%s': expected {lo, hi}, {lo, hi, log = true} "
                           "or {values = {...}}, got %s", lua_tostring(L, -2),
@@ -147,7 +149,7 @@ static const char **design_order(lua_State *L, int idx, int order_idx, size_t *n
             if (lua_rawgeti(L, order_idx, (lua_Integer)k + 1) != LUA_TSTRING)
                 luaL_error(L, "dfle.lhs: order[%d] must be a parameter name, got %s", (int)k + 1,
                            luaL_typename(L, -1));
-            names[k] = lua_tostring(L, -1);
+            names[k] = dfle_lua_check_string(L, -1, "lhs", "an order name");
             lua_pop(L, 1); /* the string is anchored by the order table */
             if (lua_getfield(L, idx, names[k]) == LUA_TNIL)
                 luaL_error(L, "dfle.lhs: order[%d] = '%s' is not in params", (int)k + 1,
@@ -330,7 +332,7 @@ static const char **input_names(lua_State *L, int idx, size_t *D)
         if (lua_rawgeti(L, idx, (lua_Integer)i + 1) != LUA_TSTRING)
             luaL_error(L, "dfle.pawn: inputs[%d] must be a column name, got %s", (int)i + 1,
                        luaL_typename(L, -1));
-        names[i] = lua_tostring(L, -1);
+        names[i] = dfle_lua_check_string(L, -1, "pawn", "an input name");
         lua_pop(L, 1);
         for (lua_Unsigned e = 0; e < i; e++)
             if (strcmp(names[e], names[i]) == 0)
@@ -501,7 +503,7 @@ static int l_pawn(lua_State *L)
     if (lua_getfield(L, 1, "output") != LUA_TSTRING) /* index 4 */
         luaL_error(L, "dfle.pawn: output (the output column name) must be a string, got %s",
                    dfle_lua_typename(L, -1));
-    output = lua_tostring(L, 4);
+    output = dfle_lua_check_string(L, 4, "pawn", "output");
     for (size_t d = 0; d < D; d++)
         if (strcmp(names[d], output) == 0)
             luaL_error(L, "dfle.pawn: '%s' is both the output and an input", output);
@@ -517,7 +519,7 @@ static int l_pawn(lua_State *L)
     if (!has_data) {
         if (lua_type(L, 5) != LUA_TSTRING)
             luaL_error(L, "dfle.pawn: file must be a path, got %s", dfle_lua_typename(L, 5));
-        file = lua_tostring(L, 5);
+        file = dfle_lua_check_string(L, 5, "pawn", "file");
     }
 
     xs = scratch(L, (D + 1) * sizeof *xs);

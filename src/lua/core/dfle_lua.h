@@ -137,6 +137,17 @@ void dfle_lua_read_params(lua_State *L, int idx, const char *fn,
                           const dfle_lua_param *params, size_t nparams,
                           const char *const *other_keys);
 
+/* The string at idx (a string or a number, as luaL_checkstring takes),
+ * refusing embedded NUL bytes: C would end it there without a word
+ * ("nul\0.csv" would write "nul", "direct\0junk" would select
+ * "direct").  `fn` and `what` name it in the error ("dfle.<fn>: <what>
+ * contains a NUL byte"). */
+const char *dfle_lua_check_string(lua_State *L, int idx, const char *fn, const char *what);
+/* Push `s` (len bytes) as it can be shown in a message: at most 60
+ * characters, NUL and control bytes as \ddd, "..." and the length after
+ * a cut; returns the pushed string. */
+const char *dfle_lua_shown(lua_State *L, const char *s, size_t len);
+
 /* Raise err's message as "dfle.<message>" at the caller's file:line. */
 int dfle_lua_raise(lua_State *L, const dfle_error *err);
 

@@ -34,7 +34,9 @@ void *dfle_lua_shell_new(lua_State *L, const dfle_lua_shell_def *def)
         if (t != LUA_TSTRING)
             luaL_error(L, "dfle.%s.define: 'name' must be a string, got %s", def->kind,
                        dfle_lua_typename(L, -1));
-        name = lua_tostring(L, -1); /* the definition table keeps it */
+        lua_pushfstring(L, "%s.define", def->kind);
+        name = dfle_lua_check_string(L, -2, lua_tostring(L, -1), "name"); /* the table keeps it */
+        lua_pop(L, 1);
     }
     lua_pop(L, 1);
 

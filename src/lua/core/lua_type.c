@@ -150,6 +150,13 @@ static int object_index(lua_State *L)
     if (lua_rawget(L, lua_upvalueindex(1)) != LUA_TNIL)
         return 1;
     lua_pop(L, 1);
+    if (lua_type(L, 2) == LUA_TSTRING) {
+        size_t len;
+        const char *key = lua_tolstring(L, 2, &len);
+        if (strlen(key) != len) /* "time\0x" must not read as time */
+            return luaL_error(L, "%s: no field '%s' (a NUL byte in the name)", t->name,
+                              dfle_lua_shown(L, key, len));
+    }
     if (t->property != NULL && lua_type(L, 2) == LUA_TSTRING)
         return t->property(L);
     return 0;

@@ -45,6 +45,40 @@ static int is_known(const char *key, const dfle_lua_param *params, size_t np,
     return 0;
 }
 
+const char *dfle_lua_shown(lua_State *L, const char *s, size_t len)
+{
+    luaL_Buffer b;
+    size_t k;
+    luaL_buffinit(L, &b);
+    for (k = 0; k < len && k < 60; k++) {
+        unsigned char c = (unsigned char)s[k];
+        if (c < 0x20 || c == 0x7f) {
+            char esc[8];
+            snprintf(esc, sizeof esc, "\\%03u", c);
+            luaL_addstring(&b, esc);
+        } else {
+            luaL_addchar(&b, (char)c);
+        }
+    }
+    if (k < len) {
+        char more[48];
+        snprintf(more, sizeof more, "... (%zu characters)", len);
+        luaL_addstring(&b, more);
+    }
+    luaL_pushresult(&b);
+    return lua_tostring(L, -1);
+}
+
+const char *dfle_lua_check_string(lua_State *L, int idx, const char *fn, const char *what)
+{
+    size_t len;
+    const char *s = luaL_checklstring(L, idx, &len);
+    if (strlen(s) != len)
+        luaL_error(L, "dfle.%s: %s contains a NUL byte ('%s')", fn, what,
+                   dfle_lua_shown(L, s, len));
+    return s;
+}
+
 void dfle_lua_read_params(lua_State *L, int idx, const char *fn,
                           const dfle_lua_param *params, size_t np,
                           const char *const *other)
@@ -61,10 +95,13 @@ void dfle_lua_read_params(lua_State *L, int idx, const char *fn,
         if (lua_type(L, -2) != LUA_TSTRING)
             luaL_error(L, "dfle.%s: parameters are named (key = value); got a %s key", fn,
                        luaL_typename(L, -2));
-        key = lua_tostring(L, -2);
-        if (!is_known(key, params, np, other)) {
+        size_t klen;
+        key = lua_tolstring(L, -2, &klen);
+        /* A NUL ends the key for strcmp: "U\0x" would pass for U. */
+        if (strlen(key) != klen || !is_known(key, params, np, other)) {
+            const char *shown = dfle_lua_shown(L, key, klen);
             push_known_keys(L, params, np, other);
-            luaL_error(L, "dfle.%s: unknown parameter '%s' (known: %s)", fn, key,
+            luaL_error(L, "dfle.%s: unknown parameter '%s' (known: %s)", fn, shown,
                        lua_tostring(L, -1));
         }
         lua_pop(L, 1);

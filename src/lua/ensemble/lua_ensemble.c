@@ -175,7 +175,7 @@ static int l_gather(lua_State *L)
     if (lua_getfield(L, 1, "out") != LUA_TSTRING)
         return luaL_error(L, "dfle.gather: parameter 'out' must be a file name, got %s",
                           luaL_typename(L, -1));
-    out = lua_tostring(L, 2);
+    out = dfle_lua_check_string(L, 2, "gather", "out");
     lua_getfield(L, 1, "files");
     if ((lua_isnil(L, 3)) == (shards == 0))
         return luaL_error(L, "dfle.gather: give either 'files' (an array of file names) or "
@@ -197,7 +197,7 @@ static int l_gather(lua_State *L)
     for (size_t i = 0; i < nf; i++) {
         if (lua_geti(L, 3, (lua_Integer)i + 1) != LUA_TSTRING)
             return luaL_error(L, "dfle.gather: files[%d] must be a file name", (int)i + 1);
-        files[i] = lua_tostring(L, -1);
+        files[i] = dfle_lua_check_string(L, -1, "gather", "a file name");
         lua_pop(L, 1); /* still referenced by the files table */
     }
     if (dfle_ens_gather(files, nf, out, NULL, &err) != DFLE_OK)

@@ -269,7 +269,8 @@ void dfle_lua_ens_read_spec(lua_State *L, int arg, const char *fn, spec *s,
     if (lua_getfield(L, arg, "out") != LUA_TSTRING)
         luaL_error(L, "dfle.%s: parameter 'out' (the CSV file of results) must be a file name, "
                       "got %s", fn, luaL_typename(L, -1));
-    dfle_lua_ens_push_shard_path(L, lua_tostring(L, -1), host ? host->shard_i : 0, host ? host->shard_n : 0);
+    dfle_lua_ens_push_shard_path(L, dfle_lua_check_string(L, -1, fn, "out"), host ? host->shard_i : 0,
+                                 host ? host->shard_n : 0);
     lua_setfield(L, ctx, "out");
     lua_pop(L, 1);
 
@@ -312,7 +313,7 @@ void dfle_lua_ens_read_spec(lua_State *L, int arg, const char *fn, spec *s,
         if (lua_geti(L, outputs, (lua_Integer)k) != LUA_TSTRING)
             luaL_error(L, "dfle.%s: outputs[%d] must be a name, got %s", fn, (int)k,
                        luaL_typename(L, -1));
-        o = lua_tostring(L, -1);
+        o = dfle_lua_check_string(L, -1, fn, "an output name");
         check_column_name(L, fn, "output", o);
         for (size_t j = 1; j <= s->nparams; j++) {
             lua_geti(L, names, (lua_Integer)j);

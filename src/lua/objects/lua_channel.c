@@ -150,7 +150,8 @@ static const char *const channel_arrays[] = {"x", "A", "w", NULL};
 static int l_channel_get(lua_State *L)
 {
     dfle_channel *ch = dfle_lua_check_channel(L, 1);
-    int which = luaL_checkoption(L, 2, NULL, channel_arrays);
+    int which = (dfle_lua_check_string(L, 2, "channel:get", "the array name"),
+                 luaL_checkoption(L, 2, NULL, channel_arrays));
     const double *v = which == 0   ? dfle_channel_x(ch)
                       : which == 1 ? dfle_channel_A(ch)
                                    : dfle_channel_w(ch);

@@ -7,6 +7,7 @@
  */
 #include "lua/core/dfle_lua.h"
 
+#include <math.h>
 #include <stdio.h>
 #include <string.h>
 
@@ -93,18 +94,35 @@ static int l_fluvial_property(lua_State *L)
 }
 
 /* fl:rate(A, S) -> E_f [m/yr]; fl:steady_slope(U, A) -> Eq. (26). */
+/* The number at idx, finite and > 0 (or >= 0): a drainage area, an
+ * uplift rate.  A negative area gave NaN (A^m). */
+static double check_positive(lua_State *L, int idx, const char *fn, const char *what, int zero_ok)
+{
+    double v = luaL_checknumber(L, idx);
+    if (!(isfinite(v) && (zero_ok ? v >= 0 : v > 0)))
+        luaL_error(L, "dfle.%s: %s must be a finite number %s 0, got %s", fn, what,
+                   zero_ok ? ">=" : ">", dfle_lua_number_text(L, v));
+    return v;
+}
+
 static int l_fluvial_rate(lua_State *L)
 {
     dfle_fluvial *fl = dfle_lua_check_fluvial(L, 1);
-    lua_pushnumber(L, dfle_fluvial_rate(fl, luaL_checknumber(L, 2), luaL_checknumber(L, 3)));
+    double A = check_positive(L, 2, "fluvial:rate", "A (drainage area, m^2)", 0);
+    double S = luaL_checknumber(L, 3);
+    if (!isfinite(S))
+        luaL_error(L, "dfle.fluvial:rate: S (slope) must be a finite number, got %s",
+                   dfle_lua_number_text(L, S));
+    lua_pushnumber(L, dfle_fluvial_rate(fl, A, S));
     return 1;
 }
 
 static int l_fluvial_steady_slope(lua_State *L)
 {
     dfle_fluvial *fl = dfle_lua_check_fluvial(L, 1);
-    lua_pushnumber(L, dfle_fluvial_steady_slope(fl, luaL_checknumber(L, 2),
-                                                luaL_checknumber(L, 3)));
+    double U = check_positive(L, 2, "fluvial:steady_slope", "U (uplift rate, m/yr)", 0);
+    double A = check_positive(L, 3, "fluvial:steady_slope", "A (drainage area, m^2)", 0);
+    lua_pushnumber(L, dfle_fluvial_steady_slope(fl, U, A));
     return 1;
 }
 

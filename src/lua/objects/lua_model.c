@@ -300,6 +300,7 @@ static int model_run(lua_State *L, int steady)
         if (lua_type(L, -1) != LUA_TSTRING)
             luaL_error(L, "dfle.%s: parameter 'method' must be a string, got %s", fn,
                        dfle_lua_typename(L, -1));
+        dfle_lua_check_string(L, -1, fn, "method");
         o.method = luaL_checkoption(L, -1, NULL, methods);
         if (!steady && o.method == DFLE_METHOD_DIRECT)
             luaL_error(L, "dfle.model:run: method 'direct' finds steady states only; use "
@@ -377,7 +378,7 @@ static void push_field_names(lua_State *L)
 static int l_model_get(lua_State *L)
 {
     dfle_model *m = dfle_lua_check_model(L, 1);
-    const char *name = luaL_checkstring(L, 2);
+    const char *name = dfle_lua_check_string(L, 2, "model:get", "the field name");
     int f = dfle_field_lookup(name);
     const double *v;
 
@@ -404,7 +405,7 @@ static int l_model_fields(lua_State *L)
 static int l_model_write_csv(lua_State *L)
 {
     dfle_model *m = dfle_lua_check_model(L, 1);
-    const char *path = luaL_checkstring(L, 2);
+    const char *path = dfle_lua_check_string(L, 2, "model:write_csv", "the path");
     dfle_error err;
     int st;
     dfle_lua_begin_use(L, 1, "dfle.model:write_csv");
