@@ -19,6 +19,7 @@
 #ifndef DFLE_SOLVER_H
 #define DFLE_SOLVER_H
 
+#include <signal.h>
 #include <stddef.h>
 #include "dfle/error.h"
 #include "dfle/model.h"
@@ -93,6 +94,10 @@ typedef struct dfle_run_opts {
      * with tol times the current U. */
     int (*uplift)(void *ud, double t, double *U, dfle_error *err);
     void *uplift_ud;
+    /* Optional: a flag a signal handler sets (SIGINT).  When it is
+     * nonzero the run stops before its next step, keeping the state it
+     * reached, with reason DFLE_STOP_INTERRUPTED (not an error). */
+    const volatile sig_atomic_t *interrupt;
 } dfle_run_opts;
 
 /* tol = 1e-3, max_time = 2e7 yr, max_steps = 1e7 (about ten minutes on
@@ -103,9 +108,10 @@ void dfle_run_opts_default(dfle_run_opts *o);
 enum dfle_stop_reason {
     DFLE_STOP_STEADY = 0, /* the steady-state criterion was met     */
     DFLE_STOP_TIME = 1,   /* max_time was reached                   */
-    DFLE_STOP_STEPS = 2   /* max_steps was reached                  */
+    DFLE_STOP_STEPS = 2,  /* max_steps was reached                  */
+    DFLE_STOP_INTERRUPTED = 3 /* the interrupt flag was raised      */
 };
-const char *dfle_stop_reason_name(int reason); /* "steady", "time", "steps" */
+const char *dfle_stop_reason_name(int reason); /* "steady", "time", "steps", "interrupted" */
 
 typedef struct dfle_run_result {
     int converged;     /* 1 when reason == DFLE_STOP_STEADY            */

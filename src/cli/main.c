@@ -36,6 +36,31 @@
 
 static const char *progname = "dfle";
 
+/* The signal that interrupted the script (SIGINT, SIGTERM), or 0.  The
+ * library only reads it: a run in progress stops at its next step and
+ * keeps its state, nothing new starts, and the script's own code after
+ * the run still writes what it has.  A second signal ends the process
+ * at once (the handler restores the default), as users expect of a
+ * second Ctrl-C; ensemble rows are whole lines either way. */
+static volatile sig_atomic_t interrupted;
+
+static void on_interrupt(int sig)
+{
+    interrupted = sig;
+    signal(sig, SIG_DFL);
+}
+
+static void catch_interrupts(void)
+{
+    struct sigaction sa;
+    memset(&sa, 0, sizeof sa);
+    sa.sa_handler = on_interrupt;
+    sigemptyset(&sa.sa_mask);
+    sa.sa_flags = SA_RESTART;
+    sigaction(SIGINT, &sa, NULL);
+    sigaction(SIGTERM, &sa, NULL);
+}
+
 static void usage(FILE *out)
 {
     fprintf(out,
@@ -235,6 +260,7 @@ static int pmain(lua_State *L)
     c->ens.open_state = open_worker; /* ensembles */
     c->ens.ud = c;
     dfle_lua_set_ensemble_host(L, &c->ens);
+    dfle_lua_set_interrupt(L, &interrupted);
     /* arg table: arg[-k] = options and program, arg[0] = script. */
     set_arg_table(L, c);
 
@@ -338,19 +364,35 @@ int main(int argc, char **argv)
 #endif
         return EXIT_FAILURE;
     }
+    catch_interrupts();
     lua_pushcfunction(L, msghandler);
     lua_pushcfunction(L, pmain);
     lua_pushlightuserdata(L, &c);
     status = lua_pcall(L, 1, 0, 1);
-    if (status != LUA_OK) {
+    if (c.hooks.finish != NULL)
+        c.hooks.finish(c.hooks.ud); /* no bar left on the line */
+    if (interrupted) {
+        /* One line: what stopped, and what was kept.  The error that
+         * ended the script, if any, is the interruption itself. */
+        const char *note = dfle_lua_interrupt_note(L);
+        const char *msg = status != LUA_OK ? lua_tostring(L, -1) : NULL;
+        if (msg != NULL && strstr(msg, "interrupted (") == NULL)
+            fprintf(stderr, "%s: %s\n", progname, msg); /* another error, after it */
+        fprintf(stderr, "%s: interrupted by %s: %s; files written before are complete (dfle "
+                        "writes whole files or none)\n",
+                progname, interrupted == SIGTERM ? "SIGTERM" : "SIGINT",
+                note != NULL ? note : "nothing was running");
+        status = 128 + interrupted;
+    } else if (status != LUA_OK) {
         const char *msg = lua_tostring(L, -1);
-        if (c.hooks.finish != NULL)
-            c.hooks.finish(c.hooks.ud);
         fprintf(stderr, "%s: %s\n", progname, msg != NULL ? msg : "(error object is not a string)");
+        status = EXIT_FAILURE;
+    } else {
+        status = EXIT_SUCCESS;
     }
     lua_close(L);
 #ifdef DFLE_MPI
     dfle_mpi_finish(0);
 #endif
-    return status == LUA_OK ? EXIT_SUCCESS : EXIT_FAILURE;
+    return status;
 }

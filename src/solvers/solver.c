@@ -30,6 +30,7 @@ const char *dfle_stop_reason_name(int reason)
     case DFLE_STOP_STEADY: return "steady";
     case DFLE_STOP_TIME: return "time";
     case DFLE_STOP_STEPS: return "steps";
+    case DFLE_STOP_INTERRUPTED: return "interrupted";
     default: return "unknown";
     }
 }
@@ -107,6 +108,13 @@ int dfle_solver_run(dfle_model *m, const dfle_run_opts *o, dfle_run_result *res,
     if (opts.method == DFLE_METHOD_AUTO)
         opts.method = o->tol > 0 ? DFLE_METHOD_DIRECT : DFLE_METHOD_EXPLICIT;
     res->method = opts.method;
+    if (o->interrupt != NULL && *o->interrupt) {
+        /* Interrupted before it began: nothing to do, nothing changed. */
+        res->reason = DFLE_STOP_INTERRUPTED;
+        if (dfle_model_is_evaluated(m) || (st = dfle_model_evaluate(m, err)) == DFLE_OK)
+            res->rate_ratio = dfle_model_rate_ratio(m);
+        return st == DFLE_OK ? DFLE_OK : st;
+    }
     if (opts.method != DFLE_METHOD_DIRECT)
         return methods[opts.method]->run(m, &opts, res, err);
 

@@ -90,6 +90,10 @@ int dfle_stepping_run(dfle_model *m, const dfle_run_opts *o, dfle_advance_fn adv
             res->reason = DFLE_STOP_STEPS;
             break;
         }
+        if (o->interrupt != NULL && *o->interrupt) {
+            res->reason = DFLE_STOP_INTERRUPTED;
+            break;
+        }
         /* Land exactly on the end of the run and on every record time. */
         limit = o->max_time - t;
         if (res->n_recorded < o->n_record && o->record_times[res->n_recorded] - t < limit)

@@ -115,6 +115,37 @@ tests["file-size limit: write_csv fails with the reason and keeps the old file"]
     f:close()
 end
 
+tests["SIGINT and SIGTERM: the run stops, returns what it has, one line, 130/143"] = function()
+    -- U(t) signals dfle itself 50 years in (through popen: os.execute
+    -- ignores SIGINT while its shell runs).  The run returns at the next
+    -- step with reason "interrupted" and its records so far; the script
+    -- can still write them; the next run does not start.
+    need_binary()
+    for sig, status in pairs{ INT = 130, TERM = 143 } do
+        local csv = T.tmpname(".csv")
+        local script = T.tmpname(".lua")
+        T.write_file(script, ([[
+local sent = false
+local m = dfle.model{ channel = dfle.channel{ dx = 20 }, U = function(t)
+  if t > 50 and not sent then sent = true; io.popen("kill -%s $PPID"):close() end
+  return 5e-4 end }
+local r = m:run{ years = 1e6, record = { 0, 10, 1e5 } }
+print("reason=" .. r.reason .. " records=" .. #r.records .. " t=" .. m.time)
+m:write_csv(%q)
+m:run{ years = 10 }
+print("not reached")
+]]):format(sig, csv))
+        local out, ok, code = sh(q(T.dfle) .. " -q " .. q(script))
+        T.eq(ok, nil)
+        T.eq(code, status, out)
+        T.has(out, "reason=interrupted records=2", "interrupted by SIG" .. sig,
+              "model:run stopped at t = ", "files written before are complete")
+        T.ok(not out:find("not reached"), out)
+        local _, lines = T.read_file(csv):gsub("\n", "")
+        T.ok(lines > 10, "the profile was written")
+    end
+end
+
 tests["missing script file: non-zero exit with a clear message"] = function()
     need_binary()
     local path = T.tmpname() .. "-does-not-exist.lua"

@@ -23,6 +23,7 @@
 #ifndef DFLE_LUA_INTERNAL_H
 #define DFLE_LUA_INTERNAL_H
 
+#include <signal.h>
 #include <stddef.h>
 
 #include <lauxlib.h>
@@ -212,6 +213,21 @@ typedef struct dfle_lua_progress {
     void *ud;
 } dfle_lua_progress;
 void dfle_lua_set_progress(lua_State *L, const dfle_lua_progress *p);
+
+/* Interruption (SIGINT/SIGTERM), installed by the CLI: `flag` holds the
+ * signal number once one arrived (0 before).  A run in progress stops at
+ * its next step and returns what it has (reason "interrupted"); starting
+ * a run or an ensemble afterwards raises; the note says what was kept,
+ * for the host's last line. */
+void dfle_lua_set_interrupt(lua_State *L, const volatile sig_atomic_t *flag);
+const volatile sig_atomic_t *dfle_lua_get_interrupt(lua_State *L);
+/* The signal number if interrupted, else 0. */
+int dfle_lua_interrupted(lua_State *L);
+/* Raise "dfle.<what>: interrupted (SIGINT) ..." if interrupted. */
+void dfle_lua_check_interrupt(lua_State *L, const char *what);
+/* Record / read what the interrupted work kept (one sentence). */
+void dfle_lua_set_interrupt_note(lua_State *L, const char *fmt, ...);
+const char *dfle_lua_interrupt_note(lua_State *L);
 const dfle_lua_progress *dfle_lua_get_progress(lua_State *L);
 
 /* The dfle module table: recorded by luaopen_dfle, pushed by the

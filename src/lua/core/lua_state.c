@@ -9,9 +9,14 @@
  */
 #include "lua/core/dfle_lua.h"
 
+#include <signal.h>
+#include <stdarg.h>
+
 /* Registry keys: their addresses are the keys. */
 static const char module_key = 'm';
 static const char progress_key = 'p';
+static const char interrupt_key = 'i';
+static const char interrupt_note_key = 'n';
 static const char epoch_key = 'e';
 
 void dfle_lua_set_module(lua_State *L, int idx)
@@ -70,3 +75,45 @@ unsigned long *dfle_lua_epoch(lua_State *L)
 }
 
 void dfle_lua_touch(lua_State *L) { ++*dfle_lua_epoch(L); }
+
+void dfle_lua_set_interrupt(lua_State *L, const volatile sig_atomic_t *flag)
+{
+    dfle_lua_set_pointer(L, &interrupt_key, (const void *)flag);
+}
+
+const volatile sig_atomic_t *dfle_lua_get_interrupt(lua_State *L)
+{
+    return dfle_lua_get_pointer(L, &interrupt_key);
+}
+
+int dfle_lua_interrupted(lua_State *L)
+{
+    const volatile sig_atomic_t *f = dfle_lua_get_interrupt(L);
+    return f != NULL ? (int)*f : 0;
+}
+
+void dfle_lua_check_interrupt(lua_State *L, const char *what)
+{
+    int sig = dfle_lua_interrupted(L);
+    if (sig != 0)
+        luaL_error(L, "dfle.%s: interrupted (%s): not started", what,
+                   sig == SIGTERM ? "SIGTERM" : "SIGINT");
+}
+
+void dfle_lua_set_interrupt_note(lua_State *L, const char *fmt, ...)
+{
+    va_list ap;
+    va_start(ap, fmt);
+    lua_pushvfstring(L, fmt, ap);
+    va_end(ap);
+    lua_rawsetp(L, LUA_REGISTRYINDEX, &interrupt_note_key);
+}
+
+const char *dfle_lua_interrupt_note(lua_State *L)
+{
+    const char *s;
+    lua_rawgetp(L, LUA_REGISTRYINDEX, &interrupt_note_key);
+    s = lua_tostring(L, -1); /* the registry keeps it */
+    lua_pop(L, 1);
+    return s;
+}

@@ -81,6 +81,7 @@ static int l_ensemble(lua_State *L)
         return 1;
     }
 
+    dfle_lua_check_interrupt(L, "ensemble");
     box = dfle_lua_ens_new_box(L);
     lua_getfield(L, ctx, "meta");
     lua_getfield(L, ctx, "header");
@@ -118,8 +119,12 @@ static int l_ensemble(lua_State *L)
     } else if (nw <= 1) {
         size_t i, failed = 0;
         double t0 = dfle_lua_ens_now();
-        while (dfle_ens_queue_next(box->queue, &i)) {
+        while (!dfle_lua_interrupted(L) && dfle_ens_queue_next(box->queue, &i)) {
             failed += (size_t)dfle_lua_ens_sample_row(L, ctx, i);
+            /* A sample cut short by the interrupt is not a result: its
+             * row is dropped, and a resumed run does it again. */
+            if (dfle_lua_interrupted(L))
+                break;
             if (dfle_ens_file_append(box->file, i, lua_tostring(L, -1), &err) != DFLE_OK)
                 return luaL_error(L, "dfle.ensemble: %s", err.msg);
             lua_pop(L, 1);
@@ -138,6 +143,7 @@ static int l_ensemble(lua_State *L)
         pl.header = lua_tostring(L, -1);
         pl.file = box->file;
         pl.queue = box->queue;
+        pl.interrupt = dfle_lua_get_interrupt(L);
         dfle_lua_ens_run_threads(L, &pl, nw, total);
         ran = pl.done;
         if (pl.error) {
@@ -149,9 +155,16 @@ static int l_ensemble(lua_State *L)
     }
     {
         dfle_ens_file *f = box->file;
+        size_t kept = dfle_ens_file_ndone(f);
         box->file = NULL;
         if (dfle_ens_file_close(f, 1, &err) != DFLE_OK)
             return luaL_error(L, "dfle.ensemble: %s", err.msg);
+        if (dfle_lua_interrupted(L) && ran < total) {
+            dfle_lua_set_interrupt_note(L, "dfle.ensemble stopped taking samples; %d finished "
+                                           "rows are in %s, and running the script again "
+                                           "resumes it", (int)kept, path);
+            dfle_lua_check_interrupt(L, "ensemble");
+        }
     }
     dfle_lua_ens_push_result(L, "ensemble", path, host ? host->shard_i : 0, host ? host->shard_n : 0,
                 (lua_Integer)ran);

@@ -51,6 +51,9 @@ typedef struct pool {
     int active;
     int error;
     char msg[DFLE_ERROR_MSG_MAX];
+    /* The main state's interrupt flag (dfle_lua_set_interrupt), or NULL:
+     * once it is up, no worker takes another sample. */
+    const volatile sig_atomic_t *interrupt;
 } pool;
 
 typedef struct worker_mode {

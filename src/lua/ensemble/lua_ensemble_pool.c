@@ -122,6 +122,10 @@ int dfle_lua_ensemble_serve(lua_State *L, int nargs, long long call,
 static int pool_next(void *ud, size_t *index)
 {
     pool *pl = ud;
+    if (pl->interrupt != NULL && *pl->interrupt) {
+        dfle_ens_queue_stop(pl->queue);
+        return 0;
+    }
     return dfle_ens_queue_next(pl->queue, index);
 }
 
@@ -205,6 +209,9 @@ void dfle_lua_ens_run_threads(lua_State *L, pool *pl, int nw, size_t total)
         struct timespec ts;
         size_t done = pl->done, failed = pl->failed;
         pthread_mutex_unlock(&pl->lock);
+        /* Interrupted: no new samples; those running finish and count. */
+        if (dfle_lua_interrupted(L))
+            dfle_ens_queue_stop(pl->queue);
         if (h->progress != NULL)
             h->progress(h->ud, done, total, failed, dfle_lua_ens_now() - t0);
         pthread_mutex_lock(&pl->lock);

@@ -329,6 +329,9 @@ static int model_run(lua_State *L, int steady)
         o.progress = prog->update;
         o.progress_ud = prog->ud;
     }
+    /* After an interrupt, nothing new starts (dfle_lua_set_interrupt). */
+    dfle_lua_check_interrupt(L, fn);
+    o.interrupt = dfle_lua_get_interrupt(L);
     /* A U(t) function stays on the stack for the run. */
     uplift_ctx uc = {L, 0};
     if (lua_getiuservalue(L, 1, UV_U) == LUA_TFUNCTION) {
@@ -345,6 +348,10 @@ static int model_run(lua_State *L, int steady)
         prog->finish(prog->ud);
     if (st != DFLE_OK)
         return dfle_lua_raise(L, &err);
+    if (res.reason == DFLE_STOP_INTERRUPTED)
+        dfle_lua_set_interrupt_note(L, "%s stopped at t = %f yr after %d steps and returned its "
+                                       "state so far (reason \"interrupted\")", fn,
+                                    dfle_model_time(m), (int)res.steps);
     push_result(L, &res);
     if (o.n_record > 0) {
         const size_t n = dfle_model_size(m);
