@@ -275,6 +275,21 @@ tests["pawn: non-finite values are errors, or dropped with drop_nan"] = function
         csv .. ":2: column 'status' is not numeric")
 end
 
+tests["pawn: a file with too few rows, or a byte-order mark, is handled by name"] = function()
+    local one = T.tmpname(".csv")
+    T.write_file(one, "x1,y\n1,2\n")
+    T.raises_here(function() return dfle.pawn{ file = one, inputs = { "x1" }, output = "y" } end,
+                  "at least 2 rows", one)
+    -- A spreadsheet's UTF-8 byte-order mark is not part of the first name.
+    local bom = T.tmpname(".csv")
+    local rows = { "\239\187\191x1,y" }
+    for i = 1, 40 do rows[#rows + 1] = ("%d,%g"):format(i, (i * 7919) % 41) end
+    T.write_file(bom, table.concat(rows, "\n") .. "\n")
+    local si, info = dfle.pawn{ file = bom, inputs = { "x1" }, output = "y", S = 4 }
+    T.eq(info.N, 40)
+    T.ok(si.x1.median >= 0)
+end
+
 tests["pawn: errors name the problem and the calling line"] = function()
     local f = SALIB .. "ties_N1001.csv"
     local data = { a = { 1, 2, 3 }, y = { 1, 2, 3 } }

@@ -562,8 +562,13 @@ static int l_pawn(lua_State *L)
     if (res == NULL)
         return luaL_error(L, "dfle.pawn: out of memory");
     b->p = res;
-    if (dfle_pawn(kept, D, xs, xs[D], &o, res, &err) != DFLE_OK)
+    if (dfle_pawn(kept, D, xs, xs[D], &o, res, &err) != DFLE_OK) {
+        /* Name the table the rows came from (a file, or data). */
+        if (file != NULL)
+            return luaL_error(L, "dfle.%s (in %s, %d of whose rows were used)", err.msg, file,
+                              (int)kept);
         return dfle_lua_raise(L, &err);
+    }
 
     lua_createtable(L, 0, (int)D);
     for (size_t d = 0; d < D; d++) {
