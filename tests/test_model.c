@@ -177,18 +177,19 @@ typedef struct mock {
     int huge_after;   /* rate() writes 1e308 at node 6 after this many calls */
 } mock;
 
-static int mock_route(void *s, const dfle_channel *ch, const double *S, dfle_flow *flow,
+static int mock_route(void *s, const dfle_network *net, const double *S, dfle_flow *flow,
                       dfle_error *err)
 {
     mock *mk = s;
     (void)S, (void)err;
     mk->routes++;
-    for (size_t i = 0; i < dfle_channel_size(ch); i++) {
+    for (size_t i = 0; i < dfle_network_size(net); i++) {
         flow->h[i] = 1.0;
         flow->t_p[i] = 1.0;
         flow->Theta[i] = 1.0;
+        flow->reach[i] = 1.0;
     }
-    flow->runout_end = dfle_channel_size(ch);
+    flow->runout_end = dfle_network_size(net);
     return 0;
 }
 

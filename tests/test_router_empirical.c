@@ -4,10 +4,12 @@
 #include <string.h>
 
 #include "dfle_test.h"
+#include "dfle/network.h"
 #include "dfle/router_empirical.h"
 
 typedef struct fixture {
     dfle_channel *ch;
+    dfle_network *net; /* the channel as routers see it */
     dfle_router *rt;
     dfle_flow flow;
     dfle_empirical_opts o;
@@ -21,6 +23,7 @@ static int setup(void **state)
     dfle_channel_opts_default(&co);
     dfle_empirical_opts_default(&f.o);
     if (dfle_channel_new(&co, &f.ch, NULL) != DFLE_OK ||
+        dfle_network_new_chain(f.ch, &f.net, NULL) != DFLE_OK ||
         dfle_router_new_empirical(&f.o, &f.rt, NULL) != DFLE_OK ||
         dfle_flow_init(&f.flow, dfle_channel_size(f.ch), NULL) != DFLE_OK)
         return -1;
@@ -33,6 +36,7 @@ static int teardown(void **state)
     fixture *f = *state;
     dfle_flow_release(&f->flow);
     dfle_router_free(f->rt);
+    dfle_network_free(f->net);
     dfle_channel_free(f->ch);
     return 0;
 }
@@ -57,7 +61,7 @@ static void properties_follow_eqs_12_to_17(void **state)
     assert_int_equal(n, 403);
     for (size_t i = 0; i < n; i++)
         S[i] = 0.8;
-    assert_ok(dfle_router_route(f->rt, f->ch, S, &f->flow, &err), &err);
+    assert_ok(dfle_router_route(f->rt, f->net, S, &f->flow, &err), &err);
     for (size_t i = 0; i < f->flow.runout_end; i += 13) {
         double M = 3000 * pow(1e-6 * A[i], 0.5);
         double Q = 0.135 * pow(M, 0.78);
@@ -95,7 +99,7 @@ static void runout_stops_where_tau_first_drops_below_tau_y(void **state)
             break;
         }
     assert_true(expected > 5 && expected < 300);
-    assert_ok(dfle_router_route(f->rt, f->ch, S, &f->flow, &err), &err);
+    assert_ok(dfle_router_route(f->rt, f->net, S, &f->flow, &err), &err);
     assert_int_equal(f->flow.runout_end, expected);
     assert_true(f->flow.tau[expected - 1] >= 300.0);
     assert_true(f->flow.Theta[expected - 1] >= 0.0);
@@ -113,7 +117,7 @@ static void reverse_slope_stops_the_flow(void **state)
     for (size_t i = 0; i < 403; i++)
         S[i] = 1.0;
     S[40] = -0.01;
-    assert_int_equal(dfle_router_route(f->rt, f->ch, S, &f->flow, NULL), DFLE_OK);
+    assert_int_equal(dfle_router_route(f->rt, f->net, S, &f->flow, NULL), DFLE_OK);
     assert_int_equal(f->flow.runout_end, 40);
 }
 
@@ -127,7 +131,7 @@ static void zero_yield_strength_reaches_everywhere(void **state)
     assert_int_equal(dfle_router_new_empirical(&o, &rt, NULL), DFLE_OK);
     for (size_t i = 0; i < 403; i++)
         S[i] = 0.02;
-    assert_int_equal(dfle_router_route(rt, f->ch, S, &f->flow, NULL), DFLE_OK);
+    assert_int_equal(dfle_router_route(rt, f->net, S, &f->flow, NULL), DFLE_OK);
     assert_int_equal(f->flow.runout_end, 403);
     assert_close(f->flow.Theta[402], 1.0, 0, 0);
     dfle_router_free(rt);
@@ -139,19 +143,24 @@ static void cache_follows_the_channel(void **state)
     double A[5] = {1e4, 2e4, 3e4, 4e4, 5e4}, w[5] = {1, 1, 1, 1, 1}, S[5];
     double A2[5] = {1e5, 2e5, 3e5, 4e5, 5e5};
     dfle_channel *c1, *c2;
+    dfle_network *n1, *n2;
     dfle_flow fl;
     (void)state;
     for (int i = 0; i < 5; i++)
         S[i] = 0.5;
     assert_int_equal(dfle_flow_init(&fl, 5, NULL), DFLE_OK);
     assert_int_equal(dfle_channel_new_from_arrays(5, 5, A, w, &c1, NULL), DFLE_OK);
-    assert_int_equal(dfle_router_route(f->rt, c1, S, &fl, NULL), DFLE_OK);
+    assert_int_equal(dfle_network_new_chain(c1, &n1, NULL), DFLE_OK);
+    assert_int_equal(dfle_router_route(f->rt, n1, S, &fl, NULL), DFLE_OK);
     assert_close(fl.M[0], 3000 * pow(1e-2, 0.5), 1e-12, 0);
+    dfle_network_free(n1);
     dfle_channel_free(c1);
     /* Same size, maybe the same address: the router must not reuse c1's terms. */
     assert_int_equal(dfle_channel_new_from_arrays(5, 5, A2, w, &c2, NULL), DFLE_OK);
-    assert_int_equal(dfle_router_route(f->rt, c2, S, &fl, NULL), DFLE_OK);
+    assert_int_equal(dfle_network_new_chain(c2, &n2, NULL), DFLE_OK);
+    assert_int_equal(dfle_router_route(f->rt, n2, S, &fl, NULL), DFLE_OK);
     assert_close(fl.M[0], 3000 * pow(1e-1, 0.5), 1e-12, 0);
+    dfle_network_free(n2);
     dfle_channel_free(c2);
     dfle_flow_release(&fl);
 }
@@ -194,10 +203,10 @@ static void parameters_without_a_finite_flow_are_named(void **state)
     o.c2 = 2.5e6;
     o.g = 1e-7;
     assert_ok(dfle_router_new_empirical(&o, &rt, &err), &err);
-    assert_int_equal(dfle_router_route(rt, f->ch, S, &f->flow, &err), DFLE_EINVAL);
+    assert_int_equal(dfle_router_route(rt, f->net, S, &f->flow, &err), DFLE_EINVAL);
     assert_msg_contains(err.msg, "peak discharge Q = c1 M^c2");
     assert_msg_contains(err.msg, "c2 = 2.5e+06");
-    assert_int_equal(dfle_router_node_flow(rt, f->ch, 3, 0.5, &f->flow, &goes_on, &err),
+    assert_int_equal(dfle_router_node_flow(rt, f->net, 3, 0.5, &f->flow, &goes_on, &err),
                      DFLE_EINVAL);
     assert_int_equal(goes_on, 0);
     dfle_router_free(rt);

@@ -10,6 +10,7 @@
 #include "dfle/law_power.h"
 #include "dfle/model.h"
 #include "dfle/solver.h"
+#include "dfle/network.h"
 #include "dfle/router_process.h"
 
 static dfle_channel *channel(double dx)
@@ -50,6 +51,7 @@ static int depth(void *s, double h, double v, double lambda, double *g, dfle_err
 
 typedef struct routed {
     dfle_channel *ch;
+    dfle_network *net;
     dfle_router *rt;
     dfle_flow flow;
     double *S;
@@ -60,18 +62,20 @@ static void route(routed *r, const dfle_process_opts *o, double dx,
 {
     dfle_error err;
     r->ch = channel(dx);
+    assert_int_equal(dfle_network_new_chain(r->ch, &r->net, NULL), DFLE_OK);
     r->S = malloc(dfle_channel_size(r->ch) * sizeof *r->S);
     fluvial_slopes(r->ch, r->S);
     assert_ok(dfle_router_new_process(o, &r->rt, &err), &err);
     assert_int_equal(dfle_flow_init(&r->flow, dfle_channel_size(r->ch), NULL), DFLE_OK);
     r->flow.integrand = g;
-    assert_ok(dfle_router_route(r->rt, r->ch, r->S, &r->flow, &err), &err);
+    assert_ok(dfle_router_route(r->rt, r->net, r->S, &r->flow, &err), &err);
 }
 
 static void unroute(routed *r)
 {
     dfle_flow_release(&r->flow);
     dfle_router_free(r->rt);
+    dfle_network_free(r->net);
     dfle_channel_free(r->ch);
     free(r->S);
 }
@@ -164,11 +168,13 @@ static void pile_on_a_gentle_channel_stays_put(void **state)
 {
     dfle_process_opts o;
     dfle_channel *ch = channel(10.0);
+    dfle_network *net;
     dfle_router *rt;
     dfle_flow flow;
     double S[202];
     dfle_error err;
     (void)state;
+    assert_int_equal(dfle_network_new_chain(ch, &net, NULL), DFLE_OK);
     dfle_process_opts_default(&o);
     o.flow.lambda0 = 0.0; /* full friction, mu_s = 0.384 */
     o.M0 = 20.0;          /* a thin pile: little edge pressure */
@@ -178,7 +184,7 @@ static void pile_on_a_gentle_channel_stays_put(void **state)
     assert_ok(dfle_router_new_process(&o, &rt, &err), &err);
     assert_int_equal(dfle_flow_init(&flow, 202, NULL), DFLE_OK);
     flow.integrand = one;
-    assert_ok(dfle_router_route(rt, ch, S, &flow, &err), &err);
+    assert_ok(dfle_router_route(rt, net, S, &flow, &err), &err);
     const dfle_process_report *rep = dfle_router_process_report(rt);
     assert_int_equal(rep->end, DFLE_PROCESS_REST);
     assert_int_equal(flow.runout_end, 0);
@@ -187,6 +193,7 @@ static void pile_on_a_gentle_channel_stays_put(void **state)
         assert_close(flow.h[i], 0.0, 0, 0);
     dfle_flow_release(&flow);
     dfle_router_free(rt);
+    dfle_network_free(net);
     dfle_channel_free(ch);
 }
 
@@ -197,11 +204,13 @@ static void routing_work_is_bounded(void **state)
 {
     dfle_process_opts o;
     dfle_channel *ch = channel(10.0);
+    dfle_network *net;
     dfle_router *rt;
     dfle_flow flow;
     double S[202];
     dfle_error err;
     (void)state;
+    assert_int_equal(dfle_network_new_chain(ch, &net, NULL), DFLE_OK);
     dfle_process_opts_default(&o);
     o.flow.cfl = 3.2e-9;
     o.max_steps = 2000;
@@ -209,7 +218,7 @@ static void routing_work_is_bounded(void **state)
     assert_ok(dfle_router_new_process(&o, &rt, &err), &err);
     assert_int_equal(dfle_flow_init(&flow, dfle_channel_size(ch), NULL), DFLE_OK);
     flow.integrand = one;
-    assert_int_equal(dfle_router_route(rt, ch, S, &flow, &err), DFLE_ENUMERIC);
+    assert_int_equal(dfle_router_route(rt, net, S, &flow, &err), DFLE_ENUMERIC);
     assert_non_null(strstr(err.msg, "max_steps = 2000"));
     assert_non_null(strstr(err.msg, "raise cfl"));
     dfle_router_free(rt);
@@ -217,6 +226,7 @@ static void routing_work_is_bounded(void **state)
     assert_int_equal(dfle_router_new_process(&o, &rt, &err), DFLE_EINVAL);
     assert_non_null(strstr(err.msg, "max_steps"));
     dfle_flow_release(&flow);
+    dfle_network_free(net);
     dfle_channel_free(ch);
 }
 
@@ -229,13 +239,14 @@ static void snapshots_are_taken_at_the_requested_times(void **state)
     (void)state;
     dfle_process_opts_default(&o);
     r.ch = channel(10.0);
+    assert_int_equal(dfle_network_new_chain(r.ch, &r.net, NULL), DFLE_OK);
     r.S = malloc(dfle_channel_size(r.ch) * sizeof *r.S);
     fluvial_slopes(r.ch, r.S);
     assert_ok(dfle_router_new_process(&o, &r.rt, &err), &err);
     assert_ok(dfle_router_process_set_snapshots(r.rt, 4, times, &err), &err);
     assert_int_equal(dfle_flow_init(&r.flow, dfle_channel_size(r.ch), NULL), DFLE_OK);
     r.flow.integrand = one;
-    assert_ok(dfle_router_route(r.rt, r.ch, r.S, &r.flow, &err), &err);
+    assert_ok(dfle_router_route(r.rt, r.net, r.S, &r.flow, &err), &err);
     const dfle_process_report *rep = dfle_router_process_report(r.rt);
     size_t n = rep->n;
     assert_int_equal(rep->n_snapshots, 4);
@@ -353,11 +364,12 @@ static void bad_parameters_and_missing_integrand(void **state)
 
     dfle_process_opts_default(&o);
     r.ch = channel(10.0);
+    assert_int_equal(dfle_network_new_chain(r.ch, &r.net, NULL), DFLE_OK);
     r.S = malloc(dfle_channel_size(r.ch) * sizeof *r.S);
     fluvial_slopes(r.ch, r.S);
     assert_int_equal(dfle_router_new_process(&o, &r.rt, NULL), DFLE_OK);
     assert_int_equal(dfle_flow_init(&r.flow, dfle_channel_size(r.ch), NULL), DFLE_OK);
-    assert_int_equal(dfle_router_route(r.rt, r.ch, r.S, &r.flow, &err), DFLE_EINVAL);
+    assert_int_equal(dfle_router_route(r.rt, r.net, r.S, &r.flow, &err), DFLE_EINVAL);
     assert_msg_contains(err.msg, "no Eq. (11) integrand");
     unroute(&r);
 }

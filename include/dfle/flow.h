@@ -3,8 +3,11 @@
  *
  * A router fills this record; an erosion law reads it.  It is the only
  * thing the two share, which is what lets any law run with any router.
- * Arrays hold n values (one per node).  The flow reaches nodes
- * [0, runout_end); beyond that every array is zero and E_df = 0.
+ * Arrays hold n values (one per node).  reach[i] counts the debris flows
+ * that go on at node i (0: none reaches it, or it stops there; every
+ * other array is then zero and E_df = 0).  On a 1D channel one flow
+ * starts at the head and the reached nodes are [0, runout_end); on a
+ * network every source releases one, and they join where they meet.
  *
  * Two kinds of router fill it:
  *  - bulk routers (the empirical one): one representative value per
@@ -27,7 +30,8 @@ extern "C" {
 
 typedef struct dfle_flow {
     size_t n;          /* number of nodes                                 */
-    size_t runout_end; /* first node the flow does not reach (n = all)    */
+    size_t runout_end; /* chain: first node the flow does not reach (n = all);
+                        * a network: the number of nodes reached        */
     double *M;         /* volume passing the node [m^3]                   */
     double *Q;         /* peak discharge [m^3/s]                          */
     double *h;         /* representative flow depth [m]                   */
@@ -35,6 +39,7 @@ typedef struct dfle_flow {
     double *t_p;       /* passage time [s]                                */
     double *tau;       /* basal shear stress [Pa]                         */
     double *Theta;     /* threshold factor 1 - tau_y/tau [-]              */
+    double *reach;     /* debris flows going on at the node [-]           */
 
     /* Time-resolved routers only (time_resolved = 1). */
     int time_resolved;
@@ -47,8 +52,8 @@ typedef struct dfle_flow {
 } dfle_flow;
 
 /* Doubles a flow's arrays take per node (M, Q, h, v, t_p, tau, Theta,
- * integral): the size of the block dfle_flow_bind carves. */
-#define DFLE_FLOW_ARRAYS 8
+ * reach, integral): the size of the block dfle_flow_bind carves. */
+#define DFLE_FLOW_ARRAYS 9
 
 /* Allocate zeroed arrays for n nodes (integral included); runout_end
  * starts at 0, time_resolved at 0, integrand NULL. */

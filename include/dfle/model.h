@@ -8,14 +8,23 @@
  * solver needs nothing private.  It borrows the channel, fluvial law,
  * router and erosion law, which must outlive it.  Rates are in m/yr.
  *
- * The model is solved on a receiver tree (Braun and Willett 2013): each
- * node drains to one receiver over a flow length L [m], base-level nodes
- * (the outlet) are their own receivers and are held fixed, and the stack
- * lists every node after its receiver.  The slope of node i is
+ * The model is solved on a drainage network (network.h): each node
+ * drains to one receiver over a flow length L [m], base-level nodes (the
+ * outlet) are their own receivers and are held fixed, and the stack lists
+ * every node after its receiver (Braun and Willett 2013).  The slope of
+ * node i is
  *   S_i = (z_i - z_receiver(i)) / L_i
  * (the paper's downstream difference; a base-level node repeats the slope
- * of its largest donor).  A 1D channel is the tree in which node i drains
- * to i + 1 over dx; nothing in the model or the solvers assumes i + 1.
+ * of its largest donor).  A 1D channel is the network in which node i
+ * drains to i + 1 over dx; nothing in the model or the solvers assumes
+ * i + 1.  A landscape changes the network's shape as its surface evolves;
+ * the model follows at its next evaluation.
+ *
+ * Debris flows start at every source of the network and join where they
+ * meet.  How the flows of several sources combine at a node is a choice
+ * (dfle_df_combine): the 1D rule (a node any flow reaches erodes at the
+ * frequency a single flow stands for, with properties from its own A and
+ * S), frequency growing with the number of flows, or a function of it.
  */
 #ifndef DFLE_MODEL_H
 #define DFLE_MODEL_H
@@ -25,6 +34,7 @@
 #include "dfle/error.h"
 #include "dfle/fluvial.h"
 #include "dfle/law.h"
+#include "dfle/network.h"
 #include "dfle/router.h"
 
 #ifdef __cplusplus
@@ -33,14 +43,29 @@ extern "C" {
 
 typedef struct dfle_model dfle_model;
 
+/* How the debris flows from several sources combine at a node where
+ * they meet: E_df is multiplied by a factor of the number c of flows that
+ * go on there (1 on a channel, whatever the rule). */
+enum dfle_df_combine {
+    DFLE_DF_ANY = 0,   /* factor 1: reached is reached (the 1D rule)    */
+    DFLE_DF_COUNT = 1, /* factor c: each flow erodes, frequencies add   */
+    DFLE_DF_CUSTOM = 2 /* factor frequency(ud, c, A)                    */
+};
+
 typedef struct dfle_model_opts {
-    const dfle_channel *channel; /* required                               */
+    const dfle_channel *channel; /* the domain: a channel, or ...          */
+    const dfle_network *network; /* ... a network (exactly one of the two) */
     const dfle_fluvial *fluvial; /* NULL: no fluvial erosion               */
     dfle_router *router;         /* NULL: no debris flows                  */
     dfle_law *law;               /* required when router is set            */
     double U;                    /* rock uplift rate [m/yr], > 0  (5e-4)   */
     double cfl;                  /* Courant number in (0, 1]      (0.5)    */
     double dt_max;               /* largest time step [yr], > 0   (1000)   */
+    int df_combine;              /* enum dfle_df_combine           (ANY)   */
+    /* DFLE_DF_CUSTOM: the factor for c flows at a node of area A [m^2];
+     * must be finite and >= 0. */
+    double (*df_frequency)(void *ud, double count, double A);
+    void *df_frequency_ud;
 } dfle_model_opts;
 
 void dfle_model_opts_default(dfle_model_opts *o);
@@ -51,7 +76,7 @@ void dfle_model_free(dfle_model *m);
 
 /* Fields of the current state, one value per node. */
 enum dfle_field {
-    DFLE_FIELD_X,     /* distance from the head [m]             */
+    DFLE_FIELD_X,     /* distance from the head [m] (a network: its x, or NaN) */
     DFLE_FIELD_A,     /* drainage area [m^2]                    */
     DFLE_FIELD_W,     /* channel width [m]                      */
     DFLE_FIELD_Z,     /* elevation above the outlet [m]         */
@@ -95,7 +120,8 @@ int dfle_model_set_z(dfle_model *m, const double *z, size_t n,
 double dfle_model_time(const dfle_model *m); /* total simulated years */
 double dfle_model_U(const dfle_model *m);
 int dfle_model_set_U(dfle_model *m, double U, dfle_error *err);
-const dfle_channel *dfle_model_channel(const dfle_model *m);
+const dfle_channel *dfle_model_channel(const dfle_model *m); /* NULL on a network */
+const dfle_network *dfle_model_network(const dfle_model *m);
 const dfle_fluvial *dfle_model_fluvial(const dfle_model *m);
 dfle_router *dfle_model_router(const dfle_model *m);
 dfle_law *dfle_model_law(const dfle_model *m);
@@ -134,8 +160,9 @@ int dfle_model_is_evaluated(const dfle_model *m);
 double dfle_model_rate_ratio(const dfle_model *m);
 size_t dfle_model_nonpositive_slopes(const dfle_model *m);
 size_t dfle_model_routings(const dfle_model *m);
-/* 1 if the last routed flow reaches node i (E_df may be nonzero). */
-int dfle_model_flow_reaches(const dfle_model *m, size_t i);
+/* The number of debris flows of the last routing that go on at node i
+ * (0: none; E_df is nonzero only where this is). */
+double dfle_model_flow_reaches(const dfle_model *m, size_t i);
 
 /* Kinematic-wave speed |dE/dS| [m/yr per unit slope] of every node for
  * the evaluated state (0 on base nodes): exact for the fluvial power
@@ -145,11 +172,12 @@ int dfle_model_flow_reaches(const dfle_model *m, size_t i);
 int dfle_model_celerity(dfle_model *m, const double **c, dfle_error *err);
 
 /* Erosion E_f + E_df [m/yr] at node i for slope S, the rest of the
- * profile as it is.  with_df = 0 leaves out debris flows.  For a router
- * routed every step the flow at the node is re-evaluated for S (its
- * node_flow op), and *goes_on says whether the flow, arriving, would go
- * on; for other routers the cached Eq. (11) factor is used. */
-int dfle_model_node_erosion(dfle_model *m, size_t i, double S, int with_df, double *E,
+ * profile as it is, with `flows` debris flows arriving (0 leaves them
+ * out; the combine rule weighs them).  For a router routed every step
+ * the flow at the node is re-evaluated for S (its node_flow op), and
+ * *goes_on says whether the flow, arriving, would go on; for other
+ * routers the cached Eq. (11) factor is used. */
+int dfle_model_node_erosion(dfle_model *m, size_t i, double S, double flows, double *E,
                             int *goes_on, dfle_error *err);
 
 /* CSV of every field, header row with units. */

@@ -1,8 +1,10 @@
 /*
  * router.h - the debris-flow router interface.
  *
- * A router turns the current channel profile into the bulk properties of
- * one debris flow at every node (flow.h).  Each kind of router is a
+ * A router turns the current profile of a drainage network (network.h:
+ * a 1D channel is one) into the bulk properties of the debris flows at
+ * every node (flow.h): one flow released at each source, travelling down
+ * the receivers.  Each kind of router is a
  * `static const dfle_router_ops` table plus a private state; the model
  * only ever calls through the table, so the empirical router, the
  * process-based router and routers written in Lua are interchangeable.
@@ -16,9 +18,9 @@
 #define DFLE_ROUTER_H
 
 #include <stddef.h>
-#include "dfle/channel.h"
 #include "dfle/error.h"
 #include "dfle/flow.h"
+#include "dfle/network.h"
 #include "dfle/param.h"
 
 #ifdef __cplusplus
@@ -27,10 +29,11 @@ extern "C" {
 
 typedef struct dfle_router_ops {
     const char *name;
-    /* Route one flow over the profile.  S holds n slopes [-] (S[n-1], at
-     * the outlet, repeats S[n-2]).  Fill every array of `flow` and its
-     * runout_end.  Required. */
-    int (*route)(void *state, const dfle_channel *ch, const double *S,
+    /* Route the flows over the profile.  S holds n slopes [-] (a base
+     * level repeats the slope of its largest donor).  Fill every array
+     * of `flow`, reach included, and its runout_end.  A router that only
+     * works on a single channel checks dfle_network_is_chain.  Required. */
+    int (*route)(void *state, const dfle_network *net, const double *S,
                  dfle_flow *flow, dfle_error *err);
     /* Optional.  Set *reroute nonzero when the slopes S have moved far
      * enough from S_routed, the slopes the caller last routed over, that
@@ -45,7 +48,7 @@ typedef struct dfle_router_ops {
      * to 1 if it goes on (e.g. tau >= tau_y), 0 if it stops here (then
      * Theta = 0).  The implicit and direct solvers need it to treat E_df
      * at a node as a function of that node's slope. */
-    int (*node_flow)(void *state, const dfle_channel *ch, size_t i, double S,
+    int (*node_flow)(void *state, const dfle_network *net, size_t i, double S,
                      dfle_flow *node, int *goes_on, dfle_error *err);
     /* Optional.  The parameters (param.h): write up to cap of them to
      * out and return how many there are. */
@@ -61,7 +64,7 @@ int dfle_router_new(const dfle_router_ops *ops, void *state,
                     dfle_router **out, dfle_error *err);
 void dfle_router_free(dfle_router *rt);
 
-int dfle_router_route(dfle_router *rt, const dfle_channel *ch,
+int dfle_router_route(dfle_router *rt, const dfle_network *net,
                       const double *S, dfle_flow *flow, dfle_error *err);
 /* *reroute = 1 if the router must be routed again for slopes S, having
  * last been routed over S_routed (always 1 without the op). */
@@ -69,7 +72,7 @@ int dfle_router_needs_reroute(dfle_router *rt, size_t n, const double *S_routed,
                               const double *S, int *reroute, dfle_error *err);
 /* The node_flow op, or DFLE_ESTATE (with a message) if the router has
  * none.  *goes_on receives its verdict. */
-int dfle_router_node_flow(dfle_router *rt, const dfle_channel *ch, size_t i,
+int dfle_router_node_flow(dfle_router *rt, const dfle_network *net, size_t i,
                           double S, dfle_flow *node, int *goes_on, dfle_error *err);
 
 /* The parameters (param.h), up to cap of them; returns how many there

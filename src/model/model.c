@@ -29,6 +29,7 @@ void dfle_model_opts_default(dfle_model_opts *o)
     o->U = 5e-4;
     o->cfl = 0.5;
     o->dt_max = 1000.0;
+    o->df_combine = DFLE_DF_ANY;
 }
 
 static const struct {
@@ -62,7 +63,7 @@ const char *dfle_field_unit(int f)
     return f >= 0 && f < DFLE_FIELD_COUNT ? field_info[f].unit : NULL;
 }
 
-enum { MODEL_ARRAYS = 12 };
+enum { MODEL_ARRAYS = 13 };
 
 static int model_alloc(dfle_model *m, dfle_error *err)
 {
@@ -78,12 +79,17 @@ static int model_alloc(dfle_model *m, dfle_error *err)
     m->E_df = block + 3 * n;
     m->dzdt = block + 4 * n;
     m->F = block + 5 * n;
-    m->KAm = block + 6 * n;
-    m->S_routed = block + 7 * n;
-    m->S_pert = block + 8 * n;
-    m->E_pert = block + 9 * n;
-    m->F_pert = block + 10 * n;
-    m->celerity = block + 11 * n;
+    m->S_routed = block + 6 * n;
+    m->S_pert = block + 7 * n;
+    m->E_pert = block + 8 * n;
+    m->F_pert = block + 9 * n;
+    m->celerity = block + 10 * n;
+    m->inv_len = block + 11 * n;
+    m->KAm = block + 12 * n;
+    m->reached.node = malloc(2 * n * sizeof *m->reached.node);
+    if (m->reached.node == NULL)
+        return dfle_error_set(err, DFLE_ENOMEM, "model: out of memory for %zu nodes", n);
+    m->reached_pert.node = m->reached.node + n;
     dfle_flow_bind(&m->node, m->node_block, 1);
     st = dfle_flow_init(&m->flow, n, err);
     if (st == DFLE_OK)
@@ -91,38 +97,21 @@ static int model_alloc(dfle_model *m, dfle_error *err)
     return st;
 }
 
-/* The channel as a receiver tree: node i drains to i + 1 over dx; the
- * outlet is the base level and repeats the slope of node n - 2. */
-static int topology_from_channel(dfle_model *m, dfle_error *err)
+void dfle_model_sync_domain(dfle_model *m)
 {
-    const size_t n = m->n;
-    const double dx = dfle_channel_dx(m->ch);
-    /* Four size_t arrays, two double arrays, then bytes: each part
-     * starts suitably aligned for what follows it. */
-    void *block = malloc(4 * n * sizeof(size_t) + 2 * n * sizeof(double) + n);
-
-    if (block == NULL)
-        return dfle_error_set(err, DFLE_ENOMEM, "model: out of memory for %zu nodes", n);
-    m->recv = block;
-    m->stack = m->recv + n;
-    m->base_donor = m->stack + n;
-    m->base = m->base_donor + n;
-    m->len = (double *)(void *)(m->base + n);
-    m->inv_len = m->len + n;
-    m->is_base = (unsigned char *)(m->inv_len + n);
-    for (size_t i = 0; i < n; i++) {
-        const int base = i + 1 == n;
-        m->recv[i] = base ? i : i + 1;
-        m->stack[i] = n - 1 - i; /* the outlet first */
-        m->base_donor[i] = base ? i - 1 : NO_NODE;
-        m->len[i] = dx;
-        m->inv_len[i] = 1.0 / dx;
-        m->is_base[i] = (unsigned char)base;
+    const unsigned long long v = dfle_network_version(m->net);
+    const double *L = dfle_network_length(m->net), *A = dfle_network_A(m->net);
+    if (v == m->net_version)
+        return;
+    for (size_t i = 0; i < m->n; i++)
+        m->inv_len[i] = 1.0 / L[i];
+    if (m->fl != NULL) {
+        /* K A^m is fixed per shape: hoist its pow() out of the step loop. */
+        for (size_t i = 0; i < m->n; i++)
+            m->KAm[i] = dfle_fluvial_K(m->fl) * pow(A[i], dfle_fluvial_m(m->fl));
     }
-    m->base[0] = n - 1;
-    m->n_base = 1;
-    m->uniform_len = 1;
-    return DFLE_OK;
+    m->net_version = v;
+    dfle_model_invalidate_flow(m); /* areas moved: the flow must be routed again */
 }
 
 #ifndef NDEBUG
@@ -131,15 +120,17 @@ static int topology_from_channel(dfle_model *m, dfle_error *err)
  * after its receiver in the stack and has a positive flow length. */
 static int topology_ok(const dfle_model *m)
 {
+    const size_t *stack = dfle_model_stack(m), *recv = dfle_model_receivers(m);
+    const double *len = dfle_model_flow_length(m);
     size_t *pos = malloc(m->n * sizeof *pos);
     int ok = 1;
     if (pos == NULL)
         return 1; /* cannot check: not a broken invariant */
     for (size_t k = 0; k < m->n; k++)
-        pos[m->stack[k]] = k;
+        pos[stack[k]] = k;
     for (size_t i = 0; ok && i < m->n; i++) {
-        size_t r = m->recv[i];
-        ok = r < m->n && (m->is_base[i] ? r == i : pos[r] < pos[i] && m->len[i] > 0);
+        size_t r = recv[i];
+        ok = r < m->n && (r == i || (pos[r] < pos[i] && len[i] > 0));
     }
     free(pos);
     return ok;
@@ -152,8 +143,10 @@ void dfle_model_free(dfle_model *m)
         return;
     dfle_flow_release(&m->flow);
     dfle_flow_release(&m->flow_pert);
-    free(m->z);    /* the field block starts at z       */
-    free(m->recv); /* the topology block starts at recv */
+    free(m->z); /* the field block starts at z */
+    free(m->reached.node);
+    free(m->g_block);
+    dfle_network_free(m->own_net);
     free(m);
 }
 
@@ -163,8 +156,9 @@ int dfle_model_new(const dfle_model_opts *o, dfle_model **out, dfle_error *err)
     int st;
 
     *out = NULL;
-    if (o->channel == NULL)
-        return dfle_error_set(err, DFLE_EINVAL, "model: channel is required");
+    if ((o->channel == NULL) == (o->network == NULL))
+        return dfle_error_set(err, DFLE_EINVAL,
+                              "model: channel is required (or a network: give exactly one)");
     if (o->router != NULL && o->law == NULL)
         return dfle_error_set(err, DFLE_EINVAL,
                               "model: a debris-flow router needs an erosion law (law)");
@@ -175,6 +169,10 @@ int dfle_model_new(const dfle_model_opts *o, dfle_model **out, dfle_error *err)
     if (!(isfinite(o->dt_max) && o->dt_max > 0))
         return dfle_error_set(err, DFLE_EINVAL, "model: dt_max must be > 0 yr (got %g)",
                               o->dt_max);
+    if (o->df_combine < DFLE_DF_ANY || o->df_combine > DFLE_DF_CUSTOM ||
+        (o->df_combine == DFLE_DF_CUSTOM && o->df_frequency == NULL))
+        return dfle_error_set(err, DFLE_EINVAL, "model: df_combine must be ANY, COUNT or CUSTOM "
+                              "with a frequency function (got %d)", o->df_combine);
 
     m = calloc(1, sizeof *m);
     if (m == NULL)
@@ -186,20 +184,23 @@ int dfle_model_new(const dfle_model_opts *o, dfle_model **out, dfle_error *err)
     m->U = o->U;
     m->cfl = o->cfl;
     m->dt_max = o->dt_max;
-    m->n = dfle_channel_size(o->channel);
-    assert(m->n >= 2); /* channel.c guarantees n >= 3 */
-    st = model_alloc(m, err);
-    if (st == DFLE_OK)
-        st = topology_from_channel(m, err);
-    assert(st != DFLE_OK || topology_ok(m));
-    if (st == DFLE_OK && m->fl != NULL) {
-        /* K A^m is fixed per node: hoist its pow() out of the step loop. */
-        const double *A = dfle_channel_A(m->ch);
-        for (size_t i = 0; i < m->n; i++)
-            m->KAm[i] = dfle_fluvial_K(m->fl) * pow(A[i], dfle_fluvial_m(m->fl));
+    m->combine = o->df_combine;
+    m->frequency = o->df_frequency;
+    m->frequency_ud = o->df_frequency_ud;
+    st = DFLE_OK;
+    if (o->channel != NULL)
+        st = dfle_network_new_chain(o->channel, &m->own_net, err);
+    if (st == DFLE_OK) {
+        m->net = o->channel != NULL ? m->own_net : o->network;
+        m->n = dfle_network_size(m->net);
+        assert(m->n >= 2);
+        st = model_alloc(m, err);
     }
-    if (st == DFLE_OK)
+    if (st == DFLE_OK) {
+        dfle_model_sync_domain(m);
+        assert(topology_ok(m));
         st = dfle_model_init_fluvial_steady(m, NULL, err);
+    }
     if (st != DFLE_OK) {
         dfle_model_free(m);
         return st;
@@ -217,15 +218,20 @@ const dfle_channel *dfle_model_channel(const dfle_model *m) { return m->ch; }
 const dfle_fluvial *dfle_model_fluvial(const dfle_model *m) { return m->fl; }
 dfle_router *dfle_model_router(const dfle_model *m) { return m->rt; }
 dfle_law *dfle_model_law(const dfle_model *m) { return m->law; }
-const size_t *dfle_model_receivers(const dfle_model *m) { return m->recv; }
-const double *dfle_model_flow_length(const dfle_model *m) { return m->len; }
-const size_t *dfle_model_stack(const dfle_model *m) { return m->stack; }
+const dfle_network *dfle_model_network(const dfle_model *m) { return m->net; }
+const size_t *dfle_model_receivers(const dfle_model *m) { return dfle_network_receivers(m->net); }
+const double *dfle_model_flow_length(const dfle_model *m) { return dfle_network_length(m->net); }
+const size_t *dfle_model_stack(const dfle_model *m) { return dfle_network_stack(m->net); }
 double *dfle_model_z(dfle_model *m) { return m->z; }
 
 int dfle_model_is_base(const dfle_model *m, size_t i)
 {
-    assert(i < m->n);
-    return m->is_base[i];
+    return dfle_network_is_base(m->net, i);
+}
+
+int dfle_model_uniform_flow_length(const dfle_model *m)
+{
+    return dfle_network_uniform_length(m->net);
 }
 
 void dfle_model_advance_time(dfle_model *m, double dt)
@@ -260,7 +266,8 @@ int dfle_model_init_fluvial_steady(dfle_model *m, const dfle_fluvial *fl,
                                    dfle_error *err)
 {
     dfle_fluvial *own = NULL;
-    const double *A = dfle_channel_A(m->ch);
+    const double *A = dfle_network_A(m->net), *L = dfle_network_length(m->net);
+    const size_t *stack = dfle_network_stack(m->net), *recv = dfle_network_receivers(m->net);
     int st;
 
     if (fl == NULL)
@@ -278,9 +285,10 @@ int dfle_model_init_fluvial_steady(dfle_model *m, const dfle_fluvial *fl,
     /* Up from base level (z = 0), each node after its receiver. */
     st = DFLE_OK;
     for (size_t k = 0; k < m->n; k++) {
-        const size_t i = m->stack[k];
-        const double S = m->is_base[i] ? 0.0 : dfle_fluvial_steady_slope(fl, m->U, A[i]);
-        m->z[i] = m->is_base[i] ? 0.0 : m->z[m->recv[i]] + m->len[i] * S;
+        const size_t i = stack[k];
+        const int base = recv[i] == i;
+        const double S = base ? 0.0 : dfle_fluvial_steady_slope(fl, m->U, A[i]);
+        m->z[i] = base ? 0.0 : m->z[recv[i]] + L[i] * S;
         if (!isfinite(m->z[i])) {
             /* (U/K)^(1/n_s) overflows for a tiny n_s: no profile to start from. */
             st = dfle_error_set(
@@ -318,9 +326,9 @@ const double *dfle_model_field(dfle_model *m, int field, dfle_error *err)
     if (!m->evaluated && dfle_model_evaluate(m, err) != DFLE_OK)
         return NULL;
     switch (field) {
-    case DFLE_FIELD_X: return dfle_channel_x(m->ch);
-    case DFLE_FIELD_A: return dfle_channel_A(m->ch);
-    case DFLE_FIELD_W: return dfle_channel_w(m->ch);
+    case DFLE_FIELD_X: return dfle_network_x(m->net);
+    case DFLE_FIELD_A: return dfle_network_A(m->net);
+    case DFLE_FIELD_W: return dfle_network_w(m->net);
     case DFLE_FIELD_Z: return m->z;
     case DFLE_FIELD_S: return m->S;
     case DFLE_FIELD_E_F: return m->E_f;

@@ -1,6 +1,6 @@
 /*
  * model_internal.h - the model object, shared by model.c (the object,
- * its topology and fields) and model_rates.c (evaluating the rates).
+ * its domain and fields) and model_rates.c (evaluating the rates).
  * Not installed, and not for solvers: they sit above the model and use
  * model.h only.
  */
@@ -9,33 +9,49 @@
 
 #include "dfle/flow.h"
 #include "dfle/model.h"
+#include "dfle/network.h"
 
-/* Receiver-tree topology (model.h).  For a base-level node recv[i] = i
- * and base_donor[i] is the donor whose slope it repeats (NO_NODE: none). */
 #define NO_NODE ((size_t)-1)
 
+/* The nodes a routed flow reaches, and the law's view of them.  On a
+ * channel they are a prefix [0, n) of the nodes and the law reads the
+ * model's arrays in place; on a network they are gathered into `g_*`
+ * (contiguous, as every law expects) and the results scattered back. */
+typedef struct reached_set {
+    size_t *node; /* n_active node indices, increasing */
+    size_t n;
+    int prefix;   /* node[k] == k for all k */
+} reached_set;
+
 struct dfle_model {
-    const dfle_channel *ch;
-    const dfle_fluvial *fl; /* NULL: no fluvial erosion  */
-    dfle_router *rt;        /* NULL: no debris flows     */
+    const dfle_channel *ch;   /* NULL when the model was given a network */
+    const dfle_network *net;  /* the domain                               */
+    dfle_network *own_net;    /* the chain made from ch, else NULL        */
+    const dfle_fluvial *fl;   /* NULL: no fluvial erosion  */
+    dfle_router *rt;          /* NULL: no debris flows     */
     dfle_law *law;
     double U, cfl, dt_max;
     size_t n;
     double time; /* total simulated years */
+    int combine;                                   /* enum dfle_df_combine */
+    double (*frequency)(void *ud, double count, double A);
+    void *frequency_ud;
 
-    /* Topology: one block, see topology_alloc(). */
-    size_t *recv, *stack, *base_donor;
-    double *len, *inv_len; /* L_i [m] and 1 / L_i (slopes multiply by it) */
-    unsigned char *is_base;
-    size_t *base;          /* the n_base base-level nodes                 */
-    size_t n_base;
-    int uniform_len;       /* every L_i is the same (a 1D channel)        */
+    /* Terms derived from the network's shape, renewed when its version
+     * changes (a landscape re-routes): see sync_domain(). */
+    unsigned long long net_version;
+    double *inv_len; /* 1 / L_i: slopes multiply by it, as they always have */
+    double *KAm;     /* K A^m per node                                      */
 
     /* State and fields: one block of n-arrays, see model_alloc(). */
-    double *z, *S, *E_f, *E_df, *dzdt, *F, *KAm;
+    double *z, *S, *E_f, *E_df, *dzdt, *F;
     double *S_routed; /* slopes of this model's last routing [-]      */
     double *S_pert, *E_pert, *F_pert, *celerity;
     dfle_flow flow, flow_pert;
+    reached_set reached, reached_pert;
+    /* Gathered views for a law on a network (see reached_set). */
+    double *g_block;  /* S, A, w, F, E: 5 n, then a flow of n */
+    dfle_flow g_flow;
     /* A one-node flow for per-node evaluations (node_flow op). */
     double node_block[DFLE_FLOW_ARRAYS];
     dfle_flow node;
@@ -45,5 +61,8 @@ struct dfle_model {
     size_t routings;     /* routings since creation               */
     size_t nonpositive;  /* non-base nodes with S <= 0 at the last evaluation */
 };
+
+/* Renew what derives from the network's shape if it changed (model.c). */
+void dfle_model_sync_domain(dfle_model *m);
 
 #endif

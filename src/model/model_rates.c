@@ -16,6 +16,7 @@
  */
 #include <assert.h>
 #include <math.h>
+#include <stdlib.h>
 #include <string.h>
 
 #include "model/model_internal.h"
@@ -24,40 +25,130 @@
  * enough to stay clear of round-off in E, small enough to be local. */
 #define CELERITY_EPS 1e-6
 
+/* The nodes `flow` reaches (reach > 0), and whether they are a prefix.
+ * On a chain the router's runout_end says it at once. */
+static void find_reached(const dfle_model *m, const dfle_flow *flow, reached_set *r)
+{
+    r->n = 0;
+    r->prefix = 1;
+    if (dfle_network_is_chain(m->net)) {
+        for (; r->n < flow->runout_end; r->n++)
+            r->node[r->n] = r->n;
+        return;
+    }
+    for (size_t i = 0; i < flow->n; i++)
+        if (flow->reach[i] > 0) {
+            r->prefix = r->prefix && i == r->n;
+            r->node[r->n++] = i;
+        }
+}
+
+/* The factor the combine rule gives a node reached by `count` flows. */
+static double combine_factor(const dfle_model *m, double count, double A)
+{
+    switch (m->combine) {
+    case DFLE_DF_COUNT: return count;
+    case DFLE_DF_CUSTOM: return m->frequency(m->frequency_ud, count, A);
+    default: return 1.0;
+    }
+}
+
+/* The law on the reached nodes r of `flow`: F (after a routing, when
+ * route is set) and E.  A prefix is read in place; otherwise the nodes
+ * are gathered into contiguous arrays, as every law expects, and the
+ * results scattered back. */
+static int law_on_reached(dfle_model *m, const double *S, const dfle_flow *flow,
+                          const reached_set *r, double *F, double *E, int route, dfle_error *err)
+{
+    const double *A = dfle_network_A(m->net), *w = dfle_network_w(m->net);
+    dfle_law_ctx ctx;
+    int st;
+
+    ctx.n = r->n;
+    if (r->prefix) {
+        ctx.S = S;
+        ctx.A = A;
+        ctx.w = w;
+        ctx.flow = flow;
+        if (route && (st = dfle_law_flow_factor(m->law, &ctx, F, err)) != DFLE_OK)
+            return st;
+        return dfle_law_rate(m->law, &ctx, F, E, err);
+    }
+    if (m->g_block == NULL) {
+        const size_t n = m->n;
+        m->g_block = malloc((5 + DFLE_FLOW_ARRAYS) * n * sizeof *m->g_block);
+        if (m->g_block == NULL)
+            return dfle_error_set(err, DFLE_ENOMEM, "model: out of memory for %zu nodes", n);
+        dfle_flow_bind(&m->g_flow, m->g_block + 5 * n, n);
+    }
+    {
+        const size_t n = m->n, k = r->n;
+        double *gS = m->g_block, *gA = gS + n, *gw = gA + n, *gF = gw + n, *gE = gF + n;
+        dfle_flow *g = &m->g_flow;
+        for (size_t j = 0; j < k; j++) {
+            const size_t i = r->node[j];
+            gS[j] = S[i], gA[j] = A[i], gw[j] = w[i], gF[j] = F[i];
+            g->M[j] = flow->M[i], g->Q[j] = flow->Q[i], g->h[j] = flow->h[i];
+            g->v[j] = flow->v[i], g->t_p[j] = flow->t_p[i], g->tau[j] = flow->tau[i];
+            g->Theta[j] = flow->Theta[i], g->reach[j] = flow->reach[i];
+            g->integral[j] = flow->integral[i];
+        }
+        g->n = k;
+        g->runout_end = k;
+        g->time_resolved = flow->time_resolved;
+        ctx.S = gS, ctx.A = gA, ctx.w = gw, ctx.flow = g;
+        if (route && (st = dfle_law_flow_factor(m->law, &ctx, gF, err)) != DFLE_OK)
+            return st;
+        if ((st = dfle_law_rate(m->law, &ctx, gF, gE, err)) != DFLE_OK)
+            return st;
+        for (size_t j = 0; j < k; j++) {
+            F[r->node[j]] = gF[j];
+            E[r->node[j]] = gE[j];
+        }
+    }
+    return DFLE_OK;
+}
+
 /* Debris-flow erosion for slopes S into E; routes into `flow` when asked
- * (route != 0), otherwise reuses the flow factor F. */
-static int debris_flow_erosion(dfle_model *m, const double *S, dfle_flow *flow,
+ * (route != 0; r then becomes the nodes it reaches), otherwise reuses
+ * the flow factor F on the nodes r. */
+static int debris_flow_erosion(dfle_model *m, const double *S, dfle_flow *flow, reached_set *r,
                                double *F, double *E, int route, dfle_error *err)
 {
     const dfle_law_ops *lops = dfle_law_get_ops(m->law);
-    dfle_law_ctx ctx;
+    const double *A = dfle_network_A(m->net);
     int st;
 
     if (route) {
         /* Time-resolved routers sum the law's Eq. (11) integrand as they go. */
         flow->integrand = lops->integrand;
         flow->integrand_state = dfle_law_state(m->law);
-        st = dfle_router_route(m->rt, m->ch, S, flow, err);
+        st = dfle_router_route(m->rt, m->net, S, flow, err);
         if (st != DFLE_OK)
             return st;
         assert(flow->runout_end <= m->n);
+        find_reached(m, flow, r);
     }
-    ctx.n = flow->runout_end;
-    ctx.S = S;
-    ctx.A = dfle_channel_A(m->ch);
-    ctx.w = dfle_channel_w(m->ch);
-    ctx.flow = flow;
-    if (route) {
-        st = dfle_law_flow_factor(m->law, &ctx, F, err);
-        if (st != DFLE_OK)
-            return st;
-    }
-    st = dfle_law_rate(m->law, &ctx, F, E, err);
-    if (st != DFLE_OK)
+    if (!r->prefix)
+        for (size_t i = 0; i < m->n; i++)
+            E[i] = 0.0;
+    if ((st = law_on_reached(m, S, flow, r, F, E, route, err)) != DFLE_OK)
         return st;
-    for (size_t i = ctx.n; i < m->n; i++)
-        E[i] = 0.0;
+    if (r->prefix)
+        for (size_t i = r->n; i < m->n; i++)
+            E[i] = 0.0;
+    if (m->combine != DFLE_DF_ANY)
+        for (size_t j = 0; j < r->n; j++) {
+            const size_t i = r->node[j];
+            E[i] *= combine_factor(m, flow->reach[i], A[i]);
+        }
     return DFLE_OK;
+}
+
+/* Where node i lies, for messages: x if the network has one. */
+static double node_x(const dfle_model *m, size_t i)
+{
+    return dfle_network_x(m->net)[i];
 }
 
 /* Name the first non-finite value so the user can see where it began. */
@@ -71,7 +162,7 @@ static int report_nonfinite(const dfle_model *m, size_t i, dfle_error *err)
     return dfle_error_set(err, DFLE_ENUMERIC,
                           "model: %s is not finite at node %zu (x = %g m) at t = %g yr "
                           "(z = %g m, S = %g, E_f = %g, E_df = %g m/yr)",
-                          what, i + 1, dfle_channel_x(m->ch)[i], m->time, m->z[i], m->S[i],
+                          what, i + 1, node_x(m, i), m->time, m->z[i], m->S[i],
                           m->E_f[i], m->E_df[i]);
 }
 
@@ -88,21 +179,25 @@ static int check_finite(const dfle_model *m, dfle_error *err)
 int dfle_model_evaluate(dfle_model *m, dfle_error *err)
 {
     const size_t n = m->n;
-    size_t nonpositive = 0;
+    const size_t *recv, *base;
+    size_t nonpositive = 0, n_base;
     double sum = 0.0;
     int st;
 
+    dfle_model_sync_domain(m);
+    recv = dfle_network_receivers(m->net);
+    base = dfle_network_bases(m->net, &n_base);
     /* Branch-free over all nodes: a base node is its own receiver, so its
      * slope comes out 0 (counted, then taken back) and is then replaced
      * by its donor's. */
     for (size_t i = 0; i < n; i++) {
-        m->S[i] = (m->z[i] - m->z[m->recv[i]]) * m->inv_len[i];
+        m->S[i] = (m->z[i] - m->z[recv[i]]) * m->inv_len[i];
         nonpositive += !(m->S[i] > 0);
     }
-    for (size_t k = 0; k < m->n_base; k++) {
-        const size_t i = m->base[k];
+    for (size_t k = 0; k < n_base; k++) {
+        const size_t i = base[k], d = dfle_network_base_donor(m->net, i);
         nonpositive -= !(m->S[i] > 0);
-        m->S[i] = m->base_donor[i] != NO_NODE ? m->S[m->base_donor[i]] : 0.0;
+        m->S[i] = d != NO_NODE ? m->S[d] : 0.0;
     }
     m->nonpositive = nonpositive;
 
@@ -116,7 +211,7 @@ int dfle_model_evaluate(dfle_model *m, dfle_error *err)
         if (m->flow_valid &&
             (st = dfle_router_needs_reroute(m->rt, n, m->S_routed, m->S, &route, err)) != DFLE_OK)
             return st;
-        st = debris_flow_erosion(m, m->S, &m->flow, m->F, m->E_df, route, err);
+        st = debris_flow_erosion(m, m->S, &m->flow, &m->reached, m->F, m->E_df, route, err);
         if (st != DFLE_OK)
             return st;
         if (route) {
@@ -132,8 +227,8 @@ int dfle_model_evaluate(dfle_model *m, dfle_error *err)
          * the slow path then clears): one test per node, not five. */
         sum += m->z[i] + m->S[i] + m->dzdt[i];
     }
-    for (size_t k = 0; k < m->n_base; k++)
-        m->dzdt[m->base[k]] = 0.0;
+    for (size_t k = 0; k < n_base; k++)
+        m->dzdt[base[k]] = 0.0;
     /* Everything a step produces, not only the rates: a NaN elevation
      * gives S = NaN, which every law reads as "no erosion". */
     if (!isfinite(sum) && (st = check_finite(m, err)) != DFLE_OK)
@@ -146,10 +241,10 @@ int dfle_model_is_evaluated(const dfle_model *m) { return m->evaluated; }
 size_t dfle_model_nonpositive_slopes(const dfle_model *m) { return m->nonpositive; }
 size_t dfle_model_routings(const dfle_model *m) { return m->routings; }
 
-int dfle_model_flow_reaches(const dfle_model *m, size_t i)
+double dfle_model_flow_reaches(const dfle_model *m, size_t i)
 {
     assert(i < m->n);
-    return m->rt != NULL && i < m->flow.runout_end;
+    return m->rt != NULL ? m->flow.reach[i] : 0.0;
 }
 
 double dfle_model_rate_ratio(const dfle_model *m)
@@ -177,37 +272,40 @@ int dfle_model_celerity(dfle_model *m, const double **c_out, dfle_error *err)
         for (size_t i = 0; i < n; i++)
             m->celerity[i] = 0.0;
     }
-    if (m->rt != NULL && m->flow.runout_end > 0) {
+    if (m->rt != NULL && m->reached.n > 0) {
         int local = dfle_router_is_local(m->rt);
-        size_t active;
         int st;
 
         for (size_t i = 0; i < n; i++)
             m->S_pert[i] = m->S[i] > 0 ? m->S[i] * (1.0 + CELERITY_EPS) : m->S[i];
         if (local) {
-            st = debris_flow_erosion(m, m->S_pert, &m->flow_pert, m->F_pert, m->E_pert, 1, err);
+            st = debris_flow_erosion(m, m->S_pert, &m->flow_pert, &m->reached_pert, m->F_pert,
+                                     m->E_pert, 1, err);
         } else {
             /* The flow stays as routed; only the slope term moves. */
-            st = debris_flow_erosion(m, m->S_pert, &m->flow, m->F, m->E_pert, 0, err);
+            st = debris_flow_erosion(m, m->S_pert, &m->flow, &m->reached, m->F, m->E_pert, 0, err);
         }
         if (st != DFLE_OK)
             return st;
         /* A node the perturbed flow newly reaches would show a jump, not
          * a derivative: use only nodes both flows reach. */
-        active = m->flow.runout_end;
-        if (local && m->flow_pert.runout_end < active)
-            active = m->flow_pert.runout_end;
-        for (size_t i = 0; i < active; i++)
-            if (m->S[i] > 0)
+        for (size_t j = 0; j < m->reached.n; j++) {
+            const size_t i = m->reached.node[j];
+            if (m->S[i] > 0 && (!local || m->flow_pert.reach[i] > 0))
                 m->celerity[i] += fabs(m->E_pert[i] - m->E_df[i]) / (CELERITY_EPS * m->S[i]);
+        }
     }
-    for (size_t k = 0; k < m->n_base; k++)
-        m->celerity[m->base[k]] = 0.0; /* held fixed: no wave there */
+    {
+        size_t n_base;
+        const size_t *base = dfle_network_bases(m->net, &n_base);
+        for (size_t k = 0; k < n_base; k++)
+            m->celerity[base[k]] = 0.0; /* held fixed: no wave there */
+    }
     *c_out = m->celerity;
     return DFLE_OK;
 }
 
-int dfle_model_uniform_flow_length(const dfle_model *m) { return m->uniform_len; }
+
 
 /* A one-node view of the model's routed flow at node i. */
 static dfle_flow flow_at(const dfle_flow *f, size_t i)
@@ -215,15 +313,15 @@ static dfle_flow flow_at(const dfle_flow *f, size_t i)
     dfle_flow v;
     memset(&v, 0, sizeof v);
     v.n = 1;
-    v.runout_end = i < f->runout_end;
+    v.runout_end = f->reach[i] > 0;
     v.M = f->M + i, v.Q = f->Q + i, v.h = f->h + i, v.v = f->v + i;
-    v.t_p = f->t_p + i, v.tau = f->tau + i, v.Theta = f->Theta + i;
+    v.t_p = f->t_p + i, v.tau = f->tau + i, v.Theta = f->Theta + i, v.reach = f->reach + i;
     v.integral = f->integral + i;
     v.time_resolved = f->time_resolved;
     return v;
 }
 
-int dfle_model_node_erosion(dfle_model *m, size_t i, double S, int with_df, double *E,
+int dfle_model_node_erosion(dfle_model *m, size_t i, double S, double flows, double *E,
                             int *goes_on, dfle_error *err)
 {
     double e = 0.0;
@@ -235,15 +333,15 @@ int dfle_model_node_erosion(dfle_model *m, size_t i, double S, int with_df, doub
     }
     if (m->fl != NULL)
         e = m->KAm[i] * pow(S, dfle_fluvial_n(m->fl));
-    if (with_df && m->rt != NULL) {
-        dfle_law_ctx ctx = {.n = 1, .S = &S, .A = dfle_channel_A(m->ch) + i,
-                            .w = dfle_channel_w(m->ch) + i};
+    if (flows > 0 && m->rt != NULL) {
+        dfle_law_ctx ctx = {.n = 1, .S = &S, .A = dfle_network_A(m->net) + i,
+                            .w = dfle_network_w(m->net) + i};
         dfle_flow view; /* lives as long as ctx: rate may read the flow */
         double F, Edf;
         int st;
         if (dfle_router_is_local(m->rt)) {
             /* The flow at this node follows its slope: re-evaluate it. */
-            st = dfle_router_node_flow(m->rt, m->ch, i, S, &m->node, goes_on, err);
+            st = dfle_router_node_flow(m->rt, m->net, i, S, &m->node, goes_on, err);
             if (st != DFLE_OK)
                 return st;
             m->node.runout_end = 1;
@@ -253,7 +351,7 @@ int dfle_model_node_erosion(dfle_model *m, size_t i, double S, int with_df, doub
         } else {
             /* Routed rarely: the cached Eq. (11) factor stands. */
             view = flow_at(&m->flow, i);
-            *goes_on = i < m->flow.runout_end;
+            *goes_on = m->flow.reach[i] > 0;
             if (!*goes_on) {
                 *E = e;
                 return DFLE_OK;
@@ -263,6 +361,8 @@ int dfle_model_node_erosion(dfle_model *m, size_t i, double S, int with_df, doub
         }
         if ((st = dfle_law_rate(m->law, &ctx, &F, &Edf, err)) != DFLE_OK)
             return st;
+        if (m->combine != DFLE_DF_ANY)
+            Edf *= combine_factor(m, flows, dfle_network_A(m->net)[i]);
         e += Edf;
     }
     if (!isfinite(e))

@@ -1,7 +1,7 @@
 /*
  * flow.c - allocation of the per-node flow record that routers fill.
  *
- * All eight arrays come from one block so a flow is one allocation and
+ * All nine arrays come from one block so a flow is one allocation and
  * one free, and clearing it is a single memset.  dfle_flow_bind carves
  * the same layout out of a caller's block (a one-node view, a Lua
  * userdata), so there is one place that knows it.
@@ -22,7 +22,8 @@ void dfle_flow_bind(dfle_flow *flow, double *block, size_t n)
     flow->t_p = block + 4 * n;
     flow->tau = block + 5 * n;
     flow->Theta = block + 6 * n;
-    flow->integral = block + 7 * n;
+    flow->reach = block + 7 * n;
+    flow->integral = block + 8 * n;
 }
 
 int dfle_flow_init(dfle_flow *flow, size_t n, dfle_error *err)

@@ -45,10 +45,10 @@ void dfle_router_free(dfle_router *rt)
     free(rt);
 }
 
-int dfle_router_route(dfle_router *rt, const dfle_channel *ch,
+int dfle_router_route(dfle_router *rt, const dfle_network *net,
                       const double *S, dfle_flow *flow, dfle_error *err)
 {
-    return rt->ops->route(rt->state, ch, S, flow, err);
+    return rt->ops->route(rt->state, net, S, flow, err);
 }
 
 int dfle_router_needs_reroute(dfle_router *rt, size_t n, const double *S_routed,
@@ -60,14 +60,14 @@ int dfle_router_needs_reroute(dfle_router *rt, size_t n, const double *S_routed,
     return rt->ops->needs_reroute(rt->state, n, S_routed, S, reroute, err);
 }
 
-int dfle_router_node_flow(dfle_router *rt, const dfle_channel *ch, size_t i,
+int dfle_router_node_flow(dfle_router *rt, const dfle_network *net, size_t i,
                           double S, dfle_flow *node, int *goes_on, dfle_error *err)
 {
     *goes_on = 0;
     if (rt->ops->node_flow == NULL)
         return dfle_error_set(err, DFLE_ESTATE,
                               "router.%s cannot evaluate the flow at one node", rt->ops->name);
-    return rt->ops->node_flow(rt->state, ch, i, S, node, goes_on, err);
+    return rt->ops->node_flow(rt->state, net, i, S, node, goes_on, err);
 }
 
 size_t dfle_router_params(const dfle_router *rt, dfle_param *out, size_t cap)

@@ -7,7 +7,7 @@
  * strength (a Bingham-like stopping rule, Whipple and Dunne 1992).
  *
  * Everything that depends on drainage area alone (M, Q, t_p and the
- * constant part of h^3) is computed once per channel and cached, because
+ * constant part of h^3) is computed once per network shape and cached, because
  * the model routes this flow at every landscape step: only the slope
  * changes between calls.
  */
@@ -21,7 +21,7 @@
 typedef struct empirical {
     dfle_empirical_opts opts;
     /* Cache of the area-only terms, valid for `cached_for`. */
-    unsigned long long cached_for; /* channel id, 0 = none */
+    unsigned long long cached_for; /* network version, 0 = none */
     size_t n;
     double *M, *Q, *t_p;
     double *h3_coef; /* 3 mu Q / (rho_b g w): h^3 = h3_coef / S  [m^3] */
@@ -47,11 +47,11 @@ static void empirical_drop_cache(empirical *e)
     e->n = 0;
 }
 
-static int empirical_fill_cache(empirical *e, const dfle_channel *ch,
+static int empirical_fill_cache(empirical *e, const dfle_network *net,
                                 dfle_error *err)
 {
-    size_t n = dfle_channel_size(ch);
-    const double *A = dfle_channel_A(ch), *w = dfle_channel_w(ch);
+    size_t n = dfle_network_size(net);
+    const double *A = dfle_network_A(net), *w = dfle_network_w(net);
     const dfle_empirical_opts *o = &e->opts;
     double *block;
 
@@ -91,7 +91,7 @@ static int empirical_fill_cache(empirical *e, const dfle_channel *ch,
             return st;
         }
     }
-    e->cached_for = dfle_channel_id(ch);
+    e->cached_for = dfle_network_version(net);
     e->n = n;
     return DFLE_OK;
 }
@@ -99,7 +99,7 @@ static int empirical_fill_cache(empirical *e, const dfle_channel *ch,
 static void zero_node(dfle_flow *flow, size_t j)
 {
     flow->M[j] = flow->Q[j] = flow->t_p[j] = flow->h[j] = flow->v[j] = flow->tau[j] =
-        flow->Theta[j] = 0.0;
+        flow->Theta[j] = flow->reach[j] = 0.0;
 }
 
 /* The flow at node i for slope s > 0, written to node j of `flow`; returns
@@ -121,50 +121,96 @@ static double empirical_at(const empirical *e, const double *w, size_t i, double
     return tau;
 }
 
-static int ensure_cache(empirical *e, const dfle_channel *ch, dfle_error *err)
+static int ensure_cache(empirical *e, const dfle_network *net, dfle_error *err)
 {
-    /* Channels are immutable, so the id identifies the cached terms. */
-    return e->cached_for == dfle_channel_id(ch) ? DFLE_OK : empirical_fill_cache(e, ch, err);
+    /* Each shape of a network has a version of its own, unique for the
+     * process, so it identifies the cached terms. */
+    return e->cached_for == dfle_network_version(net) ? DFLE_OK : empirical_fill_cache(e, net, err);
 }
 
-static int empirical_route(void *state, const dfle_channel *ch,
-                           const double *S, dfle_flow *flow, dfle_error *err)
+/* Slow path of the finiteness check (one sum per routing is the fast
+ * one): name the first node whose flow is not finite. */
+static int check_finite(const dfle_flow *flow, const double *S, dfle_error *err)
 {
-    empirical *e = state;
-    const double *w = dfle_channel_w(ch);
-    size_t n = dfle_channel_size(ch), i;
-    int st;
-
-    if (flow->n != n)
-        return dfle_error_set(err, DFLE_EINVAL,
-                              "router.empirical: flow has %zu nodes, channel %zu", flow->n, n);
-    if ((st = ensure_cache(e, ch, err)) != DFLE_OK)
-        return st;
-    flow->time_resolved = 0;
-    for (i = 0; i < n; i++) {
-        /* No flow on a flat or reverse slope, nor where tau < tau_y. */
-        if (!(S[i] > 0) || empirical_at(e, w, i, S[i], flow, i) < e->opts.tau_y)
-            break;
+    for (size_t i = 0; i < flow->n; i++)
         if (!(isfinite(flow->h[i]) && isfinite(flow->v[i]) && isfinite(flow->tau[i])))
             return dfle_error_set(err, DFLE_ENUMERIC,
                                   "router.empirical: the flow at node %zu (S = %g) is not finite "
                                   "(h = %g m, v = %g m/s, tau = %g Pa)",
                                   i + 1, S[i], flow->h[i], flow->v[i], flow->tau[i]);
-    }
-    flow->runout_end = i;
-    /* Beyond the runout nothing flows; zero so every field reads honestly. */
-    for (; i < n; i++)
-        zero_node(flow, i);
-    return DFLE_OK;
+    return DFLE_OK; /* the sum overflowed, nothing else */
 }
 
-static int empirical_node_flow(void *state, const dfle_channel *ch, size_t i, double S,
+/* One flow starts at every source and travels down the receivers; at a
+ * node it goes on while S > 0 and tau >= tau_y there, and stops at the
+ * first node where it does not (no erosion from that node on).  Taken in
+ * reverse stack order every node comes after its donors, so the flows
+ * arriving at a node are counted (reach) before it is reached.  On a
+ * 1D channel this is the runout rule from the head down. */
+static int empirical_route(void *state, const dfle_network *net,
+                           const double *S, dfle_flow *flow, dfle_error *err)
+{
+    empirical *e = state;
+    const double *w = dfle_network_w(net);
+    const size_t *stack = dfle_network_stack(net), *recv = dfle_network_receivers(net);
+    const unsigned char *source = dfle_network_sources(net);
+    size_t n = dfle_network_size(net), reached = 0, first_gap = n;
+    double chk = 0.0;
+    int st;
+
+    if (flow->n != n)
+        return dfle_error_set(err, DFLE_EINVAL,
+                              "router.empirical: flow has %zu nodes, network %zu", flow->n, n);
+    if ((st = ensure_cache(e, net, err)) != DFLE_OK)
+        return st;
+    flow->time_resolved = 0;
+    if (dfle_network_is_chain(net) && source[0] && (n < 2 || !source[1])) {
+        /* A channel: the one flow from the head down to its runout, the
+         * work of the 1D model and no more (the general walk below visits
+         * every node through the stack). */
+        size_t i;
+        double sum = 0.0;
+        for (i = 0; i < n; i++) {
+            if (!(S[i] > 0) || empirical_at(e, w, i, S[i], flow, i) < e->opts.tau_y)
+                break;
+            sum += flow->h[i] + flow->v[i] + flow->tau[i];
+            flow->reach[i] = 1.0;
+        }
+        flow->runout_end = i;
+        for (; i < n; i++)
+            zero_node(flow, i);
+        return isfinite(sum) ? DFLE_OK : check_finite(flow, S, err);
+    }
+    for (size_t i = 0; i < n; i++)
+        flow->reach[i] = source[i];
+    for (size_t k = n; k-- > 0;) {
+        const size_t i = stack[k];
+        const double arriving = flow->reach[i];
+        /* No flow on a flat or reverse slope, nor where tau < tau_y. */
+        if (!(arriving > 0) || !(S[i] > 0) ||
+            empirical_at(e, w, i, S[i], flow, i) < e->opts.tau_y) {
+            zero_node(flow, i);
+            continue;
+        }
+        chk += flow->h[i] + flow->v[i] + flow->tau[i];
+        reached++;
+        if (recv[i] != i)
+            flow->reach[recv[i]] += arriving;
+    }
+    for (size_t i = 0; i < n && first_gap == n; i++)
+        if (!(flow->reach[i] > 0))
+            first_gap = i;
+    flow->runout_end = dfle_network_is_chain(net) ? first_gap : reached;
+    return isfinite(chk) ? DFLE_OK : check_finite(flow, S, err);
+}
+
+static int empirical_node_flow(void *state, const dfle_network *net, size_t i, double S,
                                dfle_flow *node, int *goes_on, dfle_error *err)
 {
     empirical *e = state;
     int st;
     *goes_on = 0;
-    if ((st = ensure_cache(e, ch, err)) != DFLE_OK)
+    if ((st = ensure_cache(e, net, err)) != DFLE_OK)
         return st;
     assert(i < e->n && node->n >= 1);
     node->time_resolved = 0;
@@ -172,10 +218,12 @@ static int empirical_node_flow(void *state, const dfle_channel *ch, size_t i, do
         zero_node(node, 0);
         return DFLE_OK;
     }
-    if (empirical_at(e, dfle_channel_w(ch), i, S, node, 0) < e->opts.tau_y) {
+    if (empirical_at(e, dfle_network_w(net), i, S, node, 0) < e->opts.tau_y) {
         node->Theta[0] = 0.0; /* arriving, it stops here: no erosion */
+        node->reach[0] = 0.0;
         return DFLE_OK;
     }
+    node->reach[0] = 1.0;
     *goes_on = 1;
     return DFLE_OK;
 }

@@ -86,25 +86,30 @@ static void record_snapshots(process *pr, size_t *next, double t, const double *
     }
 }
 
-static int process_route(void *state, const dfle_channel *ch, const double *S, dfle_flow *flow,
+static int process_route(void *state, const dfle_network *net, const double *S, dfle_flow *flow,
                          dfle_error *err)
 {
     process *pr = state;
     const dfle_process_opts *o = &pr->opts;
-    const size_t n = dfle_channel_size(ch), G = (size_t)o->n_ghost, N = G + n;
-    const double dx = dfle_channel_dx(ch);
-    const double *w = dfle_channel_w(ch), *A = dfle_channel_A(ch);
+    const size_t n = dfle_network_size(net), G = (size_t)o->n_ghost, N = G + n;
+    const double dx = dfle_network_length(net)[0];
+    const double *w = dfle_network_w(net), *A = dfle_network_A(net);
     double *cw = NULL, *cS = NULL, *h, *q, released, out_total = 0.0, t = 0.0, t_entry = -1.0;
     dfle_flow1d *f = NULL;
     size_t steps = 0, next_snap = 0;
     int st, end, moved = 0;
 
+    /* Two-phase flow down one channel: the equations are 1D. */
+    if (!dfle_network_is_chain(net) || !dfle_network_uniform_length(net))
+        return dfle_error_set(err, DFLE_EINVAL,
+                              "router.process: routes down a single channel of even spacing (a 1D "
+                              "model); for a network or a landscape use router.empirical");
     if (flow->integrand == NULL)
         return dfle_error_set(err, DFLE_EINVAL,
                               "router.process: the erosion law has no Eq. (11) integrand, so it "
                               "cannot be used with a time-resolved router");
     if (flow->n != n)
-        return dfle_error_set(err, DFLE_EINVAL, "router.process: flow has %zu nodes, channel %zu",
+        return dfle_error_set(err, DFLE_EINVAL, "router.process: flow has %zu nodes, network %zu",
                               flow->n, n);
     if ((st = process_reserve(pr, n, err)) != DFLE_OK)
         return st;
@@ -226,6 +231,9 @@ static int process_route(void *state, const dfle_channel *ch, const double *S, d
         if (o->frequency_scaling)
             flow->integral[i] *= 1000.0 * pow(1e-6 * A[i], o->gamma) / o->M0;
     }
+    /* The one flow reaches the channel down to its furthest wet node. */
+    for (size_t i = 0; i < n; i++)
+        flow->reach[i] = i < flow->runout_end;
     pr->report = (dfle_process_report){
         .routed = 1, .end = end, .volume_in = released, .volume_out = out_total,
         .volume_left = dfle_flow1d_volume(f, 0, N), .duration = t, .steps = steps, .n = n,

@@ -38,7 +38,7 @@ typedef struct direct_work {
     double *S;       /* the slopes being solved for              */
     double *guess;   /* a starting slope per node                */
     double *z_save;  /* the state to fall back from              */
-    unsigned char *reach; /* the flow arrives at the node        */
+    double *reach;   /* debris flows arriving at the node      */
 } direct_work;
 
 /* The profile from slopes S (non-base nodes), base levels kept. */
@@ -57,26 +57,22 @@ static void build_profile(dfle_model *m, const double *S)
 }
 
 /* Heads-down pass with a flow evaluated node by node.  A debris flow
- * starts at every head (a node no other drains to) and goes on below a
- * node only if it goes on at that node. */
+ * starts at every source of the network and goes on below a node only
+ * if it goes on at that node; where flows meet they add up. */
 static int solve_local(dfle_model *m, direct_work *w, dfle_error *err)
 {
     const size_t n = dfle_model_size(m);
     const size_t *stack = dfle_model_stack(m), *recv = dfle_model_receivers(m);
     const double *S0 = dfle_model_field(m, DFLE_FIELD_S, err);
+    const unsigned char *source = dfle_network_sources(dfle_model_network(m));
     const int has_flow = dfle_model_router(m) != NULL;
 
     if (S0 == NULL)
         return err != NULL ? err->code : DFLE_ESTATE;
     for (size_t i = 0; i < n; i++) {
         w->guess[i] = S0[i];
-        w->reach[i] = 1; /* a head until a donor is found */
+        w->reach[i] = has_flow && source[i];
     }
-    for (size_t i = 0; i < n; i++)
-        if (!dfle_model_is_base(m, i))
-            w->reach[recv[i]] = 0;
-    for (size_t i = 0; i < n; i++)
-        w->reach[i] = w->reach[i] && has_flow;
     for (size_t k = n; k-- > 0;) {
         const size_t i = stack[k];
         int goes_on;
@@ -87,8 +83,9 @@ static int solve_local(dfle_model *m, direct_work *w, dfle_error *err)
                              &goes_on, err);
         if (st != DFLE_OK)
             return st;
-        /* Once stopped, the flow stays stopped. */
-        w->reach[recv[i]] = w->reach[recv[i]] || (w->reach[i] && goes_on);
+        /* Once stopped, a flow stays stopped. */
+        if (goes_on && w->reach[i] > 0)
+            w->reach[recv[i]] += w->reach[i];
         w->guess[recv[i]] = w->S[i];
     }
     build_profile(m, w->S);
@@ -191,7 +188,7 @@ static int direct_run(dfle_model *m, const dfle_run_opts *o, dfle_run_result *re
 {
     const size_t n = dfle_model_size(m);
     direct_work w;
-    void *block = malloc(3 * n * sizeof(double) + n);
+    void *block = malloc(4 * n * sizeof(double));
     int st;
 
     if (block == NULL)
@@ -199,7 +196,7 @@ static int direct_run(dfle_model *m, const dfle_run_opts *o, dfle_run_result *re
     w.S = block;
     w.guess = w.S + n;
     w.z_save = w.guess + n;
-    w.reach = (unsigned char *)(w.z_save + n);
+    w.reach = w.z_save + n;
     st = direct_solve(m, o, &w, res, err);
     free(block);
     return st;

@@ -40,7 +40,7 @@ int dfle_explicit_step(dfle_model *m, double *dt, dfle_error *err);
  * *goes_on (may be NULL) receives the flow's verdict at the root.
  * Used with c = L/dt, U_eff = U + (z_old - z_receiver)/dt for a
  * backward-Euler step, and with c = 0, U_eff = U for a steady state. */
-int dfle_solve_node(dfle_model *m, size_t i, double U_eff, double c, int with_df, double guess,
+int dfle_solve_node(dfle_model *m, size_t i, double U_eff, double c, double flows, double guess,
                     double *S, int *goes_on, dfle_error *err);
 
 #endif

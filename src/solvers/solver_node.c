@@ -31,16 +31,16 @@
 #define SLOPE_FLOOR 1e-12
 
 /* G(S) = E(S) + c S, non-decreasing in S. */
-static int total(dfle_model *m, size_t i, double S, double c, int with_df, double *G,
+static int total(dfle_model *m, size_t i, double S, double c, double flows, double *G,
                  int *goes_on, dfle_error *err)
 {
     double E;
-    int st = dfle_model_node_erosion(m, i, S, with_df, &E, goes_on, err);
+    int st = dfle_model_node_erosion(m, i, S, flows, &E, goes_on, err);
     *G = E + c * S;
     return st;
 }
 
-int dfle_solve_node(dfle_model *m, size_t i, double U_eff, double c, int with_df, double guess,
+int dfle_solve_node(dfle_model *m, size_t i, double U_eff, double c, double flows, double guess,
                     double *S_out, int *goes_on, dfle_error *err)
 {
     int on = 0, on2;
@@ -64,7 +64,7 @@ int dfle_solve_node(dfle_model *m, size_t i, double U_eff, double c, int with_df
     } else {
         hi = guess > 0 ? 1.1 * guess : 1.0;
         for (;;) {
-            if ((st = total(m, i, hi, c, with_df, &G, &on, err)) != DFLE_OK)
+            if ((st = total(m, i, hi, c, flows, &G, &on, err)) != DFLE_OK)
                 return st;
             if (G >= U_eff)
                 break;
@@ -74,7 +74,7 @@ int dfle_solve_node(dfle_model *m, size_t i, double U_eff, double c, int with_df
                 return dfle_error_set(err, DFLE_EFIT,
                                       "model: erosion never reaches U at node %zu (x = %g m): "
                                       "no steady slope there",
-                                      i + 1, dfle_channel_x(dfle_model_channel(m))[i]);
+                                      i + 1, dfle_network_x(dfle_model_network(m))[i]);
         }
     }
     /* Newton on ln G against ln S, which is close to a straight line for
@@ -84,7 +84,7 @@ int dfle_solve_node(dfle_model *m, size_t i, double U_eff, double c, int with_df
     S = guess > lo && guess < hi ? guess : (lo > 0 ? sqrt(lo * hi) : 0.5 * hi);
     for (int it = 0; it < SOLVE_MAX_ITER; it++) {
         double phi, next;
-        if ((st = total(m, i, S, c, with_df, &G, &on, err)) != DFLE_OK)
+        if ((st = total(m, i, S, c, flows, &G, &on, err)) != DFLE_OK)
             return st;
         if (goes_on != NULL)
             *goes_on = on; /* the verdict at the last slope tried */
@@ -108,7 +108,7 @@ int dfle_solve_node(dfle_model *m, size_t i, double U_eff, double c, int with_df
                     "model: at node %zu (x = %g m) erosion exceeds %g m/yr at every slope down "
                     "to 1e-12: it does not grow with slope (alpha = 0 with tau_y = 0 does that), "
                     "so no slope balances it",
-                    i + 1, dfle_channel_x(dfle_model_channel(m))[i], U_eff);
+                    i + 1, dfle_network_x(dfle_model_network(m))[i], U_eff);
         }
         phi = G > 0 ? log(G) - log_target : -INFINITY;
         next = -1.0;
@@ -118,7 +118,7 @@ int dfle_solve_node(dfle_model *m, size_t i, double U_eff, double c, int with_df
                 slope = (phi - phi_prev) / (log(S) - lnS_prev); /* secant */
             } else {
                 double G2, h = 1e-7;
-                if ((st = total(m, i, S * (1.0 + h), c, with_df, &G2, &on2, err)) != DFLE_OK)
+                if ((st = total(m, i, S * (1.0 + h), c, flows, &G2, &on2, err)) != DFLE_OK)
                     return st;
                 if (G2 > G)
                     slope = (log(G2) - log(G)) / log1p(h);
@@ -138,5 +138,5 @@ int dfle_solve_node(dfle_model *m, size_t i, double U_eff, double c, int with_df
     }
     return dfle_error_set(err, DFLE_ENUMERIC,
                           "model: the slope at node %zu (x = %g m) did not converge (bracket "
-                          "[%g, %g])", i + 1, dfle_channel_x(dfle_model_channel(m))[i], lo, hi);
+                          "[%g, %g])", i + 1, dfle_network_x(dfle_model_network(m))[i], lo, hi);
 }

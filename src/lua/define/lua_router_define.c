@@ -45,14 +45,20 @@ typedef struct lua_router {
     dfle_router_ops ops; /* named after the user's router */
     /* The call in progress. */
     int busy;
-    const dfle_channel *ch;
-    const double *S;   /* route: n slopes; node_flow: &s */
-    size_t first, n;   /* nodes [first, first + n) */
+    const dfle_network *net;
+    const double *S;   /* route: n slopes, by node; node_flow: &s */
+    size_t node;       /* node_flow: the node; route: ALL_NODES */
     dfle_flow *flow;
-    size_t j0;         /* flow index of node `first` */
-    size_t end;        /* out: first node not reached */
     int node_goes_on;  /* out (node_flow) */
 } lua_router;
+
+#define ALL_NODES ((size_t)-1)
+
+/* The slope the call in progress gives node i. */
+static double slope_at(const lua_router *r, size_t i)
+{
+    return r->node == ALL_NODES ? r->S[i] : r->S[0];
+}
 
 static int bad_output(lua_State *T, const lua_router *r, size_t i, const char *field,
                       const char *why)
@@ -64,7 +70,7 @@ static int bad_output(lua_State *T, const lua_router *r, size_t i, const char *f
     lua_getinfo(T, ">S", &ar);
     return luaL_error(T, "router '%s': flow (defined at %s:%d) set %s to %s, %s, at node %d "
                          "(S = %f, A = %f m^2)", r->sh.name, ar.short_src, ar.linedefined, field,
-                      what, why, (int)i + 1, r->S[i - r->first], dfle_channel_A(r->ch)[i]);
+                      what, why, (int)i + 1, slope_at(r, i), dfle_network_A(r->net)[i]);
 }
 
 static void set_num(lua_State *T, const char *k, double v)
@@ -77,15 +83,15 @@ static void set_num(lua_State *T, const char *k, double v)
  * whether the flow goes on. */
 static int call_node(lua_State *T, lua_router *r, size_t i, size_t j)
 {
-    const double s = r->S[i - r->first];
+    const double s = slope_at(r, i);
     dfle_flow *fl = r->flow;
     double out[N_OUT];
     int goes_on;
 
     set_num(T, "S", s);
-    set_num(T, "A", dfle_channel_A(r->ch)[i]);
-    set_num(T, "w", dfle_channel_w(r->ch)[i]);
-    set_num(T, "x", dfle_channel_x(r->ch)[i]);
+    set_num(T, "A", dfle_network_A(r->net)[i]);
+    set_num(T, "w", dfle_network_w(r->net)[i]);
+    set_num(T, "x", dfle_network_x(r->net)[i]);
     for (int k = 0; k < N_OUT; k++) { /* no stale values from the last node */
         lua_pushnil(T);
         lua_setfield(T, UP(SLOT_REC), outputs[k].name);
@@ -123,28 +129,48 @@ static int call_node(lua_State *T, lua_router *r, size_t i, size_t j)
 
 static void zero_node(dfle_flow *fl, size_t j)
 {
-    fl->M[j] = fl->Q[j] = fl->h[j] = fl->v[j] = fl->t_p[j] = fl->tau[j] = fl->Theta[j] = 0.0;
+    fl->M[j] = fl->Q[j] = fl->h[j] = fl->v[j] = fl->t_p[j] = fl->tau[j] = fl->Theta[j] =
+        fl->reach[j] = 0.0;
 }
 
-/* The protected sweep: nodes [first, first + n) from the head down,
- * stopping at a reverse slope or where flow() says the flow stops. */
+/* The protected sweep.  node_flow: the one node.  route: a flow from
+ * every source down the receivers (reverse stack order: every node after
+ * its donors, whose arriving flows it counts), stopping at a reverse
+ * slope or where flow() says the flow stops - the empirical router's
+ * rule, so on a channel it is the runout from the head down. */
 static int sweep(lua_State *T)
 {
     lua_router *r = lua_touserdata(T, 1);
-    size_t i = r->first;
     r->node_goes_on = 0;
-    for (; i < r->first + r->n; i++) {
-        size_t j = r->j0 + (i - r->first);
-        if (!(r->S[i - r->first] > 0))
-            break;
-        if (!call_node(T, r, i, j)) {
-            /* Arriving here, the flow stops: no erosion at this node. */
-            r->flow->Theta[j] = 0.0;
-            break;
-        }
-        r->node_goes_on = 1;
+    if (r->node != ALL_NODES) {
+        if (!(r->S[0] > 0))
+            return 0;
+        if (call_node(T, r, r->node, 0))
+            r->node_goes_on = 1;
+        else
+            r->flow->Theta[0] = 0.0; /* arriving, it stops here: no erosion */
+        r->flow->reach[0] = r->node_goes_on;
+        return 0;
     }
-    r->end = i;
+    {
+        const size_t n = dfle_network_size(r->net);
+        const size_t *stack = dfle_network_stack(r->net), *recv = dfle_network_receivers(r->net);
+        const unsigned char *source = dfle_network_sources(r->net);
+        dfle_flow *fl = r->flow;
+        for (size_t i = 0; i < n; i++)
+            fl->reach[i] = source[i];
+        for (size_t k = n; k-- > 0;) {
+            const size_t i = stack[k];
+            const double arriving = fl->reach[i];
+            if (!(arriving > 0) || !(r->S[i] > 0) || !call_node(T, r, i, i)) {
+                zero_node(fl, i);
+                continue;
+            }
+            fl->reach[i] = arriving;
+            if (recv[i] != i)
+                fl->reach[recv[i]] += arriving;
+        }
+    }
     return 0;
 }
 
@@ -161,27 +187,31 @@ static int run_sweep(lua_router *r, dfle_error *err)
     return st;
 }
 
-static int lr_route(void *state, const dfle_channel *ch, const double *S, dfle_flow *flow,
+static int lr_route(void *state, const dfle_network *net, const double *S, dfle_flow *flow,
                     dfle_error *err)
 {
     lua_router *r = state;
-    const size_t n = dfle_channel_size(ch);
+    const size_t n = dfle_network_size(net);
+    size_t reached = 0, first_gap = n;
     int st;
 
     if (flow->n != n)
-        return dfle_error_set(err, DFLE_EINVAL, "router.%s: flow has %zu nodes, channel %zu",
+        return dfle_error_set(err, DFLE_EINVAL, "router.%s: flow has %zu nodes, network %zu",
                               r->sh.name, flow->n, n);
     flow->time_resolved = 0;
-    r->ch = ch, r->S = S, r->first = 0, r->n = n, r->flow = flow, r->j0 = 0;
+    r->net = net, r->S = S, r->node = ALL_NODES, r->flow = flow;
     if ((st = run_sweep(r, err)) != DFLE_OK)
         return st;
-    flow->runout_end = r->end;
-    for (size_t i = r->end; i < n; i++)
-        zero_node(flow, i);
+    for (size_t i = 0; i < n; i++) {
+        reached += flow->reach[i] > 0;
+        if (first_gap == n && !(flow->reach[i] > 0))
+            first_gap = i;
+    }
+    flow->runout_end = dfle_network_is_chain(net) ? first_gap : reached;
     return DFLE_OK;
 }
 
-static int lr_node_flow(void *state, const dfle_channel *ch, size_t i, double S,
+static int lr_node_flow(void *state, const dfle_network *net, size_t i, double S,
                         dfle_flow *node, int *goes_on, dfle_error *err)
 {
     lua_router *r = state;
@@ -192,7 +222,7 @@ static int lr_node_flow(void *state, const dfle_channel *ch, size_t i, double S,
     zero_node(node, 0);
     if (!(S > 0))
         return DFLE_OK;
-    r->ch = ch, r->S = &S, r->first = i, r->n = 1, r->flow = node, r->j0 = 0;
+    r->net = net, r->S = &S, r->node = i, r->flow = node;
     if ((st = run_sweep(r, err)) != DFLE_OK)
         return st;
     *goes_on = r->node_goes_on;

@@ -87,7 +87,7 @@ static int l_router_route(lua_State *L)
     dfle_router *rt = dfle_lua_check_router(L, 1);
     dfle_model *m = dfle_lua_check_model(L, 2);
     static const char *const keys[] = {"snapshots", NULL};
-    const dfle_channel *ch = dfle_model_channel(m);
+    const dfle_network *net = dfle_model_network(m);
     const size_t n = dfle_model_size(m);
     const dfle_process_report *rep;
     const double *S;
@@ -120,7 +120,7 @@ static int l_router_route(lua_State *L)
     dfle_lua_end_use(L, 2);
     dfle_lua_begin_use(L, 1, "dfle.router:route");
     dfle_lua_begin_use(L, 2, "dfle.router:route"); /* idle, just checked: cannot raise */
-    st = dfle_router_route(rt, ch, S, &flow, &err);
+    st = dfle_router_route(rt, net, S, &flow, &err);
     dfle_lua_end_use(L, 2);
     dfle_lua_end_use(L, 1);
     rep = dfle_router_process_report(rt);
