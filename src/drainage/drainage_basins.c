@@ -1,0 +1,332 @@
+/*
+ * drainage_basins.c - routing across depressions without changing
+ * elevations: the basin graph of Cordonnier, Bovy and Braun (2019), A
+ * versatile, linear complexity algorithm for flow routing in
+ * topographies with depressions, Earth Surface Dynamics 7, 549-562.
+ *
+ * After D8 and the flats, every remaining sink is the root of a basin:
+ * the cells draining to it.  Cells draining off the grid make up one
+ * more node, the outside (basin 0).  Two basins touch where a cell of
+ * one neighbours a cell of the other; the pass between them is the
+ * touching pair whose higher elevation is least, and that elevation is
+ * the cost of the link.  The minimum spanning tree of the basins
+ * (Kruskal: links by cost, union-find) holds each basin's way out over
+ * the lowest passes, which is where a flood would spill; oriented from
+ * the outside, it gives each basin the link it drains through.  The pit
+ * is then joined to that pass by reversing the receivers along the flow
+ * path from the pass cell down to the pit ("carving", their Sect. 2.4),
+ * and the pass cell drains into the next basin.  Every receiver stays a
+ * D8 neighbour, so direction codes and lengths keep their meaning.
+ *
+ * Costs: a pass over the pit basins' cells and their neighbours to find
+ * the links (a basin's links are kept unique by remembering, per
+ * neighbouring basin, the link it last made, as Cordonnier et al. do; a
+ * basin's cells are gathered by a walk up its donors), a radix sort of
+ * the links (a link per pair of touching basins), and a walk of each
+ * carved path: all linear.  Ties in cost go to the link found first,
+ * and links are found in a fixed order, so the result is reproducible.
+ *
+ * A region from which no basin reaches the outside (walled in by CLOSED
+ * edges or NoData) keeps one sink, at its lowest pit; its other basins
+ * drain to it.
+ */
+#include "drainage/drainage_internal.h"
+
+#include <assert.h>
+#include <math.h>
+#include <stdlib.h>
+#include <string.h>
+
+#define NONE UINT32_MAX
+#define ROOT (UINT32_MAX - 1) /* via[] of a basin that drains nowhere */
+
+static int grow(uint32_t **a, size_t n)
+{
+    uint32_t *p = realloc(*a, n * sizeof *p);
+    if (p == NULL)
+        return -1;
+    *a = p;
+    return 0;
+}
+
+/* Room for `need` basins (the outside included). */
+static int reserve_basins(drainage_basins *bg, size_t need)
+{
+    size_t cap;
+    if (need <= bg->cap)
+        return 0;
+    cap = need + need / 2;
+    if (grow(&bg->start, cap + 1) || grow(&bg->owner, cap) || grow(&bg->pos, cap) ||
+        grow(&bg->up, cap) || grow(&bg->tree_off, cap + 1) || grow(&bg->tree, 2 * cap) ||
+        grow(&bg->queue, cap) || grow(&bg->via, cap))
+        return -1;
+    bg->cap = cap;
+    return 0;
+}
+
+static int add_link(drainage_basins *bg, double w, uint32_t i, uint32_t j)
+{
+    if (bg->n_link >= ROOT) /* pos[] holds link indices as uint32 */
+        return -1;
+    if (bg->n_link == bg->link_cap) {
+        size_t cap = bg->link_cap ? 2 * bg->link_cap : 1024;
+        drainage_link *l = realloc(bg->link, cap * sizeof *l), *t;
+        if (l == NULL)
+            return -1;
+        bg->link = l;
+        if ((t = realloc(bg->sorted, cap * sizeof *t)) == NULL)
+            return -1;
+        bg->sorted = t;
+        bg->link_cap = cap;
+    }
+    bg->link[bg->n_link++] = (drainage_link){w, i, j};
+    return 0;
+}
+
+/* Label each pit's basin by a breadth-first walk up its donors; the
+ * cells of basin b (b = 1 ..) land in members[start[b] .. start[b+1]),
+ * the pit first.  Basin 0, the outside, is every other data cell;
+ * NoData is NONE. */
+static size_t label_basins(dfle_drainage *dr, uint32_t *basin, uint32_t *members)
+{
+    drainage_basins *bg = &dr->bg;
+    size_t m = 0;
+    uint32_t b = 0;
+    for (size_t i = 0; i < dr->n; i++)
+        basin[i] = dr->dir[i] == DIR_NODATA ? NONE : 0;
+    for (size_t p = 0; p < dr->n; p++) {
+        size_t head = m;
+        if (dr->dir[p] != DIR_SINK)
+            continue;
+        bg->start[++b] = (uint32_t)m;
+        basin[p] = b;
+        members[m++] = (uint32_t)p;
+        while (head < m) {
+            uint32_t c = members[head++];
+            for (uint32_t d = dr->don_off[c]; d < dr->don_off[c + 1]; d++) {
+                basin[dr->don[d]] = b;
+                members[m++] = dr->don[d];
+            }
+        }
+    }
+    bg->start[b + 1] = (uint32_t)m;
+    return b;
+}
+
+/* The cheapest pass from each pit basin to each basin it touches; a
+ * pair of pit basins is looked at from the lower-numbered one only. */
+static int find_links(dfle_drainage *dr, const double *z, const uint32_t *basin,
+                      const uint32_t *members, uint32_t n_basins)
+{
+    drainage_basins *bg = &dr->bg;
+    bg->n_link = 0;
+    for (uint32_t b = 0; b <= n_basins; b++)
+        bg->owner[b] = NONE;
+    for (uint32_t a = 1; a <= n_basins; a++) {
+        for (uint32_t m = bg->start[a]; m < bg->start[a + 1]; m++) {
+            uint32_t i = members[m];
+            size_t r = i / dr->o.nx, c = i % dr->o.nx;
+            int interior = drainage_interior(dr, r, c);
+            for (int k = 0; k < 8; k++) {
+                long long nb = interior ? (long long)i + dr->step[k] : drainage_nb(dr, r, c, k);
+                uint32_t b;
+                double w;
+                if (nb < 0)
+                    continue;
+                /* Most neighbours share the basin: look no further. */
+                b = basin[nb];
+                if (b == a || b == NONE || (b != 0 && b < a))
+                    continue;
+                w = z[i] > z[nb] ? z[i] : z[nb];
+                if (bg->owner[b] == a) {
+                    drainage_link *l = &bg->link[bg->pos[b]];
+                    if (w < l->w) {
+                        l->w = w;
+                        l->i = i;
+                        l->j = (uint32_t)nb;
+                    }
+                } else {
+                    bg->owner[b] = a;
+                    bg->pos[b] = (uint32_t)bg->n_link;
+                    if (add_link(bg, w, i, (uint32_t)nb) != 0)
+                        return -1;
+                }
+            }
+        }
+    }
+    return 0;
+}
+
+/* The bits of w as an unsigned key in the same order (sign flipped
+ * for positives, all bits for negatives). */
+static uint64_t sort_key(double w)
+{
+    uint64_t b;
+    memcpy(&b, &w, sizeof b);
+    return b >> 63 ? ~b : b | 0x8000000000000000ull;
+}
+
+/* Links by cost: a stable LSD radix sort, a byte a pass (passes where
+ * every key has the same byte are skipped), so ties keep the order the
+ * links were found in and the result is reproducible.  Linear, where a
+ * comparison sort would make the links the one O(n log n) step. */
+static void sort_links(drainage_basins *bg)
+{
+    uint32_t count[8][256];
+    size_t n = bg->n_link;
+    memset(count, 0, sizeof count);
+    for (size_t l = 0; l < n; l++) {
+        uint64_t key = sort_key(bg->link[l].w);
+        for (int d = 0; d < 8; d++)
+            count[d][(key >> (8 * d)) & 255]++;
+    }
+    for (int d = 0; d < 8 && n > 0; d++) {
+        uint32_t sum = 0, *at = count[d];
+        drainage_link *t;
+        if (at[(sort_key(bg->link[0].w) >> (8 * d)) & 255] == n)
+            continue;
+        for (int v = 0; v < 256; v++) {
+            uint32_t c = at[v];
+            at[v] = sum;
+            sum += c;
+        }
+        for (size_t l = 0; l < n; l++)
+            bg->sorted[at[(sort_key(bg->link[l].w) >> (8 * d)) & 255]++] = bg->link[l];
+        t = bg->link;
+        bg->link = bg->sorted;
+        bg->sorted = t;
+    }
+}
+
+static uint32_t find(uint32_t *up, uint32_t x)
+{
+    while (up[x] != x) {
+        up[x] = up[up[x]]; /* path halving */
+        x = up[x];
+    }
+    return x;
+}
+
+/* Kruskal: keep the links that join two components, cheapest first;
+ * they end up at the front of the link array.  Returns how many. */
+static size_t spanning_tree(drainage_basins *bg, const uint32_t *basin, uint32_t n_basins)
+{
+    size_t n_tree = 0;
+    sort_links(bg);
+    for (uint32_t b = 0; b <= n_basins; b++)
+        bg->up[b] = b;
+    for (size_t l = 0; l < bg->n_link && n_tree < n_basins; l++) {
+        uint32_t ra = find(bg->up, basin[bg->link[l].i]), rb = find(bg->up, basin[bg->link[l].j]);
+        if (ra == rb)
+            continue;
+        bg->up[ra] = rb;
+        bg->link[n_tree++] = bg->link[l];
+    }
+    return n_tree;
+}
+
+/* Breadth-first from `root` over the tree links: via[b] = the tree link
+ * by which b drains towards the root. */
+static void orient_from(drainage_basins *bg, const uint32_t *basin, uint32_t root)
+{
+    size_t head = 0, tail = 0;
+    bg->via[root] = ROOT;
+    bg->queue[tail++] = root;
+    while (head < tail) {
+        uint32_t a = bg->queue[head++];
+        for (uint32_t t = bg->tree_off[a]; t < bg->tree_off[a + 1]; t++) {
+            const drainage_link *l = &bg->link[bg->tree[t]];
+            uint32_t b = basin[l->i] == a ? basin[l->j] : basin[l->i];
+            if (bg->via[b] != NONE)
+                continue;
+            bg->via[b] = bg->tree[t];
+            bg->queue[tail++] = b;
+        }
+    }
+}
+
+/* Orient the tree from the outside; a component that does not reach it
+ * is oriented from its lowest pit, which stays a sink. */
+static void orient(dfle_drainage *dr, const double *z, const uint32_t *basin, uint32_t n_basins,
+                   size_t n_tree)
+{
+    drainage_basins *bg = &dr->bg;
+    uint32_t *lowest = bg->owner; /* per component; owner[] is done */
+    memset(bg->tree_off, 0, ((size_t)n_basins + 2) * sizeof *bg->tree_off);
+    for (size_t t = 0; t < n_tree; t++) {
+        bg->tree_off[basin[bg->link[t].i] + 1]++;
+        bg->tree_off[basin[bg->link[t].j] + 1]++;
+    }
+    for (uint32_t b = 0; b <= n_basins; b++)
+        bg->tree_off[b + 1] += bg->tree_off[b];
+    for (size_t t = 0; t < n_tree; t++) /* tree_off[x] as cursor, as for donors */
+        for (int e = 0; e < 2; e++) {
+            uint32_t x = basin[e ? bg->link[t].j : bg->link[t].i];
+            bg->tree[bg->tree_off[x]++] = (uint32_t)t;
+        }
+    memmove(bg->tree_off + 1, bg->tree_off, ((size_t)n_basins + 1) * sizeof *bg->tree_off);
+    bg->tree_off[0] = 0;
+
+    for (uint32_t b = 0; b <= n_basins; b++)
+        bg->via[b] = NONE;
+    orient_from(bg, basin, 0);
+    if (n_tree == n_basins)
+        return;
+    for (uint32_t b = 0; b <= n_basins; b++)
+        lowest[b] = NONE;
+    for (uint32_t b = 1; b <= n_basins; b++) {
+        uint32_t c = find(bg->up, b), pit = dr->stack[bg->start[b]];
+        if (bg->via[b] != NONE)
+            continue;
+        if (lowest[c] == NONE || z[pit] < z[dr->stack[bg->start[lowest[c]]]])
+            lowest[c] = b; /* ties: the pit first in index order */
+    }
+    for (uint32_t b = 1; b <= n_basins; b++)
+        if (lowest[b] != NONE)
+            orient_from(bg, basin, lowest[b]);
+}
+
+/* Reverse the receivers from basin b's pass cell down to its pit and
+ * send the pass cell over the pass.  Returns the cells changed. */
+static size_t carve_path(dfle_drainage *dr, const uint32_t *basin, uint32_t b)
+{
+    const drainage_link *l = &dr->bg.link[dr->bg.via[b]];
+    uint32_t in = basin[l->i] == b ? l->i : l->j, prev = in == l->i ? l->j : l->i, cur = in;
+    size_t changed = 0;
+    assert(basin[in] == b && basin[prev] != b);
+    for (;;) {
+        uint32_t next = dr->rcv[cur];
+        dr->rcv[cur] = prev;
+        dr->dir[cur] = drainage_code(dr, cur, prev);
+        changed++;
+        if (next == cur) /* the pit, its own receiver until now */
+            return changed;
+        prev = cur;
+        cur = next;
+    }
+}
+
+int drainage_carve(dfle_drainage *dr, const double *z, dfle_error *err)
+{
+    drainage_basins *bg = &dr->bg;
+    uint32_t *basin = drainage_work(dr, 0), n_basins;
+    size_t n_tree;
+
+    /* The stack is rebuilt after carving: until then it lists the
+     * basins' members. */
+    if (basin == NULL || reserve_basins(bg, dr->counts.pits + 1) != 0)
+        goto nomem;
+    n_basins = (uint32_t)label_basins(dr, basin, dr->stack);
+    assert(n_basins == dr->counts.pits);
+    if (find_links(dr, z, basin, dr->stack, n_basins) != 0)
+        goto nomem;
+    n_tree = spanning_tree(bg, basin, n_basins);
+    orient(dr, z, basin, n_basins, n_tree);
+    for (uint32_t b = 1; b <= n_basins; b++)
+        if (bg->via[b] != ROOT)
+            dr->counts.carved += carve_path(dr, basin, b);
+    dr->counts.basins = n_basins;
+    return DFLE_OK;
+nomem:
+    return dfle_error_set(err, DFLE_ENOMEM, "drainage: out of memory for the basin graph");
+}
