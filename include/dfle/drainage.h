@@ -89,11 +89,13 @@ enum dfle_drainage_depressions {
     DFLE_DRAINAGE_FILL = 1,
     /* Route through the basin graph (Cordonnier et al. 2019): the
      * catchment of each pit is a basin; basins are joined through their
-     * lowest passes by a minimum spanning tree rooted outside the grid,
-     * and the flow path from each pass down to its basin's pit is
-     * reversed (carved), so the pit drains out over its pass and every
-     * receiver stays a D8 neighbour.  Linear in practice: the landscape
-     * model's choice. */
+     * lowest passes by a minimum spanning tree rooted outside the grid
+     * (a basin may also spill off the grid at its lowest cell on an
+     * OPEN border), and the flow path from each pass down to its
+     * basin's pit is reversed (carved), so the pit drains out over its
+     * pass and every receiver stays a D8 neighbour.  A region with no
+     * way out keeps one sink, its lowest pit.  Linear in practice: the
+     * landscape model's choice. */
     DFLE_DRAINAGE_CARVE = 2
 };
 

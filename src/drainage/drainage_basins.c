@@ -9,7 +9,10 @@
  * more node, the outside (basin 0).  Two basins touch where a cell of
  * one neighbours a cell of the other; the pass between them is the
  * touching pair whose higher elevation is least, and that elevation is
- * the cost of the link.  The minimum spanning tree of the basins
+ * the cost of the link.  A pit basin also touches the outside at each
+ * of its cells that may leave the grid (an OPEN edge or NoData border),
+ * at that cell's elevation: there the basin spills off the grid, the
+ * cell becoming an outlet, as priority-flood would have it.  The minimum spanning tree of the basins
  * (Kruskal: links by cost, union-find) holds each basin's way out over
  * the lowest passes, which is where a flood would spill; oriented from
  * the outside, it gives each basin the link it drains through.  The pit
@@ -113,8 +116,30 @@ static size_t label_basins(dfle_drainage *dr, uint32_t *basin, uint32_t *members
     return b;
 }
 
+/* Basin a may reach basin b (0: outside) over i -> j at cost w; keep
+ * the cheapest such pass per pair (the first of equal ones). */
+static int offer(drainage_basins *bg, uint32_t a, uint32_t b, double w, uint32_t i, uint32_t j)
+{
+    drainage_link *l;
+    if (bg->owner[b] != a) {
+        bg->owner[b] = a;
+        bg->pos[b] = (uint32_t)bg->n_link;
+        return add_link(bg, w, i, j);
+    }
+    l = &bg->link[bg->pos[b]];
+    if (w < l->w) {
+        l->w = w;
+        l->i = i;
+        l->j = j;
+    }
+    return 0;
+}
+
 /* The cheapest pass from each pit basin to each basin it touches; a
- * pair of pit basins is looked at from the lower-numbered one only. */
+ * pair of pit basins is looked at from the lower-numbered one only.  A
+ * pit basin may also leave the grid where one of its cells may (an
+ * OPEN edge or NoData border: water rises to that cell and spills off),
+ * at the cell's elevation, with j = NONE for "off the grid". */
 static int find_links(dfle_drainage *dr, const double *z, const uint32_t *basin,
                       const uint32_t *members, uint32_t n_basins)
 {
@@ -126,35 +151,35 @@ static int find_links(dfle_drainage *dr, const double *z, const uint32_t *basin,
         for (uint32_t m = bg->start[a]; m < bg->start[a + 1]; m++) {
             uint32_t i = members[m];
             size_t r = i / dr->o.nx, c = i % dr->o.nx;
-            int interior = drainage_interior(dr, r, c);
+            int interior = drainage_interior(dr, r, c), at_border = 0;
             for (int k = 0; k < 8; k++) {
                 long long nb = interior ? (long long)i + dr->step[k] : drainage_nb(dr, r, c, k);
                 uint32_t b;
-                double w;
-                if (nb < 0)
+                if (nb < 0) {
+                    at_border = 1;
                     continue;
+                }
                 /* Most neighbours share the basin: look no further. */
                 b = basin[nb];
+                if (b == NONE)
+                    at_border = 1;
                 if (b == a || b == NONE || (b != 0 && b < a))
                     continue;
-                w = z[i] > z[nb] ? z[i] : z[nb];
-                if (bg->owner[b] == a) {
-                    drainage_link *l = &bg->link[bg->pos[b]];
-                    if (w < l->w) {
-                        l->w = w;
-                        l->i = i;
-                        l->j = (uint32_t)nb;
-                    }
-                } else {
-                    bg->owner[b] = a;
-                    bg->pos[b] = (uint32_t)bg->n_link;
-                    if (add_link(bg, w, i, (uint32_t)nb) != 0)
-                        return -1;
-                }
+                if (offer(bg, a, b, z[i] > z[nb] ? z[i] : z[nb], i, (uint32_t)nb) != 0)
+                    return -1;
             }
+            if (at_border && drainage_exit(dr, z, i) != DFLE_DRAINAGE_CLOSED &&
+                offer(bg, a, 0, z[i], i, NONE) != 0)
+                return -1;
         }
     }
     return 0;
+}
+
+/* The basin on the j side of a link: off the grid is the outside. */
+static uint32_t basin_of(const uint32_t *basin, uint32_t cell)
+{
+    return cell == NONE ? 0 : basin[cell];
 }
 
 /* The bits of w as an unsigned key in the same order (sign flipped
@@ -216,7 +241,8 @@ static size_t spanning_tree(drainage_basins *bg, const uint32_t *basin, uint32_t
     for (uint32_t b = 0; b <= n_basins; b++)
         bg->up[b] = b;
     for (size_t l = 0; l < bg->n_link && n_tree < n_basins; l++) {
-        uint32_t ra = find(bg->up, basin[bg->link[l].i]), rb = find(bg->up, basin[bg->link[l].j]);
+        uint32_t ra = find(bg->up, basin[bg->link[l].i]);
+        uint32_t rb = find(bg->up, basin_of(basin, bg->link[l].j));
         if (ra == rb)
             continue;
         bg->up[ra] = rb;
@@ -236,7 +262,7 @@ static void orient_from(drainage_basins *bg, const uint32_t *basin, uint32_t roo
         uint32_t a = bg->queue[head++];
         for (uint32_t t = bg->tree_off[a]; t < bg->tree_off[a + 1]; t++) {
             const drainage_link *l = &bg->link[bg->tree[t]];
-            uint32_t b = basin[l->i] == a ? basin[l->j] : basin[l->i];
+            uint32_t b = basin[l->i] == a ? basin_of(basin, l->j) : basin[l->i];
             if (bg->via[b] != NONE)
                 continue;
             bg->via[b] = bg->tree[t];
@@ -255,13 +281,13 @@ static void orient(dfle_drainage *dr, const double *z, const uint32_t *basin, ui
     memset(bg->tree_off, 0, ((size_t)n_basins + 2) * sizeof *bg->tree_off);
     for (size_t t = 0; t < n_tree; t++) {
         bg->tree_off[basin[bg->link[t].i] + 1]++;
-        bg->tree_off[basin[bg->link[t].j] + 1]++;
+        bg->tree_off[basin_of(basin, bg->link[t].j) + 1]++;
     }
     for (uint32_t b = 0; b <= n_basins; b++)
         bg->tree_off[b + 1] += bg->tree_off[b];
     for (size_t t = 0; t < n_tree; t++) /* tree_off[x] as cursor, as for donors */
         for (int e = 0; e < 2; e++) {
-            uint32_t x = basin[e ? bg->link[t].j : bg->link[t].i];
+            uint32_t x = e ? basin_of(basin, bg->link[t].j) : basin[bg->link[t].i];
             bg->tree[bg->tree_off[x]++] = (uint32_t)t;
         }
     memmove(bg->tree_off + 1, bg->tree_off, ((size_t)n_basins + 1) * sizeof *bg->tree_off);
@@ -287,17 +313,24 @@ static void orient(dfle_drainage *dr, const double *z, const uint32_t *basin, ui
 }
 
 /* Reverse the receivers from basin b's pass cell down to its pit and
- * send the pass cell over the pass.  Returns the cells changed. */
+ * send the pass cell over the pass (or off the grid).  Returns the
+ * cells changed. */
 static size_t carve_path(dfle_drainage *dr, const uint32_t *basin, uint32_t b)
 {
     const drainage_link *l = &dr->bg.link[dr->bg.via[b]];
-    uint32_t in = basin[l->i] == b ? l->i : l->j, prev = in == l->i ? l->j : l->i, cur = in;
+    int from_j = l->j != NONE && basin[l->j] == b;
+    uint32_t cur = from_j ? l->j : l->i, prev = from_j ? l->i : l->j;
     size_t changed = 0;
-    assert(basin[in] == b && basin[prev] != b);
+    assert(basin[cur] == b && (prev == NONE || basin[prev] != b));
     for (;;) {
         uint32_t next = dr->rcv[cur];
-        dr->rcv[cur] = prev;
-        dr->dir[cur] = drainage_code(dr, cur, prev);
+        if (prev == NONE) {
+            dr->rcv[cur] = cur;
+            dr->dir[cur] = DIR_OUT;
+        } else {
+            dr->rcv[cur] = prev;
+            dr->dir[cur] = drainage_code(dr, cur, prev);
+        }
         changed++;
         if (next == cur) /* the pit, its own receiver until now */
             return changed;
