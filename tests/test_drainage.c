@@ -63,7 +63,8 @@ static void assert_codes(const dfle_drainage *dr, const unsigned char *expected)
 
 /* Every routing, whatever the grid: receivers are the neighbours the
  * codes name, and roots exactly the cells with no code 0..7; the stack
- * holds each data cell once, after its receiver (so there is no cycle);
+ * holds each data cell once, after its receiver (so there is no cycle),
+ * and depth-first, each cell's tree as one block inside its receiver's;
  * the donor rows hold each non-root once, under its receiver, in index
  * order; area is the cell plus its donors' areas, and the roots' areas
  * add up to exactly cells x cell area; the counts match the codes. */
@@ -121,6 +122,8 @@ static void check_invariants(const dfle_drainage *dr, const double *z)
             assert_int_equal((long long)rcv[i], dfle_drainage_neighbour(dr, i, dir[i]));
             assert_false(isnan(z[rcv[i]]));
             assert_true(pos[rcv[i]] < pos[i]); /* receiver first */
+            if (o.order == DFLE_DRAINAGE_DEPTH_FIRST) /* blocks of A / cell cells */
+                assert_true((double)pos[i] + A[i] / cell <= (double)pos[rcv[i]] + A[rcv[i]] / cell);
             n_nonroot++;
         } else {
             assert_true(dir[i] == O || dir[i] == X);
@@ -192,6 +195,37 @@ static void test_tilted_plane(void **state)
     assert_true(dfle_drainage_area(dr)[0] == 100.0);
     assert_true(dfle_drainage_area(dr)[1] == 400.0);
     assert_int_equal(dfle_drainage_get_counts(dr).outlets, 8);
+    check_invariants(dr, z);
+    dfle_drainage_free(dr);
+}
+
+/* The stack of that plane, both ways.  Depth-first: each column's top
+ * cell (a root, in index order), then down its column.  Kahn's: the
+ * cells without donors (row 3) first, then each row as its donors are
+ * done; backwards, row 0 from the east end first. */
+static void test_stack_orders(void **state)
+{
+    static const uint32_t depth_first[20] = {0, 5, 10, 15, 1, 6, 11, 16, 2, 7,
+                                             12, 17, 3, 8, 13, 18, 4, 9, 14, 19};
+    static const uint32_t kahn[20] = {4, 3, 2, 1, 0, 9, 8, 7, 6, 5,
+                                      14, 13, 12, 11, 10, 19, 18, 17, 16, 15};
+    dfle_drainage_opts o = grid(5, 4, 10, 10, DFLE_DRAINAGE_KEEP);
+    dfle_drainage *dr;
+    double z[20];
+    size_t n;
+    (void)state;
+
+    for (size_t i = 0; i < 20; i++)
+        z[i] = (double)(i / 5);
+    dr = make(&o);
+    route(dr, z);
+    assert_memory_equal(dfle_drainage_stack(dr, &n), depth_first, sizeof depth_first);
+    assert_int_equal(n, 20);
+    dfle_drainage_free(dr);
+    o.order = DFLE_DRAINAGE_KAHN;
+    dr = make(&o);
+    route(dr, z);
+    assert_memory_equal(dfle_drainage_stack(dr, &n), kahn, sizeof kahn);
     check_invariants(dr, z);
     dfle_drainage_free(dr);
 }
@@ -653,20 +687,21 @@ static void test_invariants_random(void **state)
     for (size_t s = 0; s < sizeof sizes / sizeof sizes[0]; s++)
         for (int kind = 0; kind < 4; kind++)
             for (int dep = 0; dep < 3; dep++)
-                for (int edges = 0; edges < 3; edges++) {
+                for (int edges = 0; edges < 6; edges++) {
                     size_t nx = sizes[s][0], ny = sizes[s][1];
                     dfle_drainage_opts o = grid(nx, ny, 3, 2, (enum dfle_drainage_depressions)dep);
+                    o.order = edges % 2 ? DFLE_DRAINAGE_KAHN : DFLE_DRAINAGE_DEPTH_FIRST;
                     double *z = malloc(nx * ny * sizeof *z);
                     dfle_drainage *dr;
                     assert_non_null(z);
                     random_grid(z, nx, ny, kind);
                     z[0] = 1.0; /* at least one data cell */
-                    if (edges == 1) { /* a landscape model's: base level, closed */
+                    if (edges / 2 == 1) { /* a landscape model's: base level, closed */
                         o.edge[DFLE_DRAINAGE_SOUTH] = DFLE_DRAINAGE_BASE_LEVEL;
                         o.edge[DFLE_DRAINAGE_NORTH] = DFLE_DRAINAGE_CLOSED;
                         o.edge[DFLE_DRAINAGE_EAST] = DFLE_DRAINAGE_CLOSED;
                         o.nodata = DFLE_DRAINAGE_CLOSED;
-                    } else if (edges == 2) { /* no way out at all */
+                    } else if (edges / 2 == 2) { /* no way out at all */
                         for (int e = 0; e < 4; e++)
                             o.edge[e] = DFLE_DRAINAGE_CLOSED;
                         o.nodata = DFLE_DRAINAGE_CLOSED;
@@ -676,7 +711,7 @@ static void test_invariants_random(void **state)
                     check_invariants(dr, z);
                     {
                         dfle_drainage_counts k = dfle_drainage_get_counts(dr);
-                        if (dep != DFLE_DRAINAGE_KEEP && edges == 0)
+                        if (dep != DFLE_DRAINAGE_KEEP && edges / 2 == 0)
                             assert_int_equal(k.sinks, 0); /* every pit handled */
                         if (dep == DFLE_DRAINAGE_KEEP)
                             assert_int_equal(k.sinks, k.pits);
@@ -697,14 +732,15 @@ static void test_reroute_matches_fresh(void **state)
     (void)state;
     assert_non_null(z1);
     assert_non_null(z2);
-    for (int dep = 0; dep < 3; dep++)
+    for (int dep = 0; dep < 6; dep++)
         for (int kind = 0; kind < 4; kind++) {
-            dfle_drainage_opts o = grid(nx, ny, 5, 5, (enum dfle_drainage_depressions)dep);
+            dfle_drainage_opts o = grid(nx, ny, 5, 5, (enum dfle_drainage_depressions)(dep / 2));
             dfle_drainage *used, *fresh;
             const uint32_t *rcv_before, *off_u, *off_f, *don_u, *don_f, *st_u, *st_f;
             size_t ns_u, ns_f, mem;
             dfle_drainage_counts ku, kf;
 
+            o.order = dep % 2 ? DFLE_DRAINAGE_KAHN : DFLE_DRAINAGE_DEPTH_FIRST;
             random_grid(z1, nx, ny, kind);
             random_grid(z2, nx, ny, (kind + 1) % 4);
             used = make(&o);
@@ -831,6 +867,10 @@ static void test_errors(void **state)
     o = grid(3, 3, 1, 1, (enum dfle_drainage_depressions)5);
     assert_int_equal(dfle_drainage_new(&o, &dr, &err), DFLE_EINVAL);
     assert_msg_contains(err.msg, "depressions");
+    o = grid(3, 3, 1, 1, DFLE_DRAINAGE_KEEP);
+    o.order = (enum dfle_drainage_order)2;
+    assert_int_equal(dfle_drainage_new(&o, &dr, &err), DFLE_EINVAL);
+    assert_msg_contains(err.msg, "order = 2");
     assert_null(dr);
 
     o = grid(3, 3, 1, 1, DFLE_DRAINAGE_KEEP);
@@ -850,6 +890,7 @@ int main(void)
 {
     const struct CMUnitTest tests[] = {
         cmocka_unit_test(test_tilted_plane),
+        cmocka_unit_test(test_stack_orders),
         cmocka_unit_test(test_closed_edge_flat),
         cmocka_unit_test(test_flat_grid),
         cmocka_unit_test(test_pit_keep),

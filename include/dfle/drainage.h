@@ -99,16 +99,30 @@ enum dfle_drainage_depressions {
     DFLE_DRAINAGE_CARVE = 2
 };
 
+/* The order of the stack; both put every cell after its receiver,
+ * roots first, and give the same areas. */
+enum dfle_drainage_order {
+    /* Each root, in index order, then its tree depth-first, donors in
+     * index order (Braun and Willett 2013): a tree's cells are
+     * contiguous, and memory is walked along the tree.  Default. */
+    DFLE_DRAINAGE_DEPTH_FIRST = 0,
+    /* Kahn's topological order read backwards (Kahn's starts with the
+     * cells that have no donors, in index order, and takes a cell once
+     * all its donors are out): the order the DEM lists. */
+    DFLE_DRAINAGE_KAHN = 1
+};
+
 typedef struct dfle_drainage_opts {
     size_t nx, ny;          /* columns and rows, >= 1, nx * ny < 2^32       */
     double dx, dy;          /* cell width (E-W) and height (N-S) [m], > 0   */
     enum dfle_drainage_edge edge[4]; /* by dfle_drainage_side               */
     enum dfle_drainage_edge nodata;  /* data cells next to NoData           */
     enum dfle_drainage_depressions depressions;
+    enum dfle_drainage_order order;
 } dfle_drainage_opts;
 
 /* Defaults: no grid (nx = ny = 0), dx = dy = 1 m, every edge and NoData
- * OPEN (the DEM rule), pits kept. */
+ * OPEN (the DEM rule), pits kept, depth-first stack. */
 void dfle_drainage_opts_default(dfle_drainage_opts *o);
 
 int dfle_drainage_new(const dfle_drainage_opts *opts, dfle_drainage **out, dfle_error *err);
@@ -149,9 +163,9 @@ const unsigned char *dfle_drainage_dir(const dfle_drainage *dr);
  * offsets has nx * ny + 1 entries. */
 const uint32_t *dfle_drainage_donors(const dfle_drainage *dr, const uint32_t **offsets);
 /* The data cells, roots first, every cell after its receiver (a stack
- * in the sense of Braun and Willett 2013): walk it forwards to go
- * downstream-first (implicit erosion), backwards to accumulate.  It is
- * Kahn's order of the flow tree read backwards (doc/dem.md). */
+ * in the sense of Braun and Willett 2013), in the order of the options:
+ * walk it forwards to go downstream-first (implicit erosion), backwards
+ * to accumulate. */
 const uint32_t *dfle_drainage_stack(const dfle_drainage *dr, size_t *n_stack);
 /* Drainage area [m^2], counting the cell itself: (1 + cells upstream)
  * dx dy, exact in whole cells; NaN on NoData. */

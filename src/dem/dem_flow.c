@@ -20,7 +20,7 @@ _Static_assert((int)DFLE_DEM_DIR_OUT == (int)DFLE_DRAINAGE_DIR_OUT &&
                "dem.h and drainage.h direction codes differ");
 
 /* The routing object, made on first need: every edge and NoData open,
- * pits kept (fill first to route across them). */
+ * pits kept (fill first to route across them), Kahn's order. */
 static int dem_drainage(dfle_dem *d, dfle_error *err)
 {
     dfle_drainage_opts o;
@@ -31,6 +31,7 @@ static int dem_drainage(dfle_dem *d, dfle_error *err)
     o.ny = d->ny;
     o.dx = d->dx;
     o.dy = d->dy;
+    o.order = DFLE_DRAINAGE_KAHN;
     return dfle_drainage_new(&o, &d->flow, err);
 }
 

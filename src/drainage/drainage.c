@@ -27,6 +27,7 @@ void dfle_drainage_opts_default(dfle_drainage_opts *o)
         o->edge[s] = DFLE_DRAINAGE_OPEN;
     o->nodata = DFLE_DRAINAGE_OPEN;
     o->depressions = DFLE_DRAINAGE_KEEP;
+    o->order = DFLE_DRAINAGE_DEPTH_FIRST;
 }
 
 static int valid_edge(enum dfle_drainage_edge e)
@@ -57,6 +58,9 @@ static int check_opts(const dfle_drainage_opts *o, dfle_error *err)
         o->depressions != DFLE_DRAINAGE_CARVE)
         return dfle_error_set(err, DFLE_EINVAL, "drainage: depressions = %d is not a method "
                               "(KEEP, FILL, CARVE)", (int)o->depressions);
+    if (o->order != DFLE_DRAINAGE_DEPTH_FIRST && o->order != DFLE_DRAINAGE_KAHN)
+        return dfle_error_set(err, DFLE_EINVAL, "drainage: order = %d is not a stack order "
+                              "(DEPTH_FIRST, KAHN)", (int)o->order);
     return DFLE_OK;
 }
 
@@ -83,7 +87,8 @@ void dfle_drainage_free(dfle_drainage *dr)
     free(dr->bg.tree_off);
     free(dr->bg.tree);
     free(dr->bg.queue);
-    free(dr->bg.via);
+    free(dr->bg.in);
+    free(dr->bg.out);
     free(dr->bg.link);
     free(dr->bg.sorted);
     free(dr);
@@ -201,24 +206,25 @@ unsigned char drainage_code(const dfle_drainage *dr, size_t a, size_t b)
 /* Routing                                                          */
 /* ---------------------------------------------------------------- */
 
+/* The first infinite elevation, for the message. */
+static int infinite_at(const dfle_drainage *dr, const double *z, dfle_error *err)
+{
+    size_t i = 0;
+    while (i + 1 < dr->n && !isinf(z[i]))
+        i++;
+    return dfle_error_set(err, DFLE_EINVAL, "drainage: elevation of cell %zu (row %zu, column "
+                          "%zu) is infinite; use NaN for NoData", i, i / dr->o.nx, i % dr->o.nx);
+}
+
 int dfle_drainage_route(dfle_drainage *dr, const double *z, dfle_error *err)
 {
-    size_t n_sinks, n_data = 0;
-    int st;
+    size_t n_sinks, n_data;
+    int st, infinite;
 
     if (z == NULL)
         return dfle_error_set(err, DFLE_EINVAL, "drainage: elevations are required");
     dr->routed = 0;
     memset(&dr->counts, 0, sizeof dr->counts);
-    for (size_t i = 0; i < dr->n; i++) {
-        if (isinf(z[i]))
-            return dfle_error_set(err, DFLE_EINVAL, "drainage: elevation of cell %zu (row %zu, "
-                                  "column %zu) is infinite; use NaN for NoData", i,
-                                  i / dr->o.nx, i % dr->o.nx);
-        n_data += !isnan(z[i]);
-    }
-    if (n_data == 0)
-        return dfle_error_set(err, DFLE_EINVAL, "drainage: every cell is NoData");
     if (dr->o.depressions == DFLE_DRAINAGE_FILL) {
         dfle_drainage_fill_stats fs;
         if (dr->zfill == NULL && (dr->zfill = malloc(dr->n * sizeof *dr->zfill)) == NULL)
@@ -230,7 +236,11 @@ int dfle_drainage_route(dfle_drainage *dr, const double *z, dfle_error *err)
         dr->counts.filled = fs.raised;
         z = dr->zfill;
     }
-    n_sinks = drainage_d8(dr, z);
+    n_sinks = drainage_d8(dr, z, &n_data, &infinite);
+    if (infinite)
+        return infinite_at(dr, z, err);
+    if (n_data == 0)
+        return dfle_error_set(err, DFLE_EINVAL, "drainage: every cell is NoData");
     dr->counts.pits = n_sinks;
     if (n_sinks > 0 && (st = drainage_flats(dr, z, n_sinks, err)) != DFLE_OK)
         return st;
@@ -241,8 +251,9 @@ int dfle_drainage_route(dfle_drainage *dr, const double *z, dfle_error *err)
             return st;
         drainage_donors(dr);
     }
-    if ((st = drainage_order(dr, n_data, err)) != DFLE_OK)
+    if ((st = drainage_stack(dr, n_data, err)) != DFLE_OK)
         return st;
+    drainage_area(dr);
     dr->counts.data = n_data;
     for (size_t i = 0; i < dr->n; i++) {
         dr->counts.outlets += dr->dir[i] == DIR_OUT;
@@ -317,7 +328,7 @@ size_t dfle_drainage_memory(const dfle_drainage *dr)
         bytes += dr->work[k] != NULL ? n * sizeof *dr->work[k] : 0;
     bytes += dr->zfill != NULL ? n * sizeof *dr->zfill : 0;
     bytes += dr->heap_cap * sizeof *dr->heap + dr->height_cap * sizeof *dr->height;
-    bytes += b > 0 ? (9 * b + 2) * sizeof(uint32_t) : 0; /* drainage_basins.c */
+    bytes += b > 0 ? (10 * b + 2) * sizeof(uint32_t) : 0; /* drainage_basins.c */
     bytes += 2 * dr->bg.link_cap * sizeof *dr->bg.link;
     return bytes;
 }

@@ -41,7 +41,7 @@
 #include <string.h>
 
 #define NONE UINT32_MAX
-#define ROOT (UINT32_MAX - 1) /* via[] of a basin that drains nowhere */
+#define ROOT (UINT32_MAX - 1) /* in[] of a basin that drains nowhere */
 
 static int grow(uint32_t **a, size_t n)
 {
@@ -61,13 +61,14 @@ static int reserve_basins(drainage_basins *bg, size_t need)
     cap = need + need / 2;
     if (grow(&bg->start, cap + 1) || grow(&bg->owner, cap) || grow(&bg->pos, cap) ||
         grow(&bg->up, cap) || grow(&bg->tree_off, cap + 1) || grow(&bg->tree, 2 * cap) ||
-        grow(&bg->queue, cap) || grow(&bg->via, cap))
+        grow(&bg->queue, cap) || grow(&bg->in, cap) || grow(&bg->out, cap))
         return -1;
     bg->cap = cap;
     return 0;
 }
 
-static int add_link(drainage_basins *bg, double w, uint32_t i, uint32_t j)
+static int add_link(drainage_basins *bg, double w, uint32_t a, uint32_t b, uint32_t i,
+                    uint32_t j)
 {
     if (bg->n_link >= ROOT) /* pos[] holds link indices as uint32 */
         return -1;
@@ -82,7 +83,7 @@ static int add_link(drainage_basins *bg, double w, uint32_t i, uint32_t j)
         bg->sorted = t;
         bg->link_cap = cap;
     }
-    bg->link[bg->n_link++] = (drainage_link){w, i, j};
+    bg->link[bg->n_link++] = (drainage_link){w, a, b, i, j};
     return 0;
 }
 
@@ -124,7 +125,7 @@ static int offer(drainage_basins *bg, uint32_t a, uint32_t b, double w, uint32_t
     if (bg->owner[b] != a) {
         bg->owner[b] = a;
         bg->pos[b] = (uint32_t)bg->n_link;
-        return add_link(bg, w, i, j);
+        return add_link(bg, w, a, b, i, j);
     }
     l = &bg->link[bg->pos[b]];
     if (w < l->w) {
@@ -174,12 +175,6 @@ static int find_links(dfle_drainage *dr, const double *z, const uint32_t *basin,
         }
     }
     return 0;
-}
-
-/* The basin on the j side of a link: off the grid is the outside. */
-static uint32_t basin_of(const uint32_t *basin, uint32_t cell)
-{
-    return cell == NONE ? 0 : basin[cell];
 }
 
 /* The bits of w as an unsigned key in the same order (sign flipped
@@ -234,15 +229,14 @@ static uint32_t find(uint32_t *up, uint32_t x)
 
 /* Kruskal: keep the links that join two components, cheapest first;
  * they end up at the front of the link array.  Returns how many. */
-static size_t spanning_tree(drainage_basins *bg, const uint32_t *basin, uint32_t n_basins)
+static size_t spanning_tree(drainage_basins *bg, uint32_t n_basins)
 {
     size_t n_tree = 0;
     sort_links(bg);
     for (uint32_t b = 0; b <= n_basins; b++)
         bg->up[b] = b;
     for (size_t l = 0; l < bg->n_link && n_tree < n_basins; l++) {
-        uint32_t ra = find(bg->up, basin[bg->link[l].i]);
-        uint32_t rb = find(bg->up, basin_of(basin, bg->link[l].j));
+        uint32_t ra = find(bg->up, bg->link[l].a), rb = find(bg->up, bg->link[l].b);
         if (ra == rb)
             continue;
         bg->up[ra] = rb;
@@ -251,21 +245,24 @@ static size_t spanning_tree(drainage_basins *bg, const uint32_t *basin, uint32_t
     return n_tree;
 }
 
-/* Breadth-first from `root` over the tree links: via[b] = the tree link
- * by which b drains towards the root. */
-static void orient_from(drainage_basins *bg, const uint32_t *basin, uint32_t root)
+/* Breadth-first from `root` over the tree links: each basin reached
+ * drains over the link it was reached by, from its cell in[] to out[].
+ * (Recording the cells, not the link, keeps the carving below from
+ * chasing links scattered by the sort.) */
+static void orient_from(drainage_basins *bg, uint32_t root)
 {
     size_t head = 0, tail = 0;
-    bg->via[root] = ROOT;
+    bg->in[root] = ROOT;
     bg->queue[tail++] = root;
     while (head < tail) {
         uint32_t a = bg->queue[head++];
         for (uint32_t t = bg->tree_off[a]; t < bg->tree_off[a + 1]; t++) {
             const drainage_link *l = &bg->link[bg->tree[t]];
-            uint32_t b = basin[l->i] == a ? basin_of(basin, l->j) : basin[l->i];
-            if (bg->via[b] != NONE)
+            uint32_t b = l->a == a ? l->b : l->a;
+            if (bg->in[b] != NONE)
                 continue;
-            bg->via[b] = bg->tree[t];
+            bg->in[b] = l->a == b ? l->i : l->j;
+            bg->out[b] = l->a == b ? l->j : l->i;
             bg->queue[tail++] = b;
         }
     }
@@ -273,43 +270,41 @@ static void orient_from(drainage_basins *bg, const uint32_t *basin, uint32_t roo
 
 /* Orient the tree from the outside; a component that does not reach it
  * is oriented from its lowest pit, which stays a sink. */
-static void orient(dfle_drainage *dr, const double *z, const uint32_t *basin, uint32_t n_basins,
-                   size_t n_tree)
+static void orient(dfle_drainage *dr, const double *z, uint32_t n_basins, size_t n_tree)
 {
     drainage_basins *bg = &dr->bg;
     uint32_t *lowest = bg->owner; /* per component; owner[] is done */
     memset(bg->tree_off, 0, ((size_t)n_basins + 2) * sizeof *bg->tree_off);
     for (size_t t = 0; t < n_tree; t++) {
-        bg->tree_off[basin[bg->link[t].i] + 1]++;
-        bg->tree_off[basin_of(basin, bg->link[t].j) + 1]++;
+        bg->tree_off[bg->link[t].a + 1]++;
+        bg->tree_off[bg->link[t].b + 1]++;
     }
     for (uint32_t b = 0; b <= n_basins; b++)
         bg->tree_off[b + 1] += bg->tree_off[b];
-    for (size_t t = 0; t < n_tree; t++) /* tree_off[x] as cursor, as for donors */
-        for (int e = 0; e < 2; e++) {
-            uint32_t x = e ? basin_of(basin, bg->link[t].j) : basin[bg->link[t].i];
-            bg->tree[bg->tree_off[x]++] = (uint32_t)t;
-        }
+    for (size_t t = 0; t < n_tree; t++) { /* tree_off[x] as cursor, as for donors */
+        bg->tree[bg->tree_off[bg->link[t].a]++] = (uint32_t)t;
+        bg->tree[bg->tree_off[bg->link[t].b]++] = (uint32_t)t;
+    }
     memmove(bg->tree_off + 1, bg->tree_off, ((size_t)n_basins + 1) * sizeof *bg->tree_off);
     bg->tree_off[0] = 0;
 
     for (uint32_t b = 0; b <= n_basins; b++)
-        bg->via[b] = NONE;
-    orient_from(bg, basin, 0);
+        bg->in[b] = NONE;
+    orient_from(bg, 0);
     if (n_tree == n_basins)
         return;
     for (uint32_t b = 0; b <= n_basins; b++)
         lowest[b] = NONE;
     for (uint32_t b = 1; b <= n_basins; b++) {
         uint32_t c = find(bg->up, b), pit = dr->stack[bg->start[b]];
-        if (bg->via[b] != NONE)
+        if (bg->in[b] != NONE)
             continue;
         if (lowest[c] == NONE || z[pit] < z[dr->stack[bg->start[lowest[c]]]])
             lowest[c] = b; /* ties: the pit first in index order */
     }
     for (uint32_t b = 1; b <= n_basins; b++)
         if (lowest[b] != NONE)
-            orient_from(bg, basin, lowest[b]);
+            orient_from(bg, lowest[b]);
 }
 
 /* Reverse the receivers from basin b's pass cell down to its pit and
@@ -317,11 +312,10 @@ static void orient(dfle_drainage *dr, const double *z, const uint32_t *basin, ui
  * cells changed. */
 static size_t carve_path(dfle_drainage *dr, const uint32_t *basin, uint32_t b)
 {
-    const drainage_link *l = &dr->bg.link[dr->bg.via[b]];
-    int from_j = l->j != NONE && basin[l->j] == b;
-    uint32_t cur = from_j ? l->j : l->i, prev = from_j ? l->i : l->j;
+    uint32_t cur = dr->bg.in[b], prev = dr->bg.out[b];
     size_t changed = 0;
     assert(basin[cur] == b && (prev == NONE || basin[prev] != b));
+    (void)basin;
     for (;;) {
         uint32_t next = dr->rcv[cur];
         if (prev == NONE) {
@@ -353,10 +347,10 @@ int drainage_carve(dfle_drainage *dr, const double *z, dfle_error *err)
     assert(n_basins == dr->counts.pits);
     if (find_links(dr, z, basin, dr->stack, n_basins) != 0)
         goto nomem;
-    n_tree = spanning_tree(bg, basin, n_basins);
-    orient(dr, z, basin, n_basins, n_tree);
+    n_tree = spanning_tree(bg, n_basins);
+    orient(dr, z, n_basins, n_tree);
     for (uint32_t b = 1; b <= n_basins; b++)
-        if (bg->via[b] != ROOT)
+        if (bg->in[b] != ROOT)
             dr->counts.carved += carve_path(dr, basin, b);
     dr->counts.basins = n_basins;
     return DFLE_OK;

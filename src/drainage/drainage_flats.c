@@ -29,6 +29,9 @@
 
 /* A low edge found but not yet labelled (labels are 1, 2, ...). */
 #define SEED UINT32_MAX
+/* Marks a low edge found, in the direction code of a draining cell
+ * (0..8) while the sinks are scanned: no n-cell array to clear. */
+#define FOUND 0x80
 
 /* Breadth-first distance (1 at the seeds) over sinks of the same label;
  * q holds the seeds on entry and room for every sink of their flats. */
@@ -92,15 +95,11 @@ int drainage_flats(dfle_drainage *dr, const double *z, size_t n_sinks, dfle_erro
      * a set of distinct cells, so n fits), the labelled cells to
      * stack[] once the sinks have been read. */
     const uint32_t *sinks = dr->stack;
-    uint32_t *low = dr->don, *high = dr->don_off, *cells = dr->stack;
-    uint32_t *label = drainage_work(dr, 0), n_labels;
+    uint32_t *low = dr->don, *high = dr->don_off, *cells = dr->stack, *label, n_labels;
     int32_t *away, *towards;
     size_t n_low = 0, n_high = 0, n_kept = 0, n_cells = 0;
 
     dr->counts.flats = 0;
-    if (label == NULL)
-        goto nomem;
-    memset(label, 0, dr->n * sizeof *label);
     for (size_t s = 0; s < n_sinks; s++) {
         size_t c = sinks[s], r = c / dr->o.nx, cc = c % dr->o.nx;
         int is_high = 0;
@@ -110,21 +109,28 @@ int drainage_flats(dfle_drainage *dr, const double *z, size_t n_sinks, dfle_erro
                 continue;
             if (z[nb] > z[c]) {
                 is_high = 1;
-            } else if (z[nb] == z[c] && dr->dir[nb] != DIR_SINK && label[nb] != SEED) {
-                label[nb] = SEED;
+            } else if (z[nb] == z[c] && dr->dir[nb] != DIR_SINK && !(dr->dir[nb] & FOUND)) {
+                dr->dir[nb] |= FOUND;
                 low[n_low++] = (uint32_t)nb;
             }
         }
         if (is_high)
             high[n_high++] = (uint32_t)c;
     }
+    for (size_t s = 0; s < n_low; s++)
+        dr->dir[low[s]] &= (unsigned char)~FOUND;
     if (n_low == 0) /* no flat drains: nothing to do */
         return DFLE_OK;
-    /* Only now: a grid of one-cell pits never needs the distances. */
+    /* Only now: a grid of one-cell pits (a landscape model's random
+     * surface) never needs the labels and distances. */
+    label = drainage_work(dr, 0);
     away = (int32_t *)drainage_work(dr, 1);
     towards = (int32_t *)drainage_work(dr, 2);
-    if (away == NULL || towards == NULL)
+    if (label == NULL || away == NULL || towards == NULL)
         goto nomem;
+    memset(label, 0, dr->n * sizeof *label);
+    for (size_t s = 0; s < n_low; s++)
+        label[low[s]] = SEED;
 
     n_labels = label_flats(dr, z, low, n_low, label, cells, &n_cells);
     if (n_labels + 1 > dr->height_cap) {

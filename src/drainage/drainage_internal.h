@@ -24,8 +24,9 @@
 /* Basin-graph workspace (drainage_basins.c), sized by the number of
  * basins and links, grown on demand and kept. */
 typedef struct drainage_link {
-    double w;        /* pass elevation: the higher of the two cells     */
-    uint32_t i, j;   /* the pass: neighbours in two basins, i's a pit's */
+    double w;        /* pass elevation: the higher of the two cells      */
+    uint32_t a, b;   /* the basins it joins: a a pit's, b (0 = outside)  */
+    uint32_t i, j;   /* the pass: cell i in a, j in b (or off the grid)  */
 } drainage_link;
 
 typedef struct drainage_basins {
@@ -38,7 +39,8 @@ typedef struct drainage_basins {
     uint32_t *tree_off;  /* cap + 1: tree links by basin (compressed rows) */
     uint32_t *tree;      /* 2 cap                                        */
     uint32_t *queue;     /* cap                                          */
-    uint32_t *via;       /* cap: the link a basin drains through         */
+    uint32_t *in, *out;  /* cap each: the pass a basin drains over, from
+                            its cell `in` to `out` in the next basin    */
     drainage_link *link, *sorted; /* link_cap each; sorted: radix scratch */
     size_t n_link, link_cap;
 } drainage_basins;
@@ -118,19 +120,21 @@ unsigned char *drainage_mark(dfle_drainage *dr);
 
 /* drainage_d8.c: dir and rcv by steepest descent; cells with no lower
  * neighbour drain out or become DIR_SINK.  Lists the sinks in stack[]
- * (borrowed until the stack is built) and returns how many. */
-size_t drainage_d8(dfle_drainage *dr, const double *z);
+ * (borrowed until the stack is built) and returns how many; counts the
+ * data cells and notes an infinite elevation on the way. */
+size_t drainage_d8(dfle_drainage *dr, const double *z, size_t *n_data, int *infinite);
 
 /* drainage_flats.c: route the sinks on flats that have a draining edge;
  * the sinks are stack[0 .. n_sinks).  Borrows don, don_off and stack,
  * work[0..2].  Sets counts.flats. */
 int drainage_flats(dfle_drainage *dr, const double *z, size_t n_sinks, dfle_error *err);
 
-/* drainage_tree.c: donors from rcv; then the stack by Kahn's algorithm
- * and the area accumulated in the same pass (DFLE_ENUMERIC on a cycle,
- * which would be a bug). */
+/* drainage_tree.c: donors from rcv; the stack in the order of the
+ * options (DFLE_ENUMERIC on a cycle, which would be a bug), which also
+ * sets area to 1 a data cell and NaN elsewhere; then area. */
 void drainage_donors(dfle_drainage *dr);
-int drainage_order(dfle_drainage *dr, size_t n_data, dfle_error *err);
+int drainage_stack(dfle_drainage *dr, size_t n_data, dfle_error *err);
+void drainage_area(dfle_drainage *dr);
 
 /* drainage_basins.c: reroute every sink through the basin graph.
  * Needs donors; borrows stack and work[0]; leaves donors stale. */

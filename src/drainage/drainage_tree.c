@@ -1,16 +1,17 @@
 /*
  * drainage_tree.c - the flow tree once receivers are final: donors in
- * compressed rows, then the stack order and drainage area in one pass.
+ * compressed rows, the stack, and drainage area.
  *
- * The stack is Kahn's topological order (cells without donors first, in
- * index order; a cell once all its donors are out), read backwards so
- * that roots come first and every cell follows its receiver, as Braun
- * and Willett (2013) need it.  Kahn's order rather than their
- * depth-first one because it is the order the DEM has always listed
- * (dfle_dem_order, and a network's rows, are that order), and both
- * serve the landscape model alike: any order with receivers first is
- * a valid stack.  Every loop is a plain pass or a FIFO, so no tree is
- * too deep for the C stack.
+ * The stack puts every cell after its receiver, roots first (Braun and
+ * Willett 2013), in one of two orders.  Depth-first, theirs, keeps each
+ * tree contiguous and walks memory along the tree, which is what a
+ * landscape model re-routing a large grid every step wants.  Kahn's
+ * (cells without donors first, in index order; a cell once all its
+ * donors are out), read backwards, is the order the DEM has always
+ * listed (dfle_dem_order, a network's rows), so the DEM asks for it.
+ * Area does not depend on the order.  Every loop is a plain pass, a
+ * FIFO or a walk along receivers, so no tree is too deep for the C
+ * stack.
  */
 #include "drainage/drainage_internal.h"
 
@@ -37,44 +38,92 @@ void drainage_donors(dfle_drainage *dr)
     off[0] = 0;
 }
 
-int drainage_order(dfle_drainage *dr, size_t n_data, dfle_error *err)
+/* Kahn's algorithm, written from the end of the stack so that it reads
+ * roots first with no reversal; the FIFO is the stack itself. */
+static size_t kahn(dfle_drainage *dr, size_t n_data, unsigned char *left)
 {
-    unsigned char *left = drainage_mark(dr); /* donors not yet passed */
-    uint32_t *s = dr->stack;
-    double *A = dr->area, cell = dr->o.dx * dr->o.dy;
+    uint32_t *s = dr->stack + n_data - 1; /* s[-t]: the t-th cell out */
     size_t head = 0, tail = 0;
+    for (size_t i = 0; i < dr->n; i++) {
+        int data = dr->dir[i] != DIR_NODATA;
+        left[i] = (unsigned char)(dr->don_off[i + 1] - dr->don_off[i]); /* at most 8 */
+        dr->area[i] = data ? 1.0 : NAN;
+        if (left[i] == 0 && data)
+            *(s - tail++) = (uint32_t)i;
+    }
+    while (head < tail) {
+        uint32_t c = *(s - head++), r = dr->rcv[c];
+        if (r != c && --left[r] == 0)
+            *(s - tail++) = r;
+    }
+    return tail;
+}
 
-    if (left == NULL)
+/* Braun and Willett's order: each root (in index order), then its tree
+ * depth-first, donors in index order.  No stack of our own: a cell's
+ * next donor to visit is counted in next[], and the walk climbs back
+ * down the receivers, so the memory touched follows the tree. */
+static size_t depth_first(dfle_drainage *dr, unsigned char *next)
+{
+    const uint32_t *off = dr->don_off;
+    uint32_t *s = dr->stack;
+    size_t t = 0;
+    for (size_t root = 0; root < dr->n; root++) {
+        uint32_t c = (uint32_t)root;
+        if (dr->dir[root] == DIR_NODATA) {
+            dr->area[root] = NAN;
+            continue;
+        }
+        if (dr->rcv[root] != root)
+            continue;
+        s[t++] = c;
+        next[c] = 0;
+        dr->area[c] = 1.0;
+        for (;;) {
+            uint32_t k = off[c] + next[c];
+            if (k < off[c + 1]) {
+                next[c]++;
+                c = dr->don[k];
+                s[t++] = c;
+                next[c] = 0;
+                dr->area[c] = 1.0;
+            } else if (c == root) {
+                break;
+            } else {
+                c = dr->rcv[c];
+            }
+        }
+    }
+    return t;
+}
+
+int drainage_stack(dfle_drainage *dr, size_t n_data, dfle_error *err)
+{
+    unsigned char *scratch = drainage_mark(dr);
+    if (scratch == NULL)
         return dfle_error_set(err, DFLE_ENOMEM, "drainage: out of memory ordering %zu cells",
                               dr->n);
-    for (size_t i = 0; i < dr->n; i++) {
-        left[i] = (unsigned char)(dr->don_off[i + 1] - dr->don_off[i]); /* at most 8 */
-        A[i] = dr->dir[i] == DIR_NODATA ? NAN : 1.0;
-        if (left[i] == 0 && dr->dir[i] != DIR_NODATA)
-            s[tail++] = (uint32_t)i;
-    }
-    /* Area in whole cells, passed on as each cell leaves the queue (all
-     * its donors have passed theirs), scaled once at the end: exact in
-     * a double, so the areas leaving the grid add up to exactly cells x
-     * cell area, whatever the order. */
-    while (head < tail) {
-        uint32_t c = s[head++], r = dr->rcv[c];
-        if (r == c)
-            continue;
-        A[r] += A[c];
-        if (--left[r] == 0)
-            s[tail++] = r;
-    }
-    dr->n_stack = tail;
-    if (tail != n_data) /* a cycle: the steps never make one */
+    dr->n_stack = dr->o.order == DFLE_DRAINAGE_KAHN ? kahn(dr, n_data, scratch)
+                                                    : depth_first(dr, scratch);
+    if (dr->n_stack != n_data) /* a cycle: the steps never make one */
         return dfle_error_set(err, DFLE_ENUMERIC, "drainage: flow directions form a cycle "
-                              "(%zu of %zu cells ordered); this is a bug in dfle", tail, n_data);
-    for (size_t i = 0; i < dr->n; i++)
-        A[i] *= cell;
-    for (size_t a = 0, b = tail; a + 1 < b; a++, b--) {
-        uint32_t t = s[a];
-        s[a] = s[b - 1];
-        s[b - 1] = t;
-    }
+                              "(%zu of %zu cells ordered); this is a bug in dfle", dr->n_stack,
+                              n_data);
     return DFLE_OK;
+}
+
+void drainage_area(dfle_drainage *dr)
+{
+    /* Whole cells, passed down the stack from its end (every donor
+     * before its receiver) and scaled as each is complete: exact in a
+     * double, so the areas leaving the grid add up to exactly cells x
+     * cell area, in any order. */
+    double cell = dr->o.dx * dr->o.dy;
+    for (size_t j = dr->n_stack; j > 0; j--) {
+        uint32_t c = dr->stack[j - 1], r = dr->rcv[c];
+        double cells = dr->area[c];
+        dr->area[c] = cells * cell;
+        if (r != c)
+            dr->area[r] += cells;
+    }
 }
