@@ -102,14 +102,16 @@ enum dfle_drainage_depressions {
 /* The order of the stack; both put every cell after its receiver,
  * roots first, and give the same areas. */
 enum dfle_drainage_order {
-    /* Each root, in index order, then its tree depth-first, donors in
-     * index order (Braun and Willett 2013): a tree's cells are
-     * contiguous, and memory is walked along the tree.  Default. */
-    DFLE_DRAINAGE_DEPTH_FIRST = 0,
     /* Kahn's topological order read backwards (Kahn's starts with the
      * cells that have no donors, in index order, and takes a cell once
-     * all its donors are out): the order the DEM lists. */
-    DFLE_DRAINAGE_KAHN = 1
+     * all its donors are out).  The fastest to build (its work is
+     * independent cell to cell) and the order the DEM lists.  Default. */
+    DFLE_DRAINAGE_KAHN = 0,
+    /* Each root, in index order, then its tree depth-first, donors in
+     * index order (Braun and Willett 2013): each tree's cells are
+     * contiguous, for work done basin by basin.  Slower to build on
+     * large grids (each step waits on the last). */
+    DFLE_DRAINAGE_DEPTH_FIRST = 1
 };
 
 typedef struct dfle_drainage_opts {
@@ -122,7 +124,7 @@ typedef struct dfle_drainage_opts {
 } dfle_drainage_opts;
 
 /* Defaults: no grid (nx = ny = 0), dx = dy = 1 m, every edge and NoData
- * OPEN (the DEM rule), pits kept, depth-first stack. */
+ * OPEN (the DEM rule), pits kept, Kahn's stack. */
 void dfle_drainage_opts_default(dfle_drainage_opts *o);
 
 int dfle_drainage_new(const dfle_drainage_opts *opts, dfle_drainage **out, dfle_error *err);

@@ -27,7 +27,7 @@ void dfle_drainage_opts_default(dfle_drainage_opts *o)
         o->edge[s] = DFLE_DRAINAGE_OPEN;
     o->nodata = DFLE_DRAINAGE_OPEN;
     o->depressions = DFLE_DRAINAGE_KEEP;
-    o->order = DFLE_DRAINAGE_DEPTH_FIRST;
+    o->order = DFLE_DRAINAGE_KAHN;
 }
 
 static int valid_edge(enum dfle_drainage_edge e)
@@ -58,9 +58,9 @@ static int check_opts(const dfle_drainage_opts *o, dfle_error *err)
         o->depressions != DFLE_DRAINAGE_CARVE)
         return dfle_error_set(err, DFLE_EINVAL, "drainage: depressions = %d is not a method "
                               "(KEEP, FILL, CARVE)", (int)o->depressions);
-    if (o->order != DFLE_DRAINAGE_DEPTH_FIRST && o->order != DFLE_DRAINAGE_KAHN)
+    if (o->order != DFLE_DRAINAGE_KAHN && o->order != DFLE_DRAINAGE_DEPTH_FIRST)
         return dfle_error_set(err, DFLE_EINVAL, "drainage: order = %d is not a stack order "
-                              "(DEPTH_FIRST, KAHN)", (int)o->order);
+                              "(KAHN, DEPTH_FIRST)", (int)o->order);
     return DFLE_OK;
 }
 

@@ -145,13 +145,13 @@ static int find_links(dfle_drainage *dr, const double *z, const uint32_t *basin,
                       const uint32_t *members, uint32_t n_basins)
 {
     drainage_basins *bg = &dr->bg;
+    uint32_t nx = (uint32_t)dr->o.nx;
     bg->n_link = 0;
     for (uint32_t b = 0; b <= n_basins; b++)
         bg->owner[b] = NONE;
     for (uint32_t a = 1; a <= n_basins; a++) {
         for (uint32_t m = bg->start[a]; m < bg->start[a + 1]; m++) {
-            uint32_t i = members[m];
-            size_t r = i / dr->o.nx, c = i % dr->o.nx;
+            uint32_t i = members[m], r = i / nx, c = i - r * nx; /* 32-bit: hot */
             int interior = drainage_interior(dr, r, c), at_border = 0;
             for (int k = 0; k < 8; k++) {
                 long long nb = interior ? (long long)i + dr->step[k] : drainage_nb(dr, r, c, k);

@@ -3,15 +3,17 @@
  * compressed rows, the stack, and drainage area.
  *
  * The stack puts every cell after its receiver, roots first (Braun and
- * Willett 2013), in one of two orders.  Depth-first, theirs, keeps each
- * tree contiguous and walks memory along the tree, which is what a
- * landscape model re-routing a large grid every step wants.  Kahn's
- * (cells without donors first, in index order; a cell once all its
- * donors are out), read backwards, is the order the DEM has always
- * listed (dfle_dem_order, a network's rows), so the DEM asks for it.
- * Area does not depend on the order.  Every loop is a plain pass, a
- * FIFO or a walk along receivers, so no tree is too deep for the C
- * stack.
+ * Willett 2013), in one of two orders.  Kahn's (cells without donors
+ * first, in index order; a cell once all its donors are out), read
+ * backwards, is the default: its FIFO holds independent cells, so the
+ * processor overlaps their memory accesses, and it is 2-3 times faster
+ * to build on a large grid than a depth-first walk, whose every step
+ * waits for the last.  It is also the order the DEM has always listed
+ * (dfle_dem_order, a network's rows).  Braun and Willett's depth-first
+ * order, which keeps each tree contiguous, is there for work done tree
+ * by tree.  Area does not depend on the order.  Every loop is a plain
+ * pass, a FIFO or a walk along receivers, so no tree is too deep for
+ * the C stack.
  */
 #include "drainage/drainage_internal.h"
 
