@@ -810,6 +810,71 @@ static void test_carve_noise(void **state)
     free(copy);
 }
 
+/* The basin graph routes each pit out over its lowest passes: along
+ * the carved flow path from a pit, the highest elevation met is the
+ * pit's spill elevation, which priority-flood computes independently
+ * (the minimax property of a minimum spanning tree).  Checked for every
+ * pit of noisy grids, with NoData holes and a closed edge; the largest
+ * has more links than the radix sort takes a byte at a time. */
+static void test_carve_minimax(void **state)
+{
+    static const size_t sides[] = {40, 150, 450};
+    (void)state;
+    for (size_t s = 0; s < sizeof sides / sizeof sides[0]; s++)
+        for (int kind = 0; kind < 4; kind++) {
+            size_t nx = sides[s], ny = sides[s] - 7, n = nx * ny, n_stack, pits = 0;
+            dfle_drainage_opts o = grid(nx, ny, 2, 3, DFLE_DRAINAGE_CARVE);
+            double *z = malloc(n * sizeof *z), *filled = malloc(n * sizeof *filled);
+            double *highest = malloc(n * sizeof *highest);
+            dfle_drainage *carve, *keep;
+            const uint32_t *rcv, *stack;
+            const unsigned char *pit_dir;
+            dfle_error err;
+            assert_non_null(z);
+            assert_non_null(filled);
+            assert_non_null(highest);
+            random_grid(z, nx, ny, kind);
+            z[0] = 1.0;
+            o.edge[DFLE_DRAINAGE_EAST] = DFLE_DRAINAGE_CLOSED;
+            o.edge[DFLE_DRAINAGE_SOUTH] = kind % 2 ? DFLE_DRAINAGE_BASE_LEVEL
+                                                   : DFLE_DRAINAGE_OPEN;
+            carve = make(&o);
+            route(carve, z);
+            check_invariants(carve, z);
+            assert_int_equal(dfle_drainage_get_counts(carve).sinks, 0);
+            o.depressions = DFLE_DRAINAGE_KEEP;
+            keep = make(&o);
+            route(keep, z);
+            memcpy(filled, z, n * sizeof *z);
+            assert_ok(dfle_drainage_fill(keep, filled, NULL, &err), &err);
+            /* Highest elevation on the way out, receivers first. */
+            rcv = dfle_drainage_receivers(carve);
+            stack = dfle_drainage_stack(carve, &n_stack);
+            for (size_t j = 0; j < n_stack; j++) {
+                uint32_t c = stack[j];
+                highest[c] = rcv[c] == c || z[c] > highest[rcv[c]] ? z[c] : highest[rcv[c]];
+            }
+            pit_dir = dfle_drainage_dir(keep);
+            for (size_t i = 0; i < n; i++)
+                if (pit_dir[i] == X) {
+                    pits++;
+                    if (highest[i] != filled[i]) {
+                        print_error("%zu x %zu, kind %d: pit %zu spills at %.17g, "
+                                    "carved path peaks at %.17g\n", nx, ny, kind, i,
+                                    filled[i], highest[i]);
+                        fail();
+                    }
+                }
+            assert_true(pits > 0);
+            assert_int_equal(dfle_drainage_get_counts(carve).pits, pits);
+            dfle_drainage_free(carve);
+            dfle_drainage_free(keep);
+            free(z);
+            free(filled);
+            free(highest);
+        }
+}
+
 /* ---------------------------------------------------------------- */
 /* Geometry and errors                                              */
 /* ---------------------------------------------------------------- */
@@ -903,6 +968,7 @@ int main(void)
         cmocka_unit_test(test_invariants_random),
         cmocka_unit_test(test_reroute_matches_fresh),
         cmocka_unit_test(test_carve_noise),
+        cmocka_unit_test(test_carve_minimax),
         cmocka_unit_test(test_geometry),
         cmocka_unit_test(test_errors),
     };

@@ -91,6 +91,7 @@ void dfle_drainage_free(dfle_drainage *dr)
     free(dr->bg.out);
     free(dr->bg.link);
     free(dr->bg.sorted);
+    free(dr->bg.count);
     free(dr);
 }
 
@@ -329,6 +330,6 @@ size_t dfle_drainage_memory(const dfle_drainage *dr)
     bytes += dr->zfill != NULL ? n * sizeof *dr->zfill : 0;
     bytes += dr->heap_cap * sizeof *dr->heap + dr->height_cap * sizeof *dr->height;
     bytes += b > 0 ? (10 * b + 2) * sizeof(uint32_t) : 0; /* drainage_basins.c */
-    bytes += 2 * dr->bg.link_cap * sizeof *dr->bg.link;
+    bytes += 2 * dr->bg.link_cap * sizeof *dr->bg.link + dr->bg.count_cap * sizeof(uint32_t);
     return bytes;
 }

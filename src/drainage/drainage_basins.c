@@ -151,22 +151,27 @@ static int find_links(dfle_drainage *dr, const double *z, const uint32_t *basin,
         bg->owner[b] = NONE;
     for (uint32_t a = 1; a <= n_basins; a++) {
         for (uint32_t m = bg->start[a]; m < bg->start[a + 1]; m++) {
-            uint32_t i = members[m], r = i / nx, c = i - r * nx; /* 32-bit: hot */
-            int interior = drainage_interior(dr, r, c), at_border = 0;
-            for (int k = 0; k < 8; k++) {
-                long long nb = interior ? (long long)i + dr->step[k] : drainage_nb(dr, r, c, k);
-                uint32_t b;
-                if (nb < 0) {
-                    at_border = 1;
-                    continue;
+            uint32_t i = members[m], r = i / nx, c = i - r * nx, across[8];
+            int interior = drainage_interior(dr, r, c), at_border = 0, n_across = 0;
+            if (interior) {
+                for (int k = 0; k < 8; k++) {
+                    uint32_t nb = (uint32_t)((long long)i + dr->step[k]), b = basin[nb];
+                    at_border |= b == NONE;
+                    across[n_across] = nb;
+                    n_across += (b != a) & (b != NONE) & ((b == 0) | (b > a));
                 }
-                /* Most neighbours share the basin: look no further. */
-                b = basin[nb];
-                if (b == NONE)
-                    at_border = 1;
-                if (b == a || b == NONE || (b != 0 && b < a))
-                    continue;
-                if (offer(bg, a, b, z[i] > z[nb] ? z[i] : z[nb], i, (uint32_t)nb) != 0)
+            } else {
+                for (int k = 0; k < 8; k++) {
+                    long long nb = drainage_nb(dr, r, c, k);
+                    uint32_t b = nb < 0 ? NONE : basin[nb];
+                    at_border |= b == NONE;
+                    if (b != a && b != NONE && (b == 0 || b > a))
+                        across[n_across++] = (uint32_t)nb;
+                }
+            }
+            for (int q = 0; q < n_across; q++) {
+                uint32_t j = across[q];
+                if (offer(bg, a, basin[j], z[i] > z[j] ? z[i] : z[j], i, j) != 0)
                     return -1;
             }
             if (at_border && drainage_exit(dr, z, i) != DFLE_DRAINAGE_CLOSED &&
@@ -186,36 +191,49 @@ static uint64_t sort_key(double w)
     return b >> 63 ? ~b : b | 0x8000000000000000ull;
 }
 
-/* Links by cost: a stable LSD radix sort, a byte a pass (passes where
- * every key has the same byte are skipped), so ties keep the order the
- * links were found in and the result is reproducible.  Linear, where a
- * comparison sort would make the links the one O(n log n) step. */
-static void sort_links(drainage_basins *bg)
+/* Links by cost: a stable LSD radix sort (passes where every key has
+ * the same digit are skipped), so ties keep the order the links were
+ * found in and the result is reproducible.  Linear, where a comparison
+ * sort would make the links the one O(n log n) step.  Many links take
+ * 16-bit digits (4 passes, a 1 MB histogram kept with the object); few
+ * take bytes (8 passes, 8 kB), so a small grid pays nothing for it. */
+static int sort_links(drainage_basins *bg)
 {
-    uint32_t count[8][256];
     size_t n = bg->n_link;
-    memset(count, 0, sizeof count);
+    int bits = n > ((size_t)1 << 16) ? 16 : 8, passes = 64 / bits;
+    size_t radix = (size_t)1 << bits, mask = radix - 1;
+    if (n < 2)
+        return 0;
+    if (bg->count_cap < (size_t)passes * radix) {
+        uint32_t *c = realloc(bg->count, (size_t)passes * radix * sizeof *c);
+        if (c == NULL)
+            return -1;
+        bg->count = c;
+        bg->count_cap = (size_t)passes * radix;
+    }
+    memset(bg->count, 0, (size_t)passes * radix * sizeof *bg->count);
     for (size_t l = 0; l < n; l++) {
         uint64_t key = sort_key(bg->link[l].w);
-        for (int d = 0; d < 8; d++)
-            count[d][(key >> (8 * d)) & 255]++;
+        for (int d = 0; d < passes; d++)
+            bg->count[(size_t)d * radix + ((key >> (bits * d)) & mask)]++;
     }
-    for (int d = 0; d < 8 && n > 0; d++) {
-        uint32_t sum = 0, *at = count[d];
+    for (int d = 0; d < passes; d++) {
+        uint32_t sum = 0, *at = bg->count + (size_t)d * radix;
         drainage_link *t;
-        if (at[(sort_key(bg->link[0].w) >> (8 * d)) & 255] == n)
+        if (at[(sort_key(bg->link[0].w) >> (bits * d)) & mask] == n)
             continue;
-        for (int v = 0; v < 256; v++) {
+        for (size_t v = 0; v < radix; v++) {
             uint32_t c = at[v];
             at[v] = sum;
             sum += c;
         }
         for (size_t l = 0; l < n; l++)
-            bg->sorted[at[(sort_key(bg->link[l].w) >> (8 * d)) & 255]++] = bg->link[l];
+            bg->sorted[at[(sort_key(bg->link[l].w) >> (bits * d)) & mask]++] = bg->link[l];
         t = bg->link;
         bg->link = bg->sorted;
         bg->sorted = t;
     }
+    return 0;
 }
 
 static uint32_t find(uint32_t *up, uint32_t x)
@@ -227,12 +245,12 @@ static uint32_t find(uint32_t *up, uint32_t x)
     return x;
 }
 
-/* Kruskal: keep the links that join two components, cheapest first;
- * they end up at the front of the link array.  Returns how many. */
+/* Kruskal: keep the links that join two components, cheapest first
+ * (links sorted); they end up at the front of the link array.  Returns
+ * how many. */
 static size_t spanning_tree(drainage_basins *bg, uint32_t n_basins)
 {
     size_t n_tree = 0;
-    sort_links(bg);
     for (uint32_t b = 0; b <= n_basins; b++)
         bg->up[b] = b;
     for (size_t l = 0; l < bg->n_link && n_tree < n_basins; l++) {
@@ -345,7 +363,7 @@ int drainage_carve(dfle_drainage *dr, const double *z, dfle_error *err)
         goto nomem;
     n_basins = (uint32_t)label_basins(dr, basin, dr->stack);
     assert(n_basins == dr->counts.pits);
-    if (find_links(dr, z, basin, dr->stack, n_basins) != 0)
+    if (find_links(dr, z, basin, dr->stack, n_basins) != 0 || sort_links(bg) != 0)
         goto nomem;
     n_tree = spanning_tree(bg, n_basins);
     orient(dr, z, n_basins, n_tree);

@@ -43,6 +43,8 @@ typedef struct drainage_basins {
                             its cell `in` to `out` in the next basin    */
     drainage_link *link, *sorted; /* link_cap each; sorted: radix scratch */
     size_t n_link, link_cap;
+    uint32_t *count;     /* radix histograms, count_cap                  */
+    size_t count_cap;
 } drainage_basins;
 
 /* Priority-flood's queue (drainage_fill.c): (z, index) pairs. */
