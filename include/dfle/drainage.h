@@ -199,6 +199,12 @@ double dfle_drainage_length(const dfle_drainage *dr, int k);
 /* Bytes the object holds now (its arrays and workspace). */
 size_t dfle_drainage_memory(const dfle_drainage *dr);
 
+/* Free the workspace kept between calls (about 5-40 bytes a cell, more
+ * where the basin graph had many links), for an object that will not
+ * route again soon; the results stay valid, and the next call allocates
+ * what it needs again. */
+void dfle_drainage_trim(dfle_drainage *dr);
+
 #ifdef __cplusplus
 }
 #endif

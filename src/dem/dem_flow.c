@@ -72,6 +72,8 @@ int dfle_dem_route(dfle_dem *d, dfle_error *err)
         return dfle_error_set(err, DFLE_ENOMEM, "dem: out of memory routing %zu cells", d->n);
     for (size_t j = 0; j < n_stack; j++)
         d->order[j] = stack[n_stack - 1 - j];
+    /* A DEM routes once per fill: its workspace is not worth keeping. */
+    dfle_drainage_trim(d->flow);
     d->routed = 1;
     return DFLE_OK;
 }

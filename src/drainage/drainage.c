@@ -64,16 +64,11 @@ static int check_opts(const dfle_drainage_opts *o, dfle_error *err)
     return DFLE_OK;
 }
 
-void dfle_drainage_free(dfle_drainage *dr)
+void dfle_drainage_trim(dfle_drainage *dr)
 {
+    drainage_basins empty = {0};
     if (dr == NULL)
         return;
-    free(dr->rcv);
-    free(dr->dir);
-    free(dr->don_off);
-    free(dr->don);
-    free(dr->stack);
-    free(dr->area);
     free(dr->mark);
     for (int k = 0; k < 3; k++)
         free(dr->work[k]);
@@ -92,6 +87,28 @@ void dfle_drainage_free(dfle_drainage *dr)
     free(dr->bg.link);
     free(dr->bg.sorted);
     free(dr->bg.count);
+    dr->mark = NULL;
+    for (int k = 0; k < 3; k++)
+        dr->work[k] = NULL;
+    dr->zfill = NULL;
+    dr->heap = NULL;
+    dr->heap_cap = 0;
+    dr->height = NULL;
+    dr->height_cap = 0;
+    dr->bg = empty;
+}
+
+void dfle_drainage_free(dfle_drainage *dr)
+{
+    if (dr == NULL)
+        return;
+    dfle_drainage_trim(dr);
+    free(dr->rcv);
+    free(dr->dir);
+    free(dr->don_off);
+    free(dr->don);
+    free(dr->stack);
+    free(dr->area);
     free(dr);
 }
 
