@@ -328,6 +328,17 @@ static const double pit_z[25] = {
     9, 9, 4, 9, 9,
 };
 
+/* Route the pit with `dep`: codes as expected, invariants kept. */
+static dfle_drainage *route_pit(enum dfle_drainage_depressions dep, const unsigned char *expected)
+{
+    dfle_drainage_opts o = grid(5, 5, 10, 10, dep);
+    dfle_drainage *dr = make(&o);
+    route(dr, pit_z);
+    assert_codes(dr, expected);
+    check_invariants(dr, pit_z);
+    return dr;
+}
+
 static void test_pit_keep(void **state)
 {
     static const unsigned char expected[] = {
@@ -337,19 +348,14 @@ static void test_pit_keep(void **state)
         0, 7, 6, 5, 4,
         7, 0, O, 4, 5,
     };
-    dfle_drainage_opts o = grid(5, 5, 10, 10, DFLE_DRAINAGE_KEEP);
-    dfle_drainage *dr = make(&o);
-    dfle_drainage_counts k;
+    dfle_drainage *dr = route_pit(DFLE_DRAINAGE_KEEP, expected);
+    dfle_drainage_counts k = dfle_drainage_get_counts(dr);
     (void)state;
-    route(dr, pit_z);
-    assert_codes(dr, expected);
-    k = dfle_drainage_get_counts(dr);
     assert_int_equal(k.sinks, 1);
     assert_int_equal(k.pits, 1);
     assert_int_equal(k.outlets, 1);
     assert_true(dfle_drainage_area(dr)[12] == 2200.0);
     assert_true(dfle_drainage_area(dr)[22] == 300.0);
-    check_invariants(dr, pit_z);
     dfle_drainage_free(dr);
 }
 
@@ -362,22 +368,18 @@ static void test_pit_fill(void **state)
         0, 1, 2, 3, 4,
         7, 0, O, 4, 5,
     };
-    dfle_drainage_opts o = grid(5, 5, 10, 10, DFLE_DRAINAGE_FILL);
-    dfle_drainage *dr = make(&o), *keep;
+    dfle_drainage_opts o = grid(5, 5, 10, 10, DFLE_DRAINAGE_KEEP);
+    dfle_drainage *dr = route_pit(DFLE_DRAINAGE_FILL, expected), *keep;
+    dfle_drainage_counts k = dfle_drainage_get_counts(dr);
     dfle_drainage_fill_stats fs;
-    dfle_drainage_counts k;
     dfle_error err;
     double z[25];
     (void)state;
 
-    route(dr, pit_z);
-    assert_codes(dr, expected);
-    k = dfle_drainage_get_counts(dr);
     assert_int_equal(k.filled, 1);
     assert_int_equal(k.flats, 6);
     assert_int_equal(k.sinks, 0);
     assert_true(dfle_drainage_area(dr)[22] == 2500.0);
-    check_invariants(dr, pit_z);
 
     /* Filling in place gives the spill surface; routing it with pits
      * kept gives exactly the FILL routing. */
@@ -388,7 +390,6 @@ static void test_pit_fill(void **state)
     assert_close(fs.volume, 300.0, 0, 0);
     for (size_t i = 0; i < 25; i++)
         assert_true(z[i] == (i == 12 ? 5.0 : pit_z[i]));
-    o.depressions = DFLE_DRAINAGE_KEEP;
     keep = make(&o);
     route(keep, z);
     assert_memory_equal(dfle_drainage_dir(keep), dfle_drainage_dir(dr), 25);
@@ -406,13 +407,9 @@ static void test_pit_carve(void **state)
         0, 1, 6, 5, 4,
         7, 0, O, 4, 5,
     };
-    dfle_drainage_opts o = grid(5, 5, 10, 10, DFLE_DRAINAGE_CARVE);
-    dfle_drainage *dr = make(&o);
-    dfle_drainage_counts k;
+    dfle_drainage *dr = route_pit(DFLE_DRAINAGE_CARVE, expected);
+    dfle_drainage_counts k = dfle_drainage_get_counts(dr);
     (void)state;
-    route(dr, pit_z);
-    assert_codes(dr, expected);
-    k = dfle_drainage_get_counts(dr);
     assert_int_equal(k.pits, 1);
     assert_int_equal(k.basins, 1);
     assert_int_equal(k.carved, 2);
@@ -421,7 +418,6 @@ static void test_pit_carve(void **state)
     assert_int_equal(dfle_drainage_receivers(dr)[16], 22);
     assert_true(dfle_drainage_area(dr)[22] == 2500.0);
     assert_true(dfle_drainage_area(dr)[16] == 2200.0); /* the pit's whole basin */
-    check_invariants(dr, pit_z);
     dfle_drainage_free(dr);
 }
 

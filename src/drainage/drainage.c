@@ -75,15 +75,7 @@ void dfle_drainage_trim(dfle_drainage *dr)
     free(dr->zfill);
     free(dr->heap);
     free(dr->height);
-    free(dr->bg.start);
-    free(dr->bg.owner);
-    free(dr->bg.pos);
-    free(dr->bg.up);
-    free(dr->bg.tree_off);
-    free(dr->bg.tree);
-    free(dr->bg.queue);
-    free(dr->bg.in);
-    free(dr->bg.out);
+    free(dr->bg.start); /* all the per-basin arrays */
     free(dr->bg.link);
     free(dr->bg.sorted);
     free(dr->bg.count);
@@ -346,7 +338,7 @@ size_t dfle_drainage_memory(const dfle_drainage *dr)
         bytes += dr->work[k] != NULL ? n * sizeof *dr->work[k] : 0;
     bytes += dr->zfill != NULL ? n * sizeof *dr->zfill : 0;
     bytes += dr->heap_cap * sizeof *dr->heap + dr->height_cap * sizeof *dr->height;
-    bytes += b > 0 ? (10 * b + 2) * sizeof(uint32_t) : 0; /* drainage_basins.c */
+    bytes += b > 0 ? DRAINAGE_BASIN_WORDS(b) * sizeof(uint32_t) : 0;
     bytes += 2 * dr->bg.link_cap * sizeof *dr->bg.link + dr->bg.count_cap * sizeof(uint32_t);
     return bytes;
 }

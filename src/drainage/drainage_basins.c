@@ -43,26 +43,28 @@
 #define NONE UINT32_MAX
 #define ROOT (UINT32_MAX - 1) /* in[] of a basin that drains nowhere */
 
-static int grow(uint32_t **a, size_t n)
-{
-    uint32_t *p = realloc(*a, n * sizeof *p);
-    if (p == NULL)
-        return -1;
-    *a = p;
-    return 0;
-}
-
-/* Room for `need` basins (the outside included). */
+/* Room for `need` basins (the outside included).  The per-basin arrays
+ * share one block (their contents never outlive a call), so growing or
+ * freeing them is one call. */
 static int reserve_basins(drainage_basins *bg, size_t need)
 {
     size_t cap;
+    uint32_t *block;
     if (need <= bg->cap)
         return 0;
     cap = need + need / 2;
-    if (grow(&bg->start, cap + 1) || grow(&bg->owner, cap) || grow(&bg->pos, cap) ||
-        grow(&bg->up, cap) || grow(&bg->tree_off, cap + 1) || grow(&bg->tree, 2 * cap) ||
-        grow(&bg->queue, cap) || grow(&bg->in, cap) || grow(&bg->out, cap))
+    if ((block = malloc(DRAINAGE_BASIN_WORDS(cap) * sizeof *block)) == NULL)
         return -1;
+    free(bg->start);
+    bg->start = block;
+    bg->owner = bg->start + cap + 1;
+    bg->pos = bg->owner + cap;
+    bg->up = bg->pos + cap;
+    bg->tree_off = bg->up + cap;
+    bg->tree = bg->tree_off + cap + 1;
+    bg->queue = bg->tree + 2 * cap;
+    bg->in = bg->queue + cap;
+    bg->out = bg->in + cap;
     bg->cap = cap;
     return 0;
 }

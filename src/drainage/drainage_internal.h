@@ -30,7 +30,9 @@ typedef struct drainage_link {
 } drainage_link;
 
 typedef struct drainage_basins {
-    size_t cap;          /* basins the arrays below can hold             */
+    size_t cap;          /* basins the arrays below can hold; they are
+                            one block of DRAINAGE_BASIN_WORDS(cap), from
+                            `start`                                      */
     uint32_t *start;     /* cap + 1: basin b's cells are members[start[b] ..
                             start[b + 1]) (members borrow the stack)     */
     uint32_t *owner;     /* cap: basin that last made a link to b        */
@@ -46,6 +48,8 @@ typedef struct drainage_basins {
     uint32_t *count;     /* radix histograms, count_cap                  */
     size_t count_cap;
 } drainage_basins;
+
+#define DRAINAGE_BASIN_WORDS(cap) (10 * (cap) + 2)
 
 /* Priority-flood's queue (drainage_fill.c): (z, index) pairs. */
 typedef struct drainage_heap_item {
