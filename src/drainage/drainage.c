@@ -6,8 +6,9 @@
  * The steps live one per file (drainage_fill.c, drainage_d8.c,
  * drainage_flats.c, drainage_basins.c, drainage_tree.c); this file only
  * decides which run.  Output arrays are allocated with the object, the
- * workspace on first need, and both are kept, so a landscape model that
- * re-routes every time step allocates nothing after its first step.
+ * workspace on first need, and both are kept (until dfle_drainage_trim),
+ * so a landscape model that re-routes every time step allocates nothing
+ * after its first step.
  */
 #include "drainage/drainage_internal.h"
 

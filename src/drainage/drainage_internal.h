@@ -75,7 +75,8 @@ struct dfle_drainage {
     dfle_drainage_counts counts;
 
     /* Workspace, allocated on first need and kept. */
-    unsigned char *mark;    /* n: Kahn's donor counts; fill's closed flags */
+    unsigned char *mark;    /* n: the stack's donors left (Kahn) or next
+                               donor (depth-first); fill's closed flags */
     uint32_t *work[3];      /* n each: fill, flats and basins (see there) */
     double *zfill;          /* n: the filled copy (FILL)                */
     drainage_heap_item *heap;
@@ -100,7 +101,7 @@ static inline long long drainage_nb(const dfle_drainage *dr, size_t r, size_t c,
     return rr * (long long)dr->o.nx + cc;
 }
 
-/* 1 if cell (r, c) is off the grid's outer ring, so all eight
+/* 1 if cell (r, c) is not on the grid's outer ring, so all eight
  * neighbours exist and are i + step[k]. */
 static inline int drainage_interior(const dfle_drainage *dr, size_t r, size_t c)
 {
@@ -119,8 +120,8 @@ enum dfle_drainage_edge drainage_exit_known(const dfle_drainage *dr, size_t i, i
 uint32_t *drainage_work(dfle_drainage *dr, int k);
 unsigned char *drainage_mark(dfle_drainage *dr);
 
-/* The steps, in the order dfle_drainage_route runs them.  Each returns
- * DFLE_OK or DFLE_ENOMEM (with err set). */
+/* The steps, in the order dfle_drainage_route runs them.  Those that
+ * can fail return DFLE_OK or a status with err set. */
 
 /* drainage_fill.c: priority-flood of z in place (dfle_drainage_fill). */
 
