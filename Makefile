@@ -4,7 +4,7 @@
 #   make test       every test: cmocka binaries, Lua tests, example smoke runs
 #   make check      the same tests built with AddressSanitizer + UBSan
 #   make memcheck   the cmocka tests under valgrind
-#   make bench      benchmark figures (see bench/)
+#   make bench      benchmark figures (see bench/; C drivers go to build/bench/)
 #   make mpi        build/dfle-mpi, ensembles across MPI ranks (needs mpicc;
 #                   `make test-mpi` checks it; doc/ensembles.md)
 #   make install    PREFIX=/usr/local DESTDIR=
@@ -43,11 +43,13 @@ CORE_SRC  := $(filter-out src/lua/% src/cli/% src/mpi/%,$(wildcard src/*/*.c))
 LUA_SRC   := $(wildcard src/lua/*/*.c)
 CLI_SRC   := $(wildcard src/cli/*.c)
 TEST_SRC  := $(wildcard tests/test_*.c)
+BENCH_SRC := $(wildcard bench/*.c)
 
 CORE_OBJ  := $(CORE_SRC:%.c=$(BUILD)/obj/%.o)
 LUA_OBJ   := $(LUA_SRC:%.c=$(BUILD)/obj/%.o)
 CLI_OBJ   := $(CLI_SRC:%.c=$(BUILD)/obj/%.o)
 TEST_BIN  := $(TEST_SRC:tests/%.c=$(BUILD)/tests/%)
+BENCH_BIN := $(BENCH_SRC:bench/%.c=$(BUILD)/bench/%)
 
 LIB_CORE  := $(BUILD)/libdfle.a
 LIB_LUA   := $(BUILD)/libdfle_lua.a
@@ -76,6 +78,11 @@ $(BUILD)/obj/src/%.o: src/%.c
 $(BUILD)/obj/tests/%.o: tests/%.c
 	@mkdir -p $(dir $@)
 	$(CC) $(ALL_CFLAGS) -Isrc $(LUA_CFLAGS) $(GSL_CFLAGS) $(GDAL_CFLAGS) $(CMOCKA_CFLAGS) -MMD -MP -c $< -o $@
+
+# Benchmark drivers in C use the library alone.
+$(BUILD)/obj/bench/%.o: bench/%.c
+	@mkdir -p $(dir $@)
+	$(CC) $(ALL_CFLAGS) -MMD -MP -c $< -o $@
 
 $(LIB_CORE): $(CORE_OBJ)
 	@mkdir -p $(dir $@)
@@ -112,12 +119,17 @@ $(GATE_TEST): $(BUILD)/obj/gate/tests/test_trace_release.o \
 	@mkdir -p $(dir $@)
 	$(CC) $(ALL_LDFLAGS) $^ $(CMOCKA_LIBS) $(LUA_LIBS) $(GSL_LIBS) $(GDAL_LIBS) -lm -o $@
 
+$(BUILD)/bench/%: $(BUILD)/obj/bench/%.o $(LIB_CORE)
+	@mkdir -p $(dir $@)
+	$(CC) $(ALL_LDFLAGS) $^ $(GSL_LIBS) $(GDAL_LIBS) -lm -o $@
+
 # The MPI tests join `make test` wherever mpicc is installed (install-deps
 # installs it), except in sanitizer builds, where OpenMPI's own
 # allocations would drown the report.
 HAVE_MPICC := $(if $(SANITIZE),,$(shell command -v $(MPICC) 2>/dev/null))
 
-test: all $(TEST_BIN) $(GATE_TEST)
+# The benchmark drivers are built (not run) so they cannot rot.
+test: all $(TEST_BIN) $(GATE_TEST) $(BENCH_BIN)
 	@BUILD=$(BUILD) sh tests/run-tests.sh
 ifneq ($(HAVE_MPICC),)
 	@$(MAKE) --no-print-directory test-mpi
@@ -130,8 +142,8 @@ check:
 memcheck: all $(TEST_BIN) $(GATE_TEST)
 	@BUILD=$(BUILD) MEMCHECK=1 sh tests/run-tests.sh
 
-bench: all
-	@sh bench/run.sh $(CLI)
+bench: all $(BENCH_BIN)
+	@sh bench/run.sh $(CLI) $(BUILD)/bench
 
 # --- MPI build (doc/ensembles.md): only these rules need mpicc ---
 

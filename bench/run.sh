@@ -1,12 +1,14 @@
 #!/bin/sh
 # make bench: prints benchmark figures (never asserts on time).
-# usage: bench/run.sh path/to/dfle
+# usage: bench/run.sh path/to/dfle [directory of the C drivers]
 DFLE=${1:-build/dfle}
+BIN=${2:-build/bench}
 here=$(dirname "$0")
 echo "dfle benchmarks on $(uname -m), $(nproc) cores, $(date -u +%Y-%m-%d)"
 "$DFLE" -q "$here/steady_state.lua"
 "$DFLE" -q "$here/process.lua"
 "$DFLE" -q "$here/dem.lua"
+"$BIN/drainage"
 "$DFLE" -q "$here/methods.lua"
 "$DFLE" -q "$here/ensemble.lua"
 "$DFLE" -q "$here/laws.lua"

@@ -19,7 +19,8 @@
  * required for anything that measures distance or area); elevations
  * are taken to be in metres.
  *
- * Algorithms (details and reasons in doc/dem.md):
+ * Algorithms (details and reasons in doc/dem.md), all of them the
+ * routing module's (drainage.h) with every edge and NoData border open:
  *  - filling: priority-flood (Barnes et al. 2014) seeded from the grid
  *    edge and the cells next to NoData, to the exact spill elevation
  *    (no epsilon gradient: flats stay flat and are resolved below);

@@ -1,6 +1,8 @@
 /*
- * dem.c - the DEM object: reading rasters through GDAL, georeferencing,
- * NoData, the CRS checks, and map <-> cell conversions.
+ * dem.c - the DEM object: making it from an array or from any raster
+ * GDAL reads (georeferencing, NoData, the CRS), and freeing it.
+ * Geometry and the CRS checks are dem_grid.c; filling and routing
+ * dem_flow.c, which this file never calls (dem_internal.h).
  *
  * GDAL is the only place dfle meets file formats, so everything that
  * depends on a file's conventions (NoData values, masks, scale and
@@ -25,20 +27,6 @@
 #include <cpl_vsi.h>
 #include <gdal.h>
 #include <ogr_srs_api.h>
-
-/* Neighbour order E, SE, S, SW, W, NW, N, NE: the ESRI direction codes
- * 1, 2, 4, ..., 128, so a D8 grid from dfle reads like ArcGIS's. */
-const int dfle_dem_nb_dr[8] = {0, 1, 1, 1, 0, -1, -1, -1};
-const int dfle_dem_nb_dc[8] = {1, 1, 0, -1, -1, -1, 0, 1};
-
-double dfle_dem_nb_dist(const struct dfle_dem *d, int k)
-{
-    if (dfle_dem_nb_dr[k] == 0)
-        return d->dx;
-    if (dfle_dem_nb_dc[k] == 0)
-        return d->dy;
-    return sqrt(d->dx * d->dx + d->dy * d->dy);
-}
 
 /* GDALAllRegister is not safe to race with itself; once per process. */
 static pthread_once_t gdal_once = PTHREAD_ONCE_INIT;
@@ -91,7 +79,8 @@ void dfle_dem_free(dfle_dem *d)
 {
     if (d == NULL)
         return;
-    dfle_dem_unroute(d);
+    dfle_drainage_free(d->flow);
+    free(d->order);
     free(d->z);
     free(d->path);
     free(d->crs_wkt);
@@ -356,86 +345,4 @@ int dfle_dem_read(const char *path, const dfle_dem_read_opts *opts, dfle_dem **o
     }
     CPLPopErrorHandler();
     return st;
-}
-
-/* ---------------------------------------------------------------- */
-/* Accessors and geometry                                           */
-/* ---------------------------------------------------------------- */
-
-size_t dfle_dem_nx(const dfle_dem *d) { return d->nx; }
-size_t dfle_dem_ny(const dfle_dem *d) { return d->ny; }
-double dfle_dem_dx(const dfle_dem *d) { return d->dx; }
-double dfle_dem_dy(const dfle_dem *d) { return d->dy; }
-const double *dfle_dem_z(const dfle_dem *d) { return d->z; }
-size_t dfle_dem_nodata_count(const dfle_dem *d) { return d->n_nodata; }
-const char *dfle_dem_path(const dfle_dem *d) { return d->path; }
-const char *dfle_dem_crs_name(const dfle_dem *d) { return d->crs_name; }
-const char *dfle_dem_crs_wkt(const dfle_dem *d) { return d->crs_wkt; }
-int dfle_dem_epsg(const dfle_dem *d) { return d->epsg; }
-int dfle_dem_is_geographic(const dfle_dem *d) { return d->geographic; }
-
-void dfle_dem_extent(const dfle_dem *d, double ext[4])
-{
-    ext[0] = d->x0;
-    ext[1] = d->x0 + (double)d->nx * d->dx;
-    ext[2] = d->y0 - (double)d->ny * d->dy;
-    ext[3] = d->y0;
-}
-
-/* A grid with no CRS whose cells are under 0.01 units and whose extent
- * fits in longitude/latitude is almost surely in degrees (an ESRI ASCII
- * grid without its .prj); a metric DEM with 1 cm cells at the origin is
- * the only false alarm, and `crs` overrides it. */
-static int looks_like_degrees(const dfle_dem *d)
-{
-    double e[4];
-    dfle_dem_extent(d, e);
-    return d->crs_wkt == NULL && d->dx < 0.01 && d->dy < 0.01 && e[0] >= -360 &&
-           e[1] <= 360 && e[2] >= -90 && e[3] <= 90;
-}
-
-int dfle_dem_check_metric(const dfle_dem *d, const char *what, dfle_error *err)
-{
-    const char *name = d->path != NULL ? d->path : "the grid";
-    if (d->geographic)
-        return dfle_error_set(err, DFLE_EINVAL,
-                              "dem: %s needs a grid in metres, but '%s' is in a geographic CRS "
-                              "(%s; cell size %g x %g degrees); reproject it to a projected CRS "
-                              "in metres first, e.g. gdalwarp -t_srs EPSG:32611 (UTM 11N)",
-                              what, name, d->crs_name, d->dx, d->dy);
-    if (d->linear_unit > 0 && fabs(d->linear_unit - 1.0) > 1e-12)
-        return dfle_error_set(err, DFLE_EINVAL,
-                              "dem: %s needs a grid in metres, but the CRS of '%s' (%s) is in "
-                              "'%s' (%g m); reproject it to a CRS in metres first (gdalwarp)",
-                              what, name, d->crs_name, d->linear_unit_name, d->linear_unit);
-    if (looks_like_degrees(d))
-        return dfle_error_set(err, DFLE_EINVAL,
-                              "dem: %s needs a grid in metres, but '%s' has no CRS and its cell "
-                              "size (%g) and coordinates look like degrees; reproject it, or "
-                              "say it is metric with dfle.dem.read(path, {crs = ...})",
-                              what, name, d->dx);
-    return DFLE_OK;
-}
-
-int dfle_dem_cell_at(const dfle_dem *d, double E, double N, const char *what, size_t *index,
-                     dfle_error *err)
-{
-    double e[4], c, r;
-    dfle_dem_extent(d, e);
-    c = floor((E - d->x0) / d->dx);
-    r = floor((d->y0 - N) / d->dy);
-    if (!(isfinite(E) && isfinite(N) && c >= 0 && r >= 0 && c < (double)d->nx &&
-          r < (double)d->ny))
-        return dfle_error_set(err, DFLE_EINVAL,
-                              "dem: %s (%.10g E, %.10g N) is outside the grid (E %.0f..%.0f, "
-                              "N %.0f..%.0f)", what, E, N, e[0], e[1], e[2], e[3]);
-    *index = (size_t)r * d->nx + (size_t)c;
-    return DFLE_OK;
-}
-
-void dfle_dem_cell_centre(const dfle_dem *d, size_t index, double *E, double *N)
-{
-    size_t r = index / d->nx, c = index % d->nx;
-    *E = d->x0 + ((double)c + 0.5) * d->dx;
-    *N = d->y0 - ((double)r + 0.5) * d->dy;
 }

@@ -1,7 +1,16 @@
 /*
- * dem_internal.h - the dfle_dem structure and the neighbour table,
- * shared by dem.c (reading, geometry), dem_flow.c (filling, routing)
- * and dem_profile.c (profiles, networks).  Not installed.
+ * dem_internal.h - the dfle_dem structure, shared by the files of
+ * src/dem/.  Not installed.
+ *
+ * The files are layered, each calling only the ones below it, never
+ * back up:
+ *   dem_profile.c  profiles and networks         (uses dem_flow, dem_grid)
+ *   dem_flow.c     fill and routing of the DEM   (uses dem_grid, drainage)
+ *   dem_grid.c     geometry, CRS checks, access  (uses nothing of the DEM)
+ *   dem.c          reading (GDAL), making and freeing the object
+ * and the routing itself is src/drainage/ (drainage.h), which knows
+ * nothing of DEMs.  This header declares no functions, so it carries no
+ * calls between the layers.
  */
 #ifndef DFLE_DEM_INTERNAL_H
 #define DFLE_DEM_INTERNAL_H
@@ -10,6 +19,7 @@
 #include <stdint.h>
 
 #include "dfle/dem.h"
+#include "dfle/drainage.h"
 
 struct dfle_dem {
     size_t nx, ny, n;       /* columns, rows, cells (n < 2^32)           */
@@ -26,34 +36,13 @@ struct dfle_dem {
 
     int filled;             /* dfle_dem_fill has run since z last changed */
 
-    /* Routing, valid while `routed`; freed when z changes. */
+    /* Filling and routing, made on first need (dem_flow.c).  Its results
+     * describe z while `routed`; a fill that raises a cell clears it. */
+    dfle_drainage *flow;
     int routed;
-    unsigned char *dir;     /* enum dfle_dem_dir_code per cell           */
-    double *area;           /* [m^2], NaN on NoData                      */
-    uint32_t *order;        /* data cells, each before its receiver      */
-    size_t n_order;
-    size_t n_sinks, n_flat;
+    uint32_t *order;        /* the stack backwards: each cell before its
+                               receiver, as dfle_dem_order has always
+                               listed them (n - n_nodata cells)          */
 };
-
-/* The eight neighbours in D8 preference order E, SE, S, SW, W, NW, N,
- * NE (ESRI codes 1 << k); rows grow southwards. */
-extern const int dfle_dem_nb_dr[8];
-extern const int dfle_dem_nb_dc[8];
-
-/* Index of neighbour k of cell (r, c), or -1 if it is off the grid. */
-static inline long long dfle_dem_nb(const struct dfle_dem *d, size_t r, size_t c, int k)
-{
-    long long rr = (long long)r + dfle_dem_nb_dr[k];
-    long long cc = (long long)c + dfle_dem_nb_dc[k];
-    if (rr < 0 || cc < 0 || rr >= (long long)d->ny || cc >= (long long)d->nx)
-        return -1;
-    return rr * (long long)d->nx + cc;
-}
-
-/* Centre-to-centre distance to neighbour k [m]. */
-double dfle_dem_nb_dist(const struct dfle_dem *d, int k);
-
-/* Drop the routing (after the elevations changed). */
-void dfle_dem_unroute(struct dfle_dem *d);
 
 #endif

@@ -95,11 +95,11 @@ static int ready(dfle_dem *d, const char *what, dfle_error *err)
     if ((st = dfle_dem_check_metric(d, what, err)) != DFLE_OK ||
         (st = dfle_dem_route(d, err)) != DFLE_OK)
         return st;
-    if (d->n_sinks > 0)
+    if (dfle_dem_sink_count(d) > 0)
         return dfle_error_set(err, DFLE_EINVAL, "dem: %s: the DEM has %zu pit cell%s (no lower "
                               "neighbour, not on the edge), where drainage area would stop "
-                              "short; fill it first (dem:fill())", what, d->n_sinks,
-                              d->n_sinks == 1 ? "" : "s");
+                              "short; fill it first (dem:fill())", what, dfle_dem_sink_count(d),
+                              dfle_dem_sink_count(d) == 1 ? "" : "s");
     return DFLE_OK;
 }
 
@@ -131,9 +131,9 @@ static int snap_outlet(const dfle_dem *d, double E, double N, double radius, siz
             d2 = (e - E) * (e - E) + (n - N) * (n - N);
             if (d2 > radius * radius && i != home)
                 continue;
-            if (d->area[i] > best_A || (d->area[i] == best_A && d2 < best_d2)) {
+            if (dfle_dem_area(d)[i] > best_A || (dfle_dem_area(d)[i] == best_A && d2 < best_d2)) {
                 best = i;
-                best_A = d->area[i];
+                best_A = dfle_dem_area(d)[i];
                 best_d2 = d2;
             }
         }
@@ -147,13 +147,15 @@ static int snap_outlet(const dfle_dem *d, double E, double N, double radius, siz
 /* The donor of largest area (first in neighbour order on ties), or -1. */
 static long long main_donor(const dfle_dem *d, size_t c)
 {
-    size_t r = c / d->nx, cc = c % d->nx;
+    const double *A = dfle_dem_area(d);
     long long best = -1;
+    /* Neighbour order, not the donor list's index order: it breaks the
+     * ties, as doc/dem.md says. */
     for (int k = 0; k < 8; k++) {
-        long long nb = dfle_dem_nb(d, r, cc, k);
+        long long nb = dfle_drainage_neighbour(d->flow, c, k);
         if (nb < 0 || dfle_dem_receiver(d, (size_t)nb) != (long long)c)
             continue;
-        if (best < 0 || d->area[nb] > d->area[best])
+        if (best < 0 || A[nb] > A[best])
             best = nb;
     }
     return best;
@@ -162,7 +164,7 @@ static long long main_donor(const dfle_dem *d, size_t c)
 /* Distance from cell c to its receiver [m]. */
 static double step_length(const dfle_dem *d, size_t c)
 {
-    return dfle_dem_nb_dist(d, d->dir[c]);
+    return dfle_drainage_length(d->flow, dfle_dem_dir(d)[c]);
 }
 
 /* ---------------------------------------------------------------- */
@@ -313,7 +315,7 @@ static int profile_from_path(const dfle_dem *d, const flowpath *pa, const dfle_s
         p->f[DFLE_PROFILE_X][i] = pa->s[i];
         p->f[DFLE_PROFILE_D][i] = L - pa->s[i];
         p->f[DFLE_PROFILE_Z][i] = pa->z[i];
-        p->f[DFLE_PROFILE_A][i] = d->area[pa->c[i]];
+        p->f[DFLE_PROFILE_A][i] = dfle_dem_area(d)[pa->c[i]];
         p->receiver[i] = i + 1 < pa->n ? i + 2 : 0;
     }
     p->slope = *o;
@@ -352,7 +354,7 @@ int dfle_dem_profile(dfle_dem *d, const dfle_profile_opts *opts, dfle_profile **
             if (path_push(&pa, c, pa.n ? pa.s[pa.n - 1] + step_length(d, pa.c[pa.n - 1]) : 0.0,
                           d->z[c]) != 0)
                 goto nomem;
-            if (r < 0 || (o.A_max > 0 && d->area[c] >= o.A_max))
+            if (r < 0 || (o.A_max > 0 && dfle_dem_area(d)[c] >= o.A_max))
                 break;
             c = (size_t)r;
         }
@@ -367,7 +369,7 @@ int dfle_dem_profile(dfle_dem *d, const dfle_profile_opts *opts, dfle_profile **
                 path_free(&rev);
                 goto nomem;
             }
-            c = up >= 0 && d->area[up] >= o.A_min ? up : -1;
+            c = up >= 0 && dfle_dem_area(d)[up] >= o.A_min ? up : -1;
         }
         for (size_t j = rev.n; j > 0; j--) {
             size_t c = rev.c[j - 1];
@@ -386,9 +388,9 @@ int dfle_dem_profile(dfle_dem *d, const dfle_profile_opts *opts, dfle_profile **
         return dfle_error_set(err, DFLE_EINVAL,
                               "dem: the profile from (%.10g E, %.10g N) has a single cell "
                               "(%.10g E, %.10g N, A = %g m^2): %s", o.E, o.N, e, n,
-                              d->area[start],
+                              dfle_dem_area(d)[start],
                               !o.from_head ? "nothing drains into it (or A_min is too large)"
-                              : o.A_max > 0 && d->area[start] >= o.A_max
+                              : o.A_max > 0 && dfle_dem_area(d)[start] >= o.A_max
                                   ? "its own area already reaches A_max"
                                   : "it drains off the grid at once");
     }
@@ -415,7 +417,8 @@ int dfle_dem_network(dfle_dem *d, const dfle_network_opts *opts, dfle_profile **
     dfle_network_opts o = *opts;
     unsigned char *keep = NULL;
     uint32_t *slot = NULL; /* cell -> 1-based network index, 0 = out */
-    size_t outlet = 0, count = 0;
+    const uint32_t *order;
+    size_t outlet = 0, count = 0, n_order;
     dfle_profile *p = NULL;
     flowpath core = {0}, up = {0}, all = {0}; /* slope windows, reused */
     int st;
@@ -430,6 +433,7 @@ int dfle_dem_network(dfle_dem *d, const dfle_network_opts *opts, dfle_profile **
         return dfle_error_set(err, DFLE_EINVAL, "dem: radius must be finite");
     if ((st = ready(d, "a channel network", err)) != DFLE_OK)
         return st;
+    order = dfle_dem_order(d, &n_order);
     if (o.has_outlet && (st = snap_outlet(d, o.E, o.N, o.radius, &outlet, err)) != DFLE_OK)
         return st;
     if ((keep = calloc(d->n, 1)) == NULL || (slot = calloc(d->n, sizeof *slot)) == NULL)
@@ -438,16 +442,16 @@ int dfle_dem_network(dfle_dem *d, const dfle_network_opts *opts, dfle_profile **
      * marks a catchment from its outlet up. */
     if (o.has_outlet) {
         keep[outlet] = 1;
-        for (size_t j = d->n_order; j > 0; j--) {
-            size_t c = d->order[j - 1];
+        for (size_t j = n_order; j > 0; j--) {
+            size_t c = order[j - 1];
             long long r = dfle_dem_receiver(d, c);
             if (r >= 0 && keep[r])
                 keep[c] = 1;
         }
     }
-    for (size_t j = 0; j < d->n_order; j++) {
-        size_t c = d->order[j];
-        if ((!o.has_outlet || keep[c]) && d->area[c] >= o.A_min)
+    for (size_t j = 0; j < n_order; j++) {
+        size_t c = order[j];
+        if ((!o.has_outlet || keep[c]) && dfle_dem_area(d)[c] >= o.A_min)
             slot[c] = (uint32_t)++count;
     }
     if (count < 2) {
@@ -459,15 +463,15 @@ int dfle_dem_network(dfle_dem *d, const dfle_network_opts *opts, dfle_profile **
         goto nomem;
     p->network = 1;
     p->slope = o.slope;
-    for (size_t j = 0, i = 0; j < d->n_order; j++) {
-        size_t c = d->order[j];
+    for (size_t j = 0, i = 0; j < n_order; j++) {
+        size_t c = order[j];
         long long r;
         if (slot[c] == 0)
             continue;
         r = dfle_dem_receiver(d, c);
         dfle_dem_cell_centre(d, c, &p->f[DFLE_PROFILE_E][i], &p->f[DFLE_PROFILE_N][i]);
         p->f[DFLE_PROFILE_Z][i] = d->z[c];
-        p->f[DFLE_PROFILE_A][i] = d->area[c];
+        p->f[DFLE_PROFILE_A][i] = dfle_dem_area(d)[c];
         p->receiver[i] = r >= 0 ? slot[r] : 0;
         /* Each cell's own path: main donors upstream, receivers down. */
         core.n = 0;
