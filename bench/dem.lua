@@ -6,9 +6,14 @@
 --   dfle -q bench/dem.lua [repetitions]
 
 local reps = tonumber(arg and arg[1]) or 5
-local here = arg[0]:match("^(.*)/[^/]*$") or "."
-local data = os.getenv("DFLE_DATA_DIR") or (here .. "/../../shared/data")
-local path = data .. "/dem/srtm_bigtujunga30m_utm11.tif"
+local data = os.getenv("DFLE_DATA_DIR")
+local path = (data or "") .. "/dem/srtm_bigtujunga30m_utm11.tif"
+local probe = data and io.open(path)
+if not probe then
+  print("dem: skipped: needs dem/srtm_bigtujunga30m_utm11.tif under DFLE_DATA_DIR")
+  return
+end
+probe:close()
 
 local best = { read = math.huge, fill = math.huge, flow = math.huge, total = math.huge }
 local dem, stats

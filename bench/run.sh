@@ -4,6 +4,11 @@
 DFLE=${1:-build/dfle}
 BIN=${2:-build/bench}
 here=$(dirname "$0")
+# Data (the Big Tujunga DEM) from DFLE_DATA_DIR, as for the tests.
+if [ -z "${DFLE_DATA_DIR:-}" ]; then
+    DFLE_DATA_DIR="$(cd "$here/../.." && pwd)/shared/data"
+fi
+export DFLE_DATA_DIR
 echo "dfle benchmarks on $(uname -m), $(nproc) cores, $(date -u +%Y-%m-%d)"
 "$DFLE" -q "$here/steady_state.lua"
 "$DFLE" -q "$here/process.lua"

@@ -12,10 +12,13 @@
 --
 --   dfle examples/alpha_beta.lua [--quick] [output-directory]
 
-local quick, outdir = false, "."
-for _, a in ipairs(arg) do
-  if a == "--quick" then quick = true else outdir = a end
-end
+local opts = dfle.args{
+  usage = "dfle examples/alpha_beta.lua [options] [output-directory]",
+  about = "Which incision laws give realistic profiles? A grid over the exponents alpha and beta of Eq. (6).",
+  flags = { quick = "two alphas and one beta on a 20 m grid (for the test suite)" },
+  output = true,
+}
+local quick, outdir = opts.quick, opts.output
 
 local alphas = quick and { 2, 6 } or { 2, 3, 4, 5, 6, 7, 8 }
 local betas = quick and { 1 } or { 0.5, 1, 2, 3 }

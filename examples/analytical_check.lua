@@ -8,10 +8,13 @@
 --
 --   dfle examples/analytical_check.lua [--quick] [output-directory]
 
-local quick, outdir = false, "."
-for _, a in ipairs(arg) do
-  if a == "--quick" then quick = true else outdir = a end
-end
+local opts = dfle.args{
+  usage = "dfle examples/analytical_check.lua [options] [output-directory]",
+  about = "The numerical model against the analytical solution of Sect. 2.4 (Eqs. 19-24).",
+  flags = { quick = "a 10 m grid (for the test suite)" },
+  output = true,
+}
+local quick, outdir = opts.quick, opts.output
 
 local U = 5e-4
 local router = dfle.router.empirical{ M0 = 3000, gamma = 0.5, mu = 500, tau_y = 0 }
@@ -32,9 +35,9 @@ for i = 1, #A do
   local d = math.abs(S[i] / S19[i] - 1)
   if d > worst then worst, at = d, i end
 end
-print(("Eq. (20): N = %.6f (NOTES.md: -0.024706)")
+print(("Eq. (20): N = %.6f (check value: -0.024706)")
       :format(dfle.analytical_exponent(router, law, { U = U })))
-print(("Eq. (19) at A = 1e4 m^2: S = %.5f (NOTES.md: 0.73834)")
+print(("Eq. (19) at A = 1e4 m^2: S = %.5f (check value: 0.73834)")
       :format(dfle.analytical_slope(router, law, { U = U, A = 1e4 })))
 print(("steady state (%s method); largest |S_model/S_Eq19 - 1| = %.2e at A = %.3g m^2")
       :format(run.method, worst, A[at]))

@@ -19,20 +19,34 @@
 --   dfle examples/compare_dem_model.lua [--quick] [output-directory]
 --
 -- --quick uses a 20 m model grid (for the test suite); the default is
--- the paper's 5 m.  The DEM is found relative to this script
--- (../../shared/data/dem/) or in $DFLE_DATA_DIR/dem.
+-- the paper's 5 m.  The DEM is read from --data DIR or $DFLE_DATA_DIR
+-- (the directory holding dem/); the script says so and stops when it is
+-- missing.
 
-local quick, outdir = false, "."
-for _, a in ipairs(arg) do
-  if a == "--quick" then quick = true else outdir = a end
+local opts = dfle.args{
+  usage = "dfle examples/compare_dem_model.lua [options] [output-directory]",
+  about = "A modelled steady state next to a real catchment, on the real channel's geometry.",
+  flags = { quick = "a 20 m model grid (for the test suite); the default is 5 m" },
+  options = { data = { "DIR", "the data directory, holding dem/ (default: $DFLE_DATA_DIR)",
+                       default = os.getenv("DFLE_DATA_DIR") } },
+  output = true,
+}
+local quick, outdir = opts.quick, opts.output
+
+-- The DEM: --data DIR or $DFLE_DATA_DIR, the directory holding dem/.
+local dem_file = (opts.data or "") .. "/dem/srtm_bigtujunga30m_utm11.tif"
+local probe = opts.data and io.open(dem_file)
+if not probe then
+  io.stderr:write(("%s: needs the Big Tujunga DEM, dem/srtm_bigtujunga30m_utm11.tif: "
+                   .. "pass --data DIR or set DFLE_DATA_DIR to the directory holding dem/%s\n")
+                  :format(arg[0], opts.data and (" (not in " .. opts.data .. ")") or ""))
+  os.exit(2)
 end
-
-local here = arg[0]:match("^(.*)/[^/]*$") or "."
-local data = os.getenv("DFLE_DATA_DIR") or (here .. "/../../shared/data")
+probe:close()
 local outlet = { 384971, 3799277 }   -- Fig. 1, blue line
 
 -- 1. The real catchment.
-local dem = dfle.dem.read(data .. "/dem/srtm_bigtujunga30m_utm11.tif")
+local dem = dfle.dem.read(dem_file)
 dem:fill()
 local net = dem:network{ A_min = dem.dx * dem.dy, outlet = outlet }
 local main = dem:profile{ outlet = outlet }

@@ -18,10 +18,13 @@
 --
 -- --quick uses a 20 m grid and a 1 km^2 basin (for the test suite).
 
-local quick, outdir = false, "."
-for _, a in ipairs(arg) do
-  if a == "--quick" then quick = true else outdir = a end
-end
+local opts = dfle.args{
+  usage = "dfle examples/custom_laws.lua [options] [output-directory]",
+  about = "Debris-flow incision laws written in Lua, run by the same routers and solvers as the paper's law.",
+  flags = { quick = "a 20 m grid and a 1 km^2 basin (for the test suite)" },
+  output = true,
+}
+local quick, outdir = opts.quick, opts.output
 
 local channel = quick and dfle.channel{ dx = 20, A_max = 1e6 } or dfle.channel{ dx = 5, A_max = 8e6 }
 

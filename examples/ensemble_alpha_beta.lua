@@ -13,17 +13,17 @@
 -- a coarse channel (dx = 20 m).  Uses all cores (-j N to choose);
 -- `dfle --shard i/n` and build/dfle-mpi work too (doc/ensembles.md).
 
-local quick, outdir, only = false, ".", nil
-local i = 1
-while i <= #arg do
-  local a = arg[i]
-  if a == "--quick" then quick = true
-  elseif a == "--router" then i = i + 1; only = arg[i]
-  else outdir = a end
-  i = i + 1
+local opts = dfle.args{
+  usage = "dfle examples/ensemble_alpha_beta.lua [options] [output-directory]",
+  about = "The paper's alpha-beta experiments (doc/ensembles.md).",
+  flags = { quick = "24 samples per router on a 20 m grid (for the test suite)" },
+  options = { router = { "NAME", "run only this router's ensemble: empirical or process" } },
+  output = true,
+}
+local quick, outdir, only = opts.quick, opts.output, opts.router
+if only ~= nil and only ~= "empirical" and only ~= "process" then
+  error(("--router must be empirical or process (got %q)"):format(only))
 end
-assert(only == nil or only == "empirical" or only == "process",
-       "--router must be empirical or process")
 
 local dx = quick and 20 or 5
 local experiments = {

@@ -24,17 +24,30 @@
 --   dfle examples/fig1_slope_area.lua [--quick] [output-directory]
 --
 -- --quick skips the per-catchment plots (for the test suite).  The DEM
--- is found relative to this script (../../shared/data/dem/) or in
--- $DFLE_DATA_DIR/dem.
+-- is read from --data DIR or $DFLE_DATA_DIR (the directory holding
+-- dem/); the script says so and stops when it is missing.
 
-local quick, outdir = false, "."
-for _, a in ipairs(arg) do
-  if a == "--quick" then quick = true else outdir = a end
+local opts = dfle.args{
+  usage = "dfle examples/fig1_slope_area.lua [options] [output-directory]",
+  about = "The paper's Fig. 1 from a real DEM.",
+  flags = { quick = "skip the per-catchment plots (for the test suite)" },
+  options = { data = { "DIR", "the data directory, holding dem/ (default: $DFLE_DATA_DIR)",
+                       default = os.getenv("DFLE_DATA_DIR") } },
+  output = true,
+}
+local quick, outdir = opts.quick, opts.output
+
+-- The DEM: --data DIR or $DFLE_DATA_DIR, the directory holding dem/.
+local dem_file = (opts.data or "") .. "/dem/srtm_bigtujunga30m_utm11.tif"
+local probe = opts.data and io.open(dem_file)
+if not probe then
+  io.stderr:write(("%s: needs the Big Tujunga DEM, dem/srtm_bigtujunga30m_utm11.tif: "
+                   .. "pass --data DIR or set DFLE_DATA_DIR to the directory holding dem/%s\n")
+                  :format(arg[0], opts.data and (" (not in " .. opts.data .. ")") or ""))
+  os.exit(2)
 end
-
-local here = arg[0]:match("^(.*)/[^/]*$") or "."
-local data = os.getenv("DFLE_DATA_DIR") or (here .. "/../../shared/data")
-local path = data .. "/dem/srtm_bigtujunga30m_utm11.tif"
+probe:close()
+local path = dem_file
 
 local catchments = {
   { name = "black",  E = 396887, N = 3799338, paper_r2 = 0.95 },

@@ -11,10 +11,13 @@
 -- frequency_scaling_slope_area.png (slope against area, log-log).
 -- --quick: three values of gamma on a coarse channel (dx = 20 m).
 
-local quick, outdir = false, "."
-for _, a in ipairs(arg) do
-  if a == "--quick" then quick = true else outdir = a end
-end
+local opts = dfle.args{
+  usage = "dfle examples/frequency_scaling.lua [options] [output-directory]",
+  about = "The paper's Appendix D (Fig. D1): steady states when debris-flow frequency grows with drainage area.",
+  flags = { quick = "three values of gamma on a 20 m grid (for the test suite)" },
+  output = true,
+}
+local quick, outdir = opts.quick, opts.output
 
 local gammas = quick and { 0, 0.5, 1 } or { 0, 0.25, 0.5, 0.75, 1 }
 local channel = dfle.channel{ dx = quick and 20 or 5 }

@@ -11,10 +11,13 @@
 --
 -- --quick uses a 10 m grid (for the test suite); the default is 5 m.
 
-local quick, outdir = false, "."
-for _, a in ipairs(arg) do
-  if a == "--quick" then quick = true else outdir = a end
-end
+local opts = dfle.args{
+  usage = "dfle examples/quickstart.lua [options] [output-directory]",
+  about = "The default dfle experiment.",
+  flags = { quick = "a 10 m grid (for the test suite); the default is 5 m" },
+  output = true,
+}
+local quick, outdir = opts.quick, opts.output
 
 local channel = dfle.channel{ dx = quick and 10 or 5, A_max = 8e6 }
 local model = dfle.model{

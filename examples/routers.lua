@@ -10,10 +10,13 @@
 --
 --   dfle examples/routers.lua [--quick] [output-directory]
 
-local quick, outdir = false, "."
-for _, a in ipairs(arg) do
-  if a == "--quick" then quick = true else outdir = a end
-end
+local opts = dfle.args{
+  usage = "dfle examples/routers.lua [options] [output-directory]",
+  about = "The two debris-flow routers side by side.",
+  flags = { quick = "a 20 m grid (for the test suite)" },
+  output = true,
+}
+local quick, outdir = opts.quick, opts.output
 
 local channel = dfle.channel{ dx = quick and 20 or 5, A_max = 8e6 }
 local fluvial = dfle.fluvial.stochastic_threshold{ k_e = 5e-14 }

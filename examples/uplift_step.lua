@@ -8,10 +8,13 @@
 --
 --   dfle examples/uplift_step.lua [--quick] [output-directory]
 
-local quick, outdir = false, "."
-for _, a in ipairs(arg) do
-  if a == "--quick" then quick = true else outdir = a end
-end
+local opts = dfle.args{
+  usage = "dfle examples/uplift_step.lua [options] [output-directory]",
+  about = "A transient: the steady-state channel of the Fig. 9 defaults responds to a doubling of the uplift rate.",
+  flags = { quick = "a 20 m grid (for the test suite)" },
+  output = true,
+}
+local quick, outdir = opts.quick, opts.output
 
 local m = dfle.model{ channel = dfle.channel{ dx = quick and 20 or 5 }, U = 5e-4 }
 local r0 = m:run_to_steady{}

@@ -3,6 +3,16 @@
 # of the examples.  Exit status is non-zero if anything failed.
 # BUILD=dir selects the build; MEMCHECK=1 runs the cmocka tests under valgrind.
 BUILD=${BUILD:-build}
+# Test data (DEMs, SALib reference cases) come from DFLE_DATA_DIR; on the
+# CI machine they sit beside the clone, which is the default here.
+if [ -z "${DFLE_DATA_DIR:-}" ]; then
+    DFLE_DATA_DIR="$(cd "$(dirname "$0")/../.." && pwd)/shared/data"
+fi
+if [ ! -d "$DFLE_DATA_DIR/dem" ]; then
+    echo "run-tests: no test data in $DFLE_DATA_DIR (set DFLE_DATA_DIR to the directory holding dem/ and salib/)"
+    exit 1
+fi
+export DFLE_DATA_DIR
 DFLE="$BUILD/dfle"
 failed=0
 failures=

@@ -1,4 +1,4 @@
-/* test_analytical.c - Eqs. (19)-(24) against the NOTES.md check values. */
+/* test_analytical.c - Eqs. (19)-(24) against the check values of doc/model.md. */
 #include <math.h>
 #include <string.h>
 

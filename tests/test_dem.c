@@ -1,10 +1,8 @@
 /*
  * test_dem.c - reading DEMs (GDAL), depression filling, D8 and flats,
- * drainage area, on the small ArcASCII grids of ../shared/data/dem/small
+ * drainage area, on the small ArcASCII grids of $DFLE_DATA_DIR/dem/small
  * (RichDEM's test data) whose answers are worked out by hand below.
- *
- * Data are read relative to the repository root (where `make test`
- * runs) or $DFLE_DATA_DIR (the directory holding dem/).
+ * The test runner (tests/run-tests.sh) sets DFLE_DATA_DIR.
  *
  * Flow directions are written as numeric-keypad digits, the way the
  * grid looks on the page: 6 = E, 3 = SE, 2 = S, 1 = SW, 4 = W, 7 = NW,
@@ -23,7 +21,7 @@ static char data_path[1024];
 static const char *dem_file(const char *name)
 {
     const char *dir = getenv("DFLE_DATA_DIR");
-    snprintf(data_path, sizeof data_path, "%s/dem/%s", dir ? dir : "../shared/data", name);
+    snprintf(data_path, sizeof data_path, "%s/dem/%s", dir ? dir : "(DFLE_DATA_DIR unset)", name);
     return data_path;
 }
 

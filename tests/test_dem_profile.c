@@ -1,11 +1,10 @@
 /*
  * test_dem_profile.c - profiles, networks and their slope-area data:
  * on a synthetic valley whose answers are exact, and on the Big Tujunga
- * SRTM DEM (../shared/data/dem), read both as GeoTIFF and as ESRI ASCII,
+ * SRTM DEM ($DFLE_DATA_DIR/dem), read both as GeoTIFF and as ESRI ASCII,
  * with the outlets of the paper's Fig. 1.
  *
- * Data are read relative to the repository root (where `make test`
- * runs) or $DFLE_DATA_DIR (the directory holding dem/).
+ * The test runner (tests/run-tests.sh) sets DFLE_DATA_DIR.
  */
 #include <math.h>
 #include <stdlib.h>
@@ -21,7 +20,7 @@ static char data_path[1024];
 static const char *dem_file(const char *name)
 {
     const char *dir = getenv("DFLE_DATA_DIR");
-    snprintf(data_path, sizeof data_path, "%s/dem/%s", dir ? dir : "../shared/data", name);
+    snprintf(data_path, sizeof data_path, "%s/dem/%s", dir ? dir : "(DFLE_DATA_DIR unset)", name);
     return data_path;
 }
 

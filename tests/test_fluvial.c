@@ -1,4 +1,4 @@
-/* test_fluvial.c - Appendix A: NOTES.md check values, stream power. */
+/* test_fluvial.c - Appendix A: the check values of doc/model.md, stream power. */
 #include <math.h>
 #include <string.h>
 
@@ -13,7 +13,7 @@ static void table_g1_gives_the_check_values(void **state)
     (void)state;
     dfle_stochastic_threshold_opts_default(&o);
     assert_ok(dfle_fluvial_new_stochastic_threshold(&o, &fl, &err), &err);
-    /* NOTES.md: m_s = 1.4, n_s = 2.3333, K = 2.4539e-10 (4 digits). */
+    /* doc/model.md, Check values: m_s = 1.4, n_s = 2.3333, K = 2.4539e-10 (4 digits). */
     assert_close(dfle_fluvial_m(fl), 1.4, 1e-12, 0);
     assert_close(dfle_fluvial_n(fl), 7.0 / 3.0, 1e-12, 0);
     assert_close(dfle_fluvial_K(fl), 2.4539e-10, 5e-5, 0);

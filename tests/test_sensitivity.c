@@ -3,7 +3,7 @@
  * building blocks, the bootstrap intervals, and the CSV reader that
  * feeds them.
  *
- * The reference cases are the *_pawn.json files of ../shared/data/salib (SALib
+ * The reference cases are the *_pawn.json files of $DFLE_DATA_DIR/salib (SALib
  * commit 1c375488, numpy 1.24, scipy 1.10): every index is compared with
  * its C99 hex float in `indices_hex` and must agree to MAX_ULPS units in
  * the last place (0: bit for bit); per slice the edges, row counts and
@@ -24,7 +24,17 @@
 #include "dfle/sensitivity.h"
 #include "dfle_test.h"
 
-#define SALIB_DIR "../shared/data/salib/"
+/* The reference files, under $DFLE_DATA_DIR/salib (the test runner sets
+ * DFLE_DATA_DIR). */
+static const char *salib(const char *name)
+{
+    static char buf[8][1024];
+    static int k;
+    const char *dir = getenv("DFLE_DATA_DIR");
+    char *b = buf[k++ % 8];
+    snprintf(b, sizeof buf[0], "%s/salib/%s", dir != NULL ? dir : "(DFLE_DATA_DIR unset)", name);
+    return b;
+}
 #define MAX_ULPS 0
 
 /* ---------------------------------------------------------------- */
@@ -206,21 +216,21 @@ static const char *const ties_names[3] = {"k1", "k2", "u3"};
 static void test_salib_ishigami_S10(void **state)
 {
     (void)state;
-    check_reference(SALIB_DIR "ishigami_N4000.csv", SALIB_DIR "ishigami_N4000_pawn.json",
+    check_reference(salib("ishigami_N4000.csv"), salib("ishigami_N4000_pawn.json"),
                     ishigami_names, 10, 4000);
 }
 
 static void test_salib_ishigami_S5(void **state)
 {
     (void)state;
-    check_reference(SALIB_DIR "ishigami_N4000.csv", SALIB_DIR "ishigami_N4000_S5_pawn.json",
+    check_reference(salib("ishigami_N4000.csv"), salib("ishigami_N4000_S5_pawn.json"),
                     ishigami_names, 5, 4000);
 }
 
 static void test_salib_ishigami_S20(void **state)
 {
     (void)state;
-    check_reference(SALIB_DIR "ishigami_N4000.csv", SALIB_DIR "ishigami_N4000_S20_pawn.json",
+    check_reference(salib("ishigami_N4000.csv"), salib("ishigami_N4000_S20_pawn.json"),
                     ishigami_names, 20, 4000);
 }
 
@@ -228,7 +238,7 @@ static void test_salib_ishigami_S20(void **state)
 static void test_salib_ties(void **state)
 {
     (void)state;
-    check_reference(SALIB_DIR "ties_N1001.csv", SALIB_DIR "ties_N1001_pawn.json", ties_names,
+    check_reference(salib("ties_N1001.csv"), salib("ties_N1001_pawn.json"), ties_names,
                     10, 1001);
 }
 
@@ -546,9 +556,9 @@ static void test_bootstrap_covers_estimate(void **state)
 {
     const size_t all[] = {0, 1, 2}, x1x2[] = {0, 1}, k1[] = {0};
     (void)state;
-    check_coverage(SALIB_DIR "ishigami_N4000.csv", ishigami_names, 5, all, 3);
-    check_coverage(SALIB_DIR "ishigami_N4000.csv", ishigami_names, 10, x1x2, 2);
-    check_coverage(SALIB_DIR "ties_N1001.csv", ties_names, 10, k1, 1);
+    check_coverage(salib("ishigami_N4000.csv"), ishigami_names, 5, all, 3);
+    check_coverage(salib("ishigami_N4000.csv"), ishigami_names, 10, x1x2, 2);
+    check_coverage(salib("ties_N1001.csv"), ties_names, 10, k1, 1);
 }
 
 /* One replicate equals PAWN on the materialised resample drawn with the
@@ -565,7 +575,7 @@ static void test_bootstrap_is_row_resampling(void **state)
     const double *xs[3];
     (void)state;
 
-    load(&ds, SALIB_DIR "ties_N1001.csv", ties_names);
+    load(&ds, salib("ties_N1001.csv"), ties_names);
     N = ds.csv->nrows;
     run_boot(&ds, 10, 1, 77, &boot);
     assert_ok(dfle_rng_new(77, &rng, &err), &err);
@@ -616,7 +626,7 @@ static void test_bootstrap_reproducible(void **state)
     dfle_pawn_result a, b, c;
     size_t differ = 0;
     (void)state;
-    load(&ds, SALIB_DIR "ties_N1001.csv", ties_names);
+    load(&ds, salib("ties_N1001.csv"), ties_names);
     run_boot(&ds, 5, 50, 9, &a);
     run_boot(&ds, 5, 50, 9, &b);
     run_boot(&ds, 5, 50, 10, &c);

@@ -3,7 +3,7 @@
  *
  *   E_df = k_df t_p S^alpha h^beta Theta          [m/yr]
  *
- * with t_p [s], h [m] and Theta from the router.  Following NOTES.md the
+ * with t_p [s], h [m] and Theta from the router.  Following doc/model.md (Units) the
  * result is read as m/yr: k_df absorbs the debris-flow frequency.
  */
 #ifndef DFLE_LAW_POWER_H

@@ -6,7 +6,7 @@
  * The paper ranks parameters with PAWN (McGuire et al. 2023, Sect. 2.5.2,
  * Figs. 5-10); geomorphologists check such numbers against SALib, so the
  * indices here reproduce SALib's to the last bit on its reference cases
- * (../shared/data/salib/).  For each input d, with N rows and S slices:
+ * (doc/sensitivity.md, Verification).  For each input d, with N rows and S slices:
  *
  *  1. edges b_s = numpy's default (linear) quantile of x_d at level
  *     s * (1.0 / S), s = 0 .. S;

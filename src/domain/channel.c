@@ -4,7 +4,7 @@
  * Geometry is computed once at construction and never changes, so the
  * model and the routers read plain arrays in their inner loops.  With the
  * default Hack-law geometry and A_max = 8 km^2 the outlet lands near
- * x = 2010 m, about 400 nodes at dx = 5 m (NOTES.md).
+ * x = 2010 m, about 400 nodes at dx = 5 m (doc/model.md, Check values).
  */
 #include "dfle/channel.h"
 

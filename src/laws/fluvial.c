@@ -101,7 +101,7 @@ int dfle_fluvial_new_stochastic_threshold(
     k_s = aaw * pow(k_t, n_s / o->beta_f) * pow(o->k, o->k + 1.0) / tgamma(o->k + 1.0)
           / ((o->k + 1.0) * (o->k + 1.0 - aaw))
           * pow(tau_c, o->a - n_s / o->beta_f) * o->k_e;
-    /* Eq. (A1) with the hydraulic-friction exponents alpha_f, beta_f (NOTES.md). */
+    /* Eq. (A1) with the hydraulic-friction exponents alpha_f, beta_f (doc/model.md, Units). */
     k_wq = pow(o->R_c, o->b / o->c) / o->k_w;
     K = k_s * pow(k_wq, -o->alpha_f * n_s / o->beta_f) * pow(o->R_c, m_s / o->c);
 

@@ -40,6 +40,9 @@ T = {}
 T.dfle = absolute(arg and arg[1])  -- path of the dfle binary (CLI tests)
 T.dir = absolute(here)              -- tests/lua
 T.root = T.dir:match("^(.*)/tests/lua$") or (T.dir .. "/../..")
+-- Test data (DEMs, SALib reference cases): the test runner sets
+-- DFLE_DATA_DIR (tests/run-tests.sh).
+T.data = os.getenv("DFLE_DATA_DIR") or "(DFLE_DATA_DIR unset)"
 T.shquote = shquote
 
 local function fmt(v)

@@ -95,13 +95,13 @@ tests["contract: the issue's example runs and its results are consistent"] = fun
     T.close(S19, 0.73834, 1e-4)
 end
 
-tests["fluvial.stochastic_threshold: Table G1 law matches NOTES check values"] = function()
+tests["fluvial.stochastic_threshold: Table G1 law matches the check values"] = function()
     local fl = dfle.fluvial.stochastic_threshold{ k_e = 5e-14 }
     T.close(fl.K, 2.4539e-10, 1e-4)
     T.close(fl.m_s, 1.4, 1e-4)
     T.close(fl.n_s, 2.3333, 1e-4)
     T.eq(fl.name, "stochastic_threshold")
-    -- Eq. (26) at U = 5e-4 m/yr (NOTES.md).
+    -- Eq. (26) at U = 5e-4 m/yr (doc/model.md, Check values).
     T.close(fl:steady_slope(5e-4, 1e6), 0.1270, 1e-3)
     T.close(fl:steady_slope(5e-4, 1e3), 8.015, 1e-3)
     -- E_f = K A^m S^n, and zero on a reverse slope.

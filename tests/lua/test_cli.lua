@@ -146,6 +146,49 @@ print("not reached")
     end
 end
 
+tests["dfle.args: --help, unknown options before any work, values, the output directory"] = function()
+    need_binary()
+    local dir = T.tmpname("-args")
+    local script = T.tmpname(".lua")
+    T.write_file(script, [[
+local o = dfle.args{ usage = "dfle s.lua [options] [output-directory]", about = "About it.",
+  flags = { quick = "fast" }, options = { data = { "DIR", "the data", default = "D0" } },
+  output = true }
+print(("quick=%s data=%s output=%s"):format(tostring(o.quick), o.data, o.output))
+print("work done")
+]])
+    local run = function(args) return sh(q(T.dfle) .. " -q " .. q(script) .. " " .. args) end
+    local out, ok = run("--help")
+    T.eq(ok, true)
+    T.has(out, "usage: dfle s.lua", "About it.", "--data DIR", "--quick", "output-directory")
+    T.ok(not out:find("work done"))
+    out, ok = run("--qiuck")
+    T.eq(ok, nil)
+    T.has(out, 'unknown option "--qiuck"', "--quick", "--data DIR", ".lua:1:")
+    T.ok(not out:find("work done"))
+    out = run("--quick --data=/x " .. q(dir .. "/a/b"))
+    T.has(out, "quick=true data=/x output=" .. dir .. "/a/b", "work done")
+    local probe = io.open(dir .. "/a/b/.probe", "w") -- the directory was made
+    T.ok(probe ~= nil)
+    probe:close()
+    out = run("--data")
+    T.has(out, "--data needs a value")
+    out = run("a b")
+    T.has(out, "one output directory at most")
+    out = run("")
+    T.has(out, "quick=false data=D0 output=.")
+    os.execute("rm -rf " .. q(dir))
+end
+
+tests["examples say which data they need when it is missing"] = function()
+    need_binary()
+    local out, ok, code = sh("DFLE_DATA_DIR= " .. q(T.dfle) .. " -q " .. q(T.root .. "/examples/fig1_slope_area.lua") ..
+                             " --quick --data /nonexistent " .. q(T.tmpname("-out")))
+    T.eq(ok, nil)
+    T.eq(code, 2)
+    T.has(out, "needs the Big Tujunga DEM", "--data DIR", "DFLE_DATA_DIR", "/nonexistent")
+end
+
 tests["missing script file: non-zero exit with a clear message"] = function()
     need_binary()
     local path = T.tmpname() .. "-does-not-exist.lua"

@@ -1,10 +1,10 @@
 -- test_dem.lua - dfle.dem from Lua: reading, filling, routing, profiles
--- and networks on the Big Tujunga SRTM DEM (../shared/data/dem), their
+-- and networks on the Big Tujunga SRTM DEM ($DFLE_DATA_DIR/dem), their
 -- use in the slope-area fit, plots and model channels, and the errors.
 local T = ...
 local tests = {}
 
-local DATA = T.root .. "/../shared/data/dem/"
+local DATA = T.data .. "/dem/"
 local TIF = DATA .. "srtm_bigtujunga30m_utm11.tif"
 local ASC = DATA .. "srtm_bigtujunga30m_utm11.asc"
 local BLACK = { 396887, 3799338 }   -- the paper's Fig. 1 outlets (UTM 11N)

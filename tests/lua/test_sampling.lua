@@ -5,7 +5,7 @@
 local T = ...
 local tests = {}
 
-local SALIB = T.root .. "/../shared/data/salib/"
+local SALIB = T.data .. "/salib/"
 local STATS = { "minimum", "mean", "median", "maximum", "CV", "stdev" }
 
 local function design(opts)

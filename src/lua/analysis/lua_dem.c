@@ -1,7 +1,7 @@
 /*
  * lua_dem.c - dfle.dem: DEMs, channel profiles and networks from Lua.
  *
- *   local dem = dfle.dem.read("../shared/data/dem/srtm_bigtujunga30m_utm11.tif")
+ *   local dem = dfle.dem.read("srtm_bigtujunga30m_utm11.tif")
  *   dem:fill()
  *   local p = dem:profile{ outlet = {396887, 3799338} }
  *   local fit = dfle.fit_slope_area(p)

@@ -1,0 +1,159 @@
+/*
+ * lua_args.c - dfle.args{...}: the command line of an experiment script,
+ * and dfle.mkdir(path).
+ *
+ *   local o = dfle.args{
+ *     usage   = "dfle examples/fig1_slope_area.lua [options] [output-directory]",
+ *     about   = "The paper's Fig. 1 from a real DEM.",
+ *     flags   = { quick = "a fast version (for the test suite)" },
+ *     options = { data = { "DIR", "data directory (default: $DFLE_DATA_DIR)",
+ *                          default = os.getenv("DFLE_DATA_DIR") } },
+ *     output  = true,   -- an output directory, default ".", created
+ *   }
+ *   o.quick, o.data, o.output
+ *
+ * Why in the binding: every example parsed its arguments by hand, so a
+ * misspelt flag (--qiuck) or --help became the output directory and the
+ * script failed after the whole run, and the directory was never made.
+ * Here a script states its options once and gets, before any work is
+ * done: --help (usage on stdout, exit 0), an error naming an unknown
+ * option and listing the known ones, values for --name VALUE or
+ * --name=VALUE, at most one positional argument, and the output
+ * directory made (like mkdir -p).  The parser is a few lines of Lua,
+ * kept here as a chunk loaded when the module opens.
+ */
+#include "lua/core/dfle_lua.h"
+
+#include <errno.h>
+#include <string.h>
+#include <sys/stat.h>
+#include <sys/types.h>
+
+/* dfle.mkdir(path): make path and its parents (0777 less the umask);
+ * an existing directory is fine.  Raises with the system's reason. */
+static int l_mkdir(lua_State *L)
+{
+    const char *path = dfle_lua_check_string(L, 1, "mkdir", "the path");
+    size_t len = strlen(path);
+    char *buf;
+    struct stat sb;
+
+    if (len == 0)
+        return luaL_error(L, "dfle.mkdir: the path is empty");
+    buf = lua_newuserdatauv(L, len + 1, 0); /* collected if we raise */
+    memcpy(buf, path, len + 1);
+    /* Each prefix in turn, as mkdir -p does. */
+    for (size_t k = 1; k <= len; k++) {
+        if (buf[k] != '/' && buf[k] != '\0')
+            continue;
+        buf[k] = '\0';
+        if (mkdir(buf, 0777) != 0 && errno != EEXIST)
+            return luaL_error(L, "dfle.mkdir: cannot make '%s': %s", buf, strerror(errno));
+        buf[k] = k < len ? '/' : '\0';
+    }
+    if (stat(path, &sb) != 0 || !S_ISDIR(sb.st_mode))
+        return luaL_error(L, "dfle.mkdir: '%s' exists and is not a directory", path);
+    lua_pushstring(L, path);
+    return 1;
+}
+
+static const char args_chunk[] =
+    "local spec = ...\n"
+    "local mkdir = select(2, ...)\n"
+    "if type(spec) ~= 'table' then error('dfle.args: expected a table {usage =, flags =, options =, output =}', 3) end\n"
+    "for k in pairs(spec) do\n"
+    "  if k ~= 'usage' and k ~= 'about' and k ~= 'flags' and k ~= 'options' and k ~= 'output' and k ~= 'arg' then\n"
+    "    error(('dfle.args: unknown key %q (known: usage, about, flags, options, output, arg)'):format(tostring(k)), 3)\n"
+    "  end\n"
+    "end\n"
+    "local flags, options = spec.flags or {}, spec.options or {}\n"
+    "local names = {}\n"
+    "for name in pairs(flags) do names[#names + 1] = name end\n"
+    "for name, o in pairs(options) do\n"
+    "  if type(o) ~= 'table' or type(o[1]) ~= 'string' or type(o[2]) ~= 'string' then\n"
+    "    error(('dfle.args: option %q must be {\\\"VALUE\\\", \\\"help text\\\", default = ...}'):format(name), 3)\n"
+    "  end\n"
+    "  names[#names + 1] = name\n"
+    "end\n"
+    "table.sort(names)\n"
+    "local function known()\n"
+    "  local t = {}\n"
+    "  for _, n in ipairs(names) do t[#t + 1] = '--' .. n .. (options[n] and (' ' .. options[n][1]) or '') end\n"
+    "  t[#t + 1] = '--help'\n"
+    "  return table.concat(t, ', ')\n"
+    "end\n"
+    "local function help()\n"
+    "  local out = { 'usage: ' .. (spec.usage or 'dfle script.lua [options]') }\n"
+    "  if spec.about then out[#out + 1] = ''; out[#out + 1] = spec.about end\n"
+    "  out[#out + 1] = ''\n"
+    "  out[#out + 1] = 'options:'\n"
+    "  for _, n in ipairs(names) do\n"
+    "    local left = '--' .. n .. (options[n] and (' ' .. options[n][1]) or '')\n"
+    "    out[#out + 1] = ('  %-22s %s'):format(left, flags[n] or options[n][2])\n"
+    "  end\n"
+    "  out[#out + 1] = ('  %-22s %s'):format('--help', 'show this help and exit')\n"
+    "  if spec.output then out[#out + 1] = ('  %-22s %s'):format('output-directory', 'where files go (default: the current directory; made if missing)') end\n"
+    "  io.stdout:write(table.concat(out, '\\n'), '\\n')\n"
+    "  os.exit(0)\n"
+    "end\n"
+    "local argv = spec.arg or _G.arg or {}\n"
+    "local r = {}\n"
+    "for n in pairs(flags) do r[n] = false end\n"
+    "for n, o in pairs(options) do r[n] = o.default end\n"
+    "local positional = {}\n"
+    "local i = 1\n"
+    "while i <= #argv do\n"
+    "  local a = argv[i]\n"
+    "  if a == '--help' or a == '-h' then help() end\n"
+    "  local name, value = a:match('^%-%-([%w_%-]+)=(.*)$')\n"
+    "  name = name or a:match('^%-%-([%w_%-]+)$')\n"
+    "  if name then\n"
+    "    if flags[name] then\n"
+    "      if value then error(('%s: --%s takes no value'):format(spec.usage or 'arguments', name), 3) end\n"
+    "      r[name] = true\n"
+    "    elseif options[name] then\n"
+    "      if not value then\n"
+    "        i = i + 1\n"
+    "        value = argv[i]\n"
+    "        if value == nil then error(('--%s needs a value (%s)'):format(name, options[name][1]), 3) end\n"
+    "      end\n"
+    "      r[name] = value\n"
+    "    else\n"
+    "      error(('unknown option %q (options: %s)'):format(a, known()), 3)\n"
+    "    end\n"
+    "  elseif a:sub(1, 1) == '-' and a ~= '-' then\n"
+    "    error(('unknown option %q (options: %s)'):format(a, known()), 3)\n"
+    "  else\n"
+    "    positional[#positional + 1] = a\n"
+    "  end\n"
+    "  i = i + 1\n"
+    "end\n"
+    "if spec.output then\n"
+    "  if #positional > 1 then error(('one output directory at most (got %q and %q)'):format(positional[1], positional[2]), 3) end\n"
+    "  r.output = positional[1] or '.'\n"
+    "  mkdir(r.output)\n"
+    "elseif #positional > 0 then\n"
+    "  error(('unexpected argument %q (options: %s)'):format(positional[1], known()), 3)\n"
+    "end\n"
+    "return r\n";
+
+/* dfle.args(spec): the chunk, called with the spec and dfle.mkdir. */
+static int l_args(lua_State *L)
+{
+    lua_settop(L, 1);
+    lua_pushvalue(L, lua_upvalueindex(1));
+    lua_insert(L, 1);
+    lua_pushcfunction(L, l_mkdir);
+    lua_call(L, 2, 1);
+    return 1;
+}
+
+void dfle_lua_open_args(lua_State *L)
+{
+    if (luaL_loadbufferx(L, args_chunk, sizeof args_chunk - 1, "=dfle.args", "t") != LUA_OK)
+        lua_error(L); /* only out of memory: the source is ours */
+    lua_pushcclosure(L, l_args, 1);
+    lua_setfield(L, -2, "args");
+    lua_pushcfunction(L, l_mkdir);
+    lua_setfield(L, -2, "mkdir");
+}
