@@ -77,10 +77,20 @@ int dfle_dem_cell_at(const dfle_dem *d, double E, double N, const char *what, si
     c = floor((E - d->x0) / d->dx);
     r = floor((d->y0 - N) / d->dy);
     if (!(isfinite(E) && isfinite(N) && c >= 0 && r >= 0 && c < (double)d->nx &&
-          r < (double)d->ny))
+          r < (double)d->ny)) {
+        /* Longitude and latitude given for a grid in metres: the commonest
+         * slip, so name the grid's CRS and what it wants. */
+        if (!d->geographic && fabs(E) <= 180 && fabs(N) <= 90 && (e[1] - e[0] > 360 || e[3] - e[2] > 180))
+            return dfle_error_set(err, DFLE_EINVAL,
+                                  "dem: %s (%.10g E, %.10g N) is outside the grid (E %.0f..%.0f, "
+                                  "N %.0f..%.0f); it looks like longitude and latitude, but the "
+                                  "DEM is in %s: give the point in its coordinates (metres)",
+                                  what, E, N, e[0], e[1], e[2], e[3],
+                                  d->crs_name != NULL ? d->crs_name : "a projected CRS");
         return dfle_error_set(err, DFLE_EINVAL,
                               "dem: %s (%.10g E, %.10g N) is outside the grid (E %.0f..%.0f, "
                               "N %.0f..%.0f)", what, E, N, e[0], e[1], e[2], e[3]);
+    }
     *index = (size_t)r * d->nx + (size_t)c;
     return DFLE_OK;
 }

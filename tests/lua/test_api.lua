@@ -131,7 +131,8 @@ tests["fluvial.stream_power: K, m, n round-trip"] = function()
     T.eq(fl.n_s, 1)
     T.eq(fl.name, "stream_power")
     T.close(fl:steady_slope(1e-4, 1e6), (1e-4 / 2e-5) * 1e6 ^ -0.5, 1e-12)
-    T.eq(fl.nope, nil)
+    -- a field that does not exist is an error naming the fields there are
+    T.raises_here(function() return fl.nope end, "has no field 'nope'", "fields: ", "methods: ")
 end
 
 tests["channel: defaults are the paper's grid"] = function()
@@ -152,7 +153,8 @@ tests["channel: defaults are the paper's grid"] = function()
         T.close(A[i], 1000 + 25 * x[i] ^ (5 / 3), 1e-12)
         T.close(w[i], 0.05 * A[i] ^ 0.3, 1e-12)
     end
-    T.eq(ch.nope, nil)
+    -- a field that does not exist is an error naming the fields there are
+    T.raises_here(function() return ch.nope end, "has no field 'nope'", "fields: ", "methods: ")
 end
 
 tests["channel: dx, A_max and length set the grid"] = function()
@@ -185,7 +187,8 @@ tests["router.empirical: parameters read back"] = function()
     T.eq(d.c2, 0.78)
     T.eq(d.rho_b, 1800)
     T.eq(d.g, 9.81)
-    T.eq(rt.nope, nil)
+    -- a field that does not exist is an error naming the fields there are
+    T.raises_here(function() return rt.nope end, "has no field 'nope'", "fields: ", "methods: ")
 end
 
 tests["law.power: parameters read back"] = function()
@@ -198,7 +201,8 @@ tests["law.power: parameters read back"] = function()
     T.eq(d.k_df, 1e-4)
     T.eq(d.alpha, 6)
     T.eq(d.beta, 1)
-    T.eq(law.nope, nil)
+    -- a field that does not exist is an error naming the fields there are
+    T.raises_here(function() return law.nope end, "has no field 'nope'", "fields: ", "methods: ")
 end
 
 tests["model: properties and components"] = function()
@@ -214,7 +218,8 @@ tests["model: properties and components"] = function()
     T.ok(rawequal(m.fluvial, fl), "m.fluvial")
     T.ok(rawequal(m.router, rt), "m.router")
     T.ok(rawequal(m.law, law), "m.law")
-    T.eq(m.nope, nil)
+    -- a field that does not exist is an error naming the fields there are
+    T.raises_here(function() return m.nope end, "has no field 'nope'", "fields: ", "methods: ")
     -- Defaults: every component is built when omitted.
     local d = dfle.model{}
     T.eq(d.n, 403)

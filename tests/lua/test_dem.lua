@@ -125,7 +125,7 @@ tests["profile: from a head down to A_max, slope over a vertical interval"] = fu
     local k = math.floor(main.n / 4)
     T.ok(A[k] < 3e6)
     local p = dem:profile{ head = { E[k], N[k] }, A_max = 3e6, dz = 10 }
-    T.eq(p.E, nil)
+    raises(function() return p.E end, "no field 'E'", "get") -- arrays come through p:get
     T.eq(p.dz, 10)
     T.eq(p.ds, nil)
     T.eq(p:get("E")[1], E[k])
@@ -233,6 +233,9 @@ tests["errors: degrees, pits, outlets, options"] = function()
            "dfle.dem: outlet (417896 E, 3792642 N) is outside the grid (E 376314..412224, " ..
            "N 3788628..3807918)")
     raises(function() return dem:at(0, 0) end, "outside the grid")
+    -- longitude and latitude given to a projected DEM: say so
+    raises(function() return dem:profile{ outlet = { -118.2, 34.3 } } end,
+           "looks like longitude and latitude", "UTM zone 11N", "metres")
     raises(function() return dem:profile{} end, "'outlet' or 'head'")
     raises(function() return dem:profile() end, "table expected")
     raises(function() return dem:profile{ outlet = BLACK, head = BLUE } end, "not both")

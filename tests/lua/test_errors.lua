@@ -496,4 +496,27 @@ tests["metatables are protected: a script cannot free a component a model uses"]
     T.ok(out:find("PROTECTED", 1, true) or out:find("RAISED", 1, true), out)
 end
 
+-- Rough edges a first-time user meets: each error says what to do instead.
+tests["fields: read-only assignment, dot calls, unknown methods, strict fit results"] = function()
+    local m = dfle.model{ channel = dfle.channel{ A_max = 2e5 }, router = false }
+    T.raises_here(function() m.U = 1e-3 end, "field 'U' is read-only", "m:set_U(U)")
+    T.raises_here(function() m.n = 3 end, "field 'n' is read-only")
+    local ch = dfle.channel{ A_max = 2e5 }
+    T.raises_here(function() ch.dx = 5 end, "field 'dx' is read-only", "make a new")
+    T.raises_here(function() return m.get("A") end, "call it with a colon", "obj:get(...)", "not a dot")
+    T.raises_here(function() return m:frobnicate() end, "has no field 'frobnicate'",
+                  "methods: ", "run_to_steady")
+    -- unknown keys of a fit result name the ones there are
+    local fm = dfle.model{ channel = dfle.channel{ dx = 20 } }
+    fm:run_to_steady{}
+    local fit = dfle.fit_slope_area(fm)
+    T.ok(fit.S_df > 0)
+    T.raises_here(function() return fit.Sdf end, "no field 'Sdf'", "S_df", "r2")
+    -- fitting the unrun starting profile says to run the model first
+    local fresh = dfle.model{ channel = dfle.channel{ dx = 20 } }
+    local none, why = dfle.fit_slope_area(fresh)
+    T.eq(none, nil)
+    T.has(why, "has not been run", "run_to_steady")
+end
+
 return tests

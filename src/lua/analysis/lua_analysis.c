@@ -68,9 +68,17 @@ static int l_fit_slope_area(lua_State *L)
     memset(&bins, 0, sizeof bins);
     st = dfle_slope_area_fit(n, A, S, nbins, &bins, &fit, &err);
     if (st == DFLE_EFIT) {
+        dfle_model *m = luaL_testudata(L, 1, DFLE_LUA_MODEL) != NULL
+                            ? *(dfle_model **)lua_touserdata(L, 1) : NULL;
         dfle_bins_release(&bins);
         lua_pushnil(L);
-        lua_pushfstring(L, "dfle.fit_slope_area: %s", err.msg);
+        /* A model that has not run is still at its fluvial start, a pure
+         * power law that Eq. (2) cannot fit: say so. */
+        lua_pushfstring(L, "dfle.fit_slope_area: %s%s", err.msg,
+                        m != NULL && dfle_model_time(m) == 0
+                            ? " (the model has not been run: its profile is the fluvial starting "
+                              "state; run it first, e.g. m:run_to_steady{})"
+                            : "");
         return 2;
     }
     if (st != DFLE_OK) {
@@ -92,6 +100,7 @@ static int l_fit_slope_area(lua_State *L)
     push_bins(L, &bins);
     lua_setfield(L, -2, "bins");
     dfle_bins_release(&bins);
+    dfle_lua_strict_table(L, -1, "a fit_slope_area result");
     return 1;
 }
 

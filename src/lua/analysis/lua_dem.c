@@ -319,7 +319,7 @@ static int l_dem_property(lua_State *L)
                 v = z[i];
         lua_pushnumber(L, v); /* at least one cell has data */
     } else
-        lua_pushnil(L);
+        return 0; /* not a field: __index says so */
     return 1;
 }
 
@@ -470,7 +470,7 @@ static int l_profile_property(lua_State *L)
         else
             lua_pushnil(L);
     } else
-        lua_pushnil(L);
+        return 0; /* not a field: __index says so */
     return 1;
 }
 
@@ -517,10 +517,13 @@ void dfle_lua_open_dem(lua_State *L)
     static const dfle_lua_type dem_type = {
         .name = DFLE_LUA_DEM, .free = dem_free, .describe = dem_describe,
         .methods = dem_methods, .property = l_dem_property, .closable = 1,
+        .fields = "nx, ny, n, dx, dy, extent, crs, crs_wkt, epsg, geographic, path, "
+                  "nodata_cells, filled, routed, sinks, flats, z_min, z_max",
     };
     static const dfle_lua_type profile_type = {
         .name = DFLE_LUA_PROFILE, .free = profile_free, .describe = profile_describe,
         .methods = profile_methods, .property = l_profile_property, .meta = profile_meta,
+        .fields = "n, kind, length, A_max, A_min, outlet, head, given, snap_distance, ds, dz",
         .closable = 1,
     };
     static const luaL_Reg funcs[] = {{"read", l_dem_read}, {NULL, NULL}};

@@ -77,6 +77,12 @@ typedef struct dfle_lua_type {
     /* After the C object is freed: let go of what it held (the userdata
      * is at index idx).  May be NULL. */
     void (*release)(lua_State *L, int idx);
+    /* The read-only fields, for the message when a script reads one that
+     * does not exist ("time, U, n"); NULL: the object's params() keys. */
+    const char *fields;
+    /* How to change what scripts may try to assign ("U: m:set_U(U)");
+     * NULL: nothing can be changed after construction. */
+    const char *setters;
 } dfle_lua_type;
 
 /* Lifetime while in use (C objects point at each other, and Lua code
@@ -148,6 +154,15 @@ const char *dfle_lua_check_string(lua_State *L, int idx, const char *fn, const c
  * characters, NUL and control bytes as \ddd, "..." and the length after
  * a cut; returns the pushed string. */
 const char *dfle_lua_shown(lua_State *L, const char *s, size_t len);
+
+/* Push, as one string, the string keys of the table at idx, sorted
+ * ("a, b, c"); returns it. */
+const char *dfle_lua_push_sorted_keys(lua_State *L, int idx);
+
+/* Make the result table at idx strict: reading a key it does not have
+ * raises, naming `what` and the keys it has (fit.Adf for fit.A_df would
+ * otherwise be nil, and fail later, far from the mistake). */
+void dfle_lua_strict_table(lua_State *L, int idx, const char *what);
 
 /* Raise err's message as "dfle.<message>" at the caller's file:line. */
 int dfle_lua_raise(lua_State *L, const dfle_error *err);

@@ -60,7 +60,8 @@ int dfle_lua_push_param_field(lua_State *L, const char *name, dfle_lua_params_fn
         return 1;
     }
     dfle_lua_push_params(L, 1, fn, comp);
-    lua_getfield(L, -1, key);
+    if (lua_getfield(L, -1, key) == LUA_TNIL)
+        return 0; /* not a parameter: __index says so */
     return 1;
 }
 

@@ -141,11 +141,15 @@ static int object_tostring(lua_State *L)
     return 1;
 }
 
-/* __index: methods first, then the type's read-only properties.
- * Upvalues: the methods table, the type. */
+/* __index: methods first, then the type's read-only properties; a key
+ * that is neither raises, naming the fields and methods there are (a
+ * misspelt m.cfl or a dot for a colon would otherwise read as nil and
+ * fail later, far from the mistake).  Upvalues: the methods table, the
+ * type. */
 static int object_index(lua_State *L)
 {
     const dfle_lua_type *t = lua_touserdata(L, lua_upvalueindex(2));
+    const char *fields;
     lua_pushvalue(L, 2);
     if (lua_rawget(L, lua_upvalueindex(1)) != LUA_TNIL)
         return 1;
@@ -156,10 +160,41 @@ static int object_index(lua_State *L)
         if (strlen(key) != len) /* "time\0x" must not read as time */
             return luaL_error(L, "%s: no field '%s' (a NUL byte in the name)", t->name,
                               dfle_lua_shown(L, key, len));
+        if (t->property != NULL) {
+            int top = lua_gettop(L), r = t->property(L);
+            if (r > 0)
+                return r;
+            lua_settop(L, top);
+        }
     }
-    if (t->property != NULL && lua_type(L, 2) == LUA_TSTRING)
-        return t->property(L);
-    return 0;
+    if (t->fields != NULL) {
+        fields = t->fields;
+    } else if (lua_getfield(L, lua_upvalueindex(1), "params") == LUA_TFUNCTION) {
+        /* The object's parameters are its fields (the method itself, read
+         * from the methods table: indexing the object would come back here). */
+        lua_pushvalue(L, 1);
+        lua_call(L, 1, 1);
+        fields = lua_pushfstring(L, "name, %s", dfle_lua_push_sorted_keys(L, -1));
+    } else {
+        fields = "none";
+    }
+    return luaL_error(L, "%s has no field '%s' (fields: %s; methods: %s)", t->name,
+                      lua_type(L, 2) == LUA_TSTRING ? dfle_lua_shown(L, lua_tostring(L, 2),
+                                                                     lua_rawlen(L, 2))
+                                                    : luaL_tolstring(L, 2, NULL),
+                      fields, dfle_lua_push_sorted_keys(L, lua_upvalueindex(1)));
+}
+
+/* __newindex: every field is read-only. */
+static int object_newindex(lua_State *L)
+{
+    const dfle_lua_type *t = lua_touserdata(L, lua_upvalueindex(1));
+    const char *key = lua_type(L, 2) == LUA_TSTRING ? lua_tostring(L, 2) : "?";
+    if (t->setters != NULL)
+        return luaL_error(L, "%s: field '%s' is read-only (to change: %s)", t->name, key,
+                          t->setters);
+    return luaL_error(L, "%s: field '%s' is read-only (make a new %s to change it)", t->name, key,
+                      t->name);
 }
 
 void dfle_lua_register(lua_State *L, const dfle_lua_type *t)
@@ -189,6 +224,9 @@ void dfle_lua_register(lua_State *L, const dfle_lua_type *t)
     lua_pushlightuserdata(L, (void *)t);
     lua_pushcclosure(L, object_index, 2);
     lua_setfield(L, -2, "__index");
+    lua_pushlightuserdata(L, (void *)t);
+    lua_pushcclosure(L, object_newindex, 1);
+    lua_setfield(L, -2, "__newindex");
     /* Scripts must not reach __gc: freeing a component a model still
      * uses would leave the model reading freed memory. */
     lua_pushliteral(L, "dfle objects do not share their metatable");
@@ -196,9 +234,30 @@ void dfle_lua_register(lua_State *L, const dfle_lua_type *t)
     lua_pop(L, 1);
 }
 
+/* A method of type tname called with a dot (m.run()) gets no object as
+ * its first argument: say so, rather than "dfle.model expected". */
+static void check_colon(lua_State *L, int arg, const char *tname)
+{
+    lua_Debug ar;
+    /* What was passed, named before anything is pushed (index 1 may be
+     * empty); dfle_lua_typename leaves its name on the stack. */
+    const char *got = lua_isnone(L, 1) ? "no value" : dfle_lua_typename(L, 1);
+    if (arg != 1 || luaL_testudata(L, 1, tname) != NULL || !lua_getstack(L, 0, &ar) ||
+        !lua_getinfo(L, "n", &ar) || ar.name == NULL)
+        return;
+    if (luaL_getmetatable(L, tname) == LUA_TTABLE && lua_getfield(L, -1, "__index") != LUA_TNIL &&
+        lua_getupvalue(L, -1, 1) != NULL && lua_getfield(L, -1, ar.name) == LUA_TFUNCTION)
+        luaL_error(L, "%s:%s: call it with a colon, obj:%s(...), not a dot (the object is its "
+                      "first argument; got %s)", tname, ar.name, ar.name, got);
+}
+
 void *dfle_lua_check_object(lua_State *L, int arg, const char *tname)
 {
-    void **p = luaL_checkudata(L, arg, tname);
+    void **p;
+    int top = lua_gettop(L);
+    check_colon(L, arg, tname);
+    lua_settop(L, top);
+    p = luaL_checkudata(L, arg, tname);
     if (*p == NULL)
         luaL_argerror(L, arg, lua_pushfstring(L, "%s has been closed", tname));
     return *p;

@@ -229,3 +229,59 @@ size_t dfle_lua_slope_area(lua_State *L, int arg, const char *fn, const double *
         luaL_error(L, "dfle.%s: A has %d values but S has %d", fn, (int)n, (int)nS);
     return n;
 }
+
+/* Push, as one string, the keys of the table at idx, sorted. */
+const char *dfle_lua_push_sorted_keys(lua_State *L, int idx)
+{
+    luaL_Buffer b;
+    int n = 0, list;
+    idx = lua_absindex(L, idx);
+    lua_newtable(L);
+    list = lua_gettop(L);
+    lua_pushnil(L);
+    while (lua_next(L, idx) != 0) {
+        lua_pop(L, 1);
+        if (lua_type(L, -1) == LUA_TSTRING) {
+            lua_pushvalue(L, -1);
+            lua_rawseti(L, list, ++n);
+        }
+    }
+    lua_getglobal(L, "table");
+    if (lua_getfield(L, -1, "sort") == LUA_TFUNCTION) {
+        lua_pushvalue(L, list);
+        lua_call(L, 1, 0);
+    } else {
+        lua_pop(L, 1);
+    }
+    lua_pop(L, 1);
+    luaL_buffinit(L, &b);
+    for (int k = 1; k <= n; k++) {
+        lua_rawgeti(L, list, k);
+        if (k > 1)
+            luaL_addstring(&b, ", ");
+        luaL_addvalue(&b);
+    }
+    luaL_pushresult(&b);
+    return lua_tostring(L, -1);
+}
+
+/* __index of a strict table: upvalue 1 names it. */
+static int strict_index(lua_State *L)
+{
+    const char *keys = dfle_lua_push_sorted_keys(L, 1);
+    return luaL_error(L, "%s has no field '%s' (fields: %s)", lua_tostring(L, lua_upvalueindex(1)),
+                      lua_type(L, 2) == LUA_TSTRING ? dfle_lua_shown(L, lua_tostring(L, 2),
+                                                                     lua_rawlen(L, 2))
+                                                    : luaL_typename(L, 2),
+                      keys);
+}
+
+void dfle_lua_strict_table(lua_State *L, int idx, const char *what)
+{
+    idx = lua_absindex(L, idx);
+    lua_createtable(L, 0, 1);
+    lua_pushstring(L, what);
+    lua_pushcclosure(L, strict_index, 1);
+    lua_setfield(L, -2, "__index");
+    lua_setmetatable(L, idx);
+}

@@ -463,11 +463,13 @@ static int run_sample(lua_State *L)
             t = lua_getfield(L, extra, name);
         if (t == LUA_TNIL) {
             lua_settop(L, vals + 1);
-            t = lua_getfield(L, fit, name);
+            lua_pushstring(L, name);
+            t = lua_rawget(L, fit); /* raw: the fit table raises on unknown keys */
         }
         if (t == LUA_TNIL) {
             lua_settop(L, vals + 1);
-            t = lua_getfield(L, res, name);
+            lua_pushstring(L, name);
+            t = lua_rawget(L, res);
         }
         if (t == LUA_TNIL && (strcmp(name, "runout_A") == 0 || strcmp(name, "runout_x") == 0)) {
             lua_settop(L, vals + 1);

@@ -174,7 +174,7 @@ static int l_channel_property(lua_State *L)
     else if (strcmp(key, "A_max") == 0)
         lua_pushnumber(L, dfle_channel_A(ch)[n - 1]);
     else
-        lua_pushnil(L);
+        return 0; /* not a field: __index says so */
     return 1;
 }
 
@@ -204,6 +204,7 @@ void dfle_lua_open_channel(lua_State *L)
     static const dfle_lua_type type = {
         .name = DFLE_LUA_CHANNEL, .free = channel_free, .describe = channel_describe,
         .methods = methods, .property = l_channel_property, .meta = meta,
+        .fields = "n, dx, length, A_max",
     };
     dfle_lua_register(L, &type);
     lua_pushcfunction(L, l_channel_new);

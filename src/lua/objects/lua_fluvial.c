@@ -89,7 +89,7 @@ static int l_fluvial_property(lua_State *L)
     else if (strcmp(key, "name") == 0)
         lua_pushstring(L, dfle_fluvial_name(fl));
     else
-        lua_pushnil(L);
+        return 0; /* not a field: __index says so */
     return 1;
 }
 
@@ -145,6 +145,7 @@ void dfle_lua_open_fluvial(lua_State *L)
     static const dfle_lua_type type = {
         .name = DFLE_LUA_FLUVIAL, .free = fluvial_free, .describe = fluvial_describe,
         .methods = methods, .property = l_fluvial_property,
+        .fields = "K, m_s (or m), n_s (or n), name",
     };
     static const luaL_Reg funcs[] = {
         {"stochastic_threshold", l_stochastic_threshold},

@@ -300,8 +300,16 @@ static int model_run(lua_State *L, int steady)
         if (lua_type(L, -1) != LUA_TSTRING)
             luaL_error(L, "dfle.%s: parameter 'method' must be a string, got %s", fn,
                        dfle_lua_typename(L, -1));
-        dfle_lua_check_string(L, -1, fn, "method");
-        o.method = luaL_checkoption(L, -1, NULL, methods);
+        {
+            const char *name = dfle_lua_check_string(L, -1, fn, "method");
+            o.method = -1;
+            for (int k = 0; methods[k] != NULL; k++)
+                if (strcmp(name, methods[k]) == 0)
+                    o.method = k;
+            if (o.method < 0)
+                luaL_error(L, "dfle.%s: method '%s' is not one of explicit, implicit, direct, auto "
+                              "(lower case)", fn, name);
+        }
         if (!steady && o.method == DFLE_METHOD_DIRECT)
             luaL_error(L, "dfle.model:run: method 'direct' finds steady states only; use "
                           "run_to_steady, or 'explicit' or 'implicit' here");
@@ -447,8 +455,7 @@ static int l_model_property(lua_State *L)
             lua_getiuservalue(L, 1, k + 1);
             return 1;
         }
-    lua_pushnil(L);
-    return 1;
+    return 0; /* not a field: __index says so */
 }
 
 static void model_describe(lua_State *L, void *obj)
@@ -489,6 +496,9 @@ void dfle_lua_open_model(lua_State *L)
     static const dfle_lua_type type = {
         .name = DFLE_LUA_MODEL, .free = model_free, .describe = model_describe,
         .methods = methods, .property = l_model_property, .closable = 1,
+        .fields = "time, U, n, channel, fluvial, router, law",
+        /* Read-only: say how to change them. */
+        .setters = "U: m:set_U(U); z: m:set_z(z)",
         .release = model_release,
     };
     dfle_lua_register(L, &type);
