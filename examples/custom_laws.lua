@@ -5,7 +5,7 @@
 -- Four laws on the Fig. 9 channel (empirical router, Table G1 fluvial law):
 --   * the paper's Eq. (6), built in (dfle.law.power);
 --   * the inertial-stress law after Stock and Dietrich (2006), written in
---     Lua exactly as in issue 6, and built in (dfle.law.inertial) to show
+--     Lua as a user would, and built in (dfle.law.inertial) to show
 --     they agree;
 --   * an excess-stress law k (tau - tau_c)^p, written in Lua;
 --   * Eq. (6) with a debris-flow frequency that falls with drainage area
