@@ -615,6 +615,97 @@ static void test_long_path(void **state)
     dfle_dem_free(d);
 }
 
+
+/* Damaged files: every one is refused with a message that names the
+ * file and the fault, never read as plausible-looking numbers. */
+static void test_damaged_files(void **state)
+{
+    static const char head[] = "ncols 3\nnrows 3\nxllcorner 0\nyllcorner 0\ncellsize 10\n";
+    char text[512];
+    dfle_dem *d = NULL;
+    dfle_error err;
+    const char *p;
+    (void)state;
+
+    /* A word GDAL would read as 0. */
+    snprintf(text, sizeof text, "%s1 2 3\n4 x 6\n7 8 9\n", head);
+    p = write_tmp("word.asc", text);
+    assert_int_equal(dfle_dem_read(p, NULL, &d, &err), DFLE_EINVAL);
+    assert_null(d);
+    assert_msg_contains(err.msg, "word.asc' line 7: 'x' is not a number");
+    /* A decimal comma. */
+    snprintf(text, sizeof text, "%s1 2 3\n4 5,5 6\n7 8 9\n", head);
+    p = write_tmp("comma.asc", text);
+    assert_int_equal(dfle_dem_read(p, NULL, &d, &err), DFLE_EINVAL);
+    assert_msg_contains(err.msg, "'5,5' is not a number");
+    /* Values past the last row, which GDAL ignores. */
+    snprintf(text, sizeof text, "%s1 2 3\n4 5 6\n7 8 9\n10 11 12\n", head);
+    p = write_tmp("extra.asc", text);
+    assert_int_equal(dfle_dem_read(p, NULL, &d, &err), DFLE_EINVAL);
+    assert_msg_contains(err.msg, "holds 12 values where its header (ncols x nrows) says 9");
+    /* A cell size or corner no DEM has. */
+    p = write_tmp("far.asc", "ncols 3\nnrows 3\nxllcorner 1e308\nyllcorner 0\ncellsize 1e300\n"
+                             "1 2 3\n4 5 6\n7 8 9\n");
+    assert_int_equal(dfle_dem_read(p, NULL, &d, &err), DFLE_EINVAL);
+    assert_msg_contains(err.msg, "far.asc' has cells of 1e+300 x 1e+300");
+    assert_msg_contains(err.msg, "header damaged");
+    p = write_tmp("infcell.asc", "ncols 3\nnrows 3\nxllcorner 0\nyllcorner 0\ncellsize inf\n"
+                                 "1 2 3\n4 5 6\n7 8 9\n");
+    assert_int_equal(dfle_dem_read(p, NULL, &d, &err), DFLE_EINVAL);
+    assert_msg_contains(err.msg, "not a north-up grid");
+    /* A value that is no elevation in metres. */
+    snprintf(text, sizeof text, "%s1 2 3\n4 1e30 6\n7 8 9\n", head);
+    p = write_tmp("huge.asc", text);
+    assert_int_equal(dfle_dem_read(p, NULL, &d, &err), DFLE_EINVAL);
+    assert_msg_contains(err.msg, "at row 2, column 2, which is no elevation in metres");
+    assert_msg_contains(err.msg, "nodata = ");
+    /* ... unless it is declared NoData. */
+    snprintf(text, sizeof text, "%sNODATA_value 1e30\n1 2 3\n4 1e30 6\n7 8 9\n", head);
+    p = write_tmp("declared.asc", text);
+    assert_ok(dfle_dem_read(p, NULL, &d, &err), &err);
+    assert_int_equal(dfle_dem_nodata_count(d), 1);
+    dfle_dem_free(d);
+    /* The same from memory. */
+    {
+        const double z[4] = {1, 2, -1e12, 4};
+        const dfle_dem_geo g = {0, 20, 10, 10};
+        assert_int_equal(dfle_dem_new(2, 2, z, &g, &d, &err), DFLE_EINVAL);
+        assert_msg_contains(err.msg, "the grid holds -1e+12 at row 2, column 1");
+    }
+}
+
+/* Undeclared NoData markers and heights beyond any on land read, and
+ * are named for the caller to warn about. */
+static void test_plausible_elevations(void **state)
+{
+    static const char head[] = "ncols 3\nnrows 2\nxllcorner 0\nyllcorner 0\ncellsize 10\n";
+    char text[512], msg[400];
+    dfle_dem *d = NULL;
+    dfle_error err;
+    (void)state;
+
+    snprintf(text, sizeof text, "%s100 101 102\n-9999 103 -9999\n", head);
+    assert_ok(dfle_dem_read(write_tmp("marker.asc", text), NULL, &d, &err), &err);
+    assert_int_equal(dfle_dem_check_plausible(d, msg, sizeof msg), 1);
+    assert_msg_contains(msg, "2 cells hold -9999");
+    assert_msg_contains(msg, "pass nodata = -9999");
+    dfle_dem_free(d);
+    /* Declared, the marker is NoData and nothing is odd. */
+    snprintf(text, sizeof text, "%sNODATA_value -9999\n100 101 102\n-9999 103 -9999\n", head);
+    assert_ok(dfle_dem_read(write_tmp("marked.asc", text), NULL, &d, &err), &err);
+    assert_int_equal(dfle_dem_check_plausible(d, msg, sizeof msg), 0);
+    dfle_dem_free(d);
+    /* Centimetres. */
+    snprintf(text, sizeof text, "%s31500 40000 229500\n31000 32000 33000\n", head);
+    assert_ok(dfle_dem_read(write_tmp("cm.asc", text), NULL, &d, &err), &err);
+    assert_int_equal(dfle_dem_check_plausible(d, msg, sizeof msg), 1);
+    assert_msg_contains(msg, "elevations run from 31000 to 229500 m");
+    dfle_dem_free(d);
+    /* The real DEM is fine. */
+    d = read_dem("srtm_bigtujunga30m_utm11.tif");
+    assert_int_equal(dfle_dem_check_plausible(d, msg, sizeof msg), 0);
+    dfle_dem_free(d);
+}
 int main(void)
 {
     const struct CMUnitTest tests[] = {
@@ -629,6 +720,8 @@ int main(void)
         cmocka_unit_test(test_nodata),
         cmocka_unit_test(test_new_and_geometry),
         cmocka_unit_test(test_long_path),
+        cmocka_unit_test(test_damaged_files),
+        cmocka_unit_test(test_plausible_elevations),
     };
     return cmocka_run_group_tests(tests, make_tmpdir, remove_tmpdir);
 }

@@ -107,6 +107,13 @@ int dfle_dem_is_geographic(const dfle_dem *dem);    /* 1: degrees        */
  * reproject. */
 int dfle_dem_check_metric(const dfle_dem *dem, const char *what, dfle_error *err);
 
+/* Elevations that read but are almost surely wrong: cells holding a
+ * common NoData marker (-9999, -32768, ...) the file did not declare, or
+ * a range beyond any on land.  Writes one sentence with the fix into msg
+ * and returns 1; 0 if nothing looks wrong.  Callers warn; the values
+ * are kept as read. */
+int dfle_dem_check_plausible(const dfle_dem *dem, char *msg, size_t cap);
+
 /* Index of the cell containing map point (E, N) [m].  DFLE_EINVAL,
  * naming `what` and the grid's extent, when the point is outside. */
 int dfle_dem_cell_at(const dfle_dem *dem, double E, double N, const char *what,

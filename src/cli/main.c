@@ -84,6 +84,8 @@ static void usage(FILE *out)
 
 typedef struct cli {
     int quiet;
+    int warn_off;  /* warn("@off") */
+    int warn_cont; /* a warning is being continued (lua_warning tocont) */
     int load_error; /* the script failed to load (no traceback wanted) */
     int script; /* index of the script in argv */
     int argc;
@@ -110,6 +112,42 @@ static int msghandler(lua_State *L)
     }
     luaL_traceback(L, L, msg, 1);
     return 1;
+}
+
+/* Lua warnings (warn(), and dfle's plausibility warnings) go to stderr as
+ * "dfle: warning: ...", on by default: they flag values that run but are
+ * almost surely mistakes.  warn("@off") and warn("@on") switch them. */
+static void on_warning(void *ud, const char *msg, int tocont)
+{
+    cli *c = ud;
+    if (!c->warn_cont && !tocont && msg[0] == '@') {
+        if (strcmp(msg, "@off") == 0)
+            c->warn_off = 1;
+        else if (strcmp(msg, "@on") == 0)
+            c->warn_off = 0;
+        return;
+    }
+    if (!c->warn_off) {
+        if (!c->warn_cont) {
+            if (c->bar.drawn)
+                fputs("\r\033[K", stderr); /* not on top of the progress bar */
+            fprintf(stderr, "%s: warning: ", progname);
+        }
+        fputs(msg, stderr);
+        if (!tocont)
+            fputc('\n', stderr);
+        fflush(stderr);
+    }
+    c->warn_cont = tocont;
+}
+
+/* Ensemble workers replay the script: their warnings would repeat the
+ * main state's once per worker. */
+static void drop_warning(void *ud, const char *msg, int tocont)
+{
+    (void)ud;
+    (void)msg;
+    (void)tocont;
 }
 
 /* --- ensembles (doc/ensembles.md): worker states, -j, --shard, the
@@ -153,6 +191,7 @@ static lua_State *open_worker(void *ud, int *nargs, char *msg, size_t msglen)
         snprintf(msg, msglen, "cannot create a worker's Lua state: not enough memory");
         return NULL;
     }
+    lua_setwarnf(L, drop_warning, NULL);
     lua_pushcfunction(L, open_worker_p);
     lua_pushlightuserdata(L, ud);
     if (lua_pcall(L, 1, LUA_MULTRET, 0) != LUA_OK) {
@@ -364,6 +403,7 @@ int main(int argc, char **argv)
 #endif
         return EXIT_FAILURE;
     }
+    lua_setwarnf(L, on_warning, &c);
     catch_interrupts();
     lua_pushcfunction(L, msghandler);
     lua_pushcfunction(L, pmain);

@@ -75,6 +75,93 @@ static int dem_alloc(size_t nx, size_t ny, dfle_dem **out, dfle_error *err)
     return DFLE_OK;
 }
 
+
+/* Elevations are metres on Earth, within +-11 km.  A magnitude past
+ * 10 000 km is no elevation in any unit a DEM uses: a corrupt file, an
+ * undeclared NoData such as -3.4e38, or data that are not heights.
+ * Such values would pass through filling and routing as numbers and
+ * come out as slopes of 1e30, so they are refused; merely odd values
+ * only warn (dfle_dem_check_plausible). */
+#define DEM_Z_LIMIT 1e7
+
+static int check_elevations(const dfle_dem *d, const char *path, dfle_error *err)
+{
+    const char *q = path != NULL ? "'" : "", *where = path != NULL ? path : "the grid";
+    for (size_t i = 0; i < d->n; i++)
+        if (fabs(d->z[i]) >= DEM_Z_LIMIT) /* false for NaN (NoData) */
+            return dfle_error_set(err, DFLE_EINVAL,
+                                  "dem: %s%s%s holds %g at row %zu, column %zu, which is no "
+                                  "elevation in metres; if it marks missing data, declare it "
+                                  "(nodata = %g)", q, where, q, d->z[i], i / d->nx + 1, i % d->nx + 1,
+                                  d->z[i]);
+    return DFLE_OK;
+}
+
+/* Cell sizes past 1000 km, or a grid whose far edge overflows, come from
+ * a damaged header, not from a DEM (degrees are far below the limit). */
+static int check_geometry(const char *path, const double gt[6], int nx, int ny, dfle_error *err)
+{
+    double east = gt[0] + (double)nx * gt[1], south = gt[3] + (double)ny * gt[5];
+    if (gt[1] > 1e6 || -gt[5] > 1e6 || !isfinite(east) || !isfinite(south))
+        return dfle_error_set(err, DFLE_EINVAL, "dem: '%s' has cells of %g x %g and its corner at "
+                              "(%g, %g): not the geometry of a DEM; is its header damaged?",
+                              path, gt[1], -gt[5], gt[0], gt[3]);
+    return DFLE_OK;
+}
+
+/* GDAL's ESRI ASCII reader takes a word it cannot parse ("x", "1,5")
+ * as 0 and ignores values past the last row, both without a word; a
+ * hand-edited or script-written grid gets both wrong often enough to
+ * read it once more and check every value is a number, n in all. */
+static int check_ascii_values(const char *path, size_t n, dfle_error *err)
+{
+    FILE *f = fopen(path, "r");
+    char word[128];
+    size_t count = 0, line = 1;
+    int c, in_header = 1, st = DFLE_OK;
+
+    if (f == NULL)
+        return dfle_error_set(err, DFLE_EIO, "dem: cannot read '%s' again to check it", path);
+    while (st == DFLE_OK) {
+        size_t len = 0;
+        while ((c = getc(f)) != EOF && (c == ' ' || c == '\t' || c == '\r' || c == '\n'))
+            line += c == '\n';
+        if (c == EOF)
+            break;
+        while (c != EOF && c != ' ' && c != '\t' && c != '\r' && c != '\n') {
+            if (len + 1 < sizeof word)
+                word[len++] = (char)c;
+            c = getc(f);
+        }
+        word[len] = '\0';
+        if (c == '\n')
+            ungetc(c, f);
+        /* Header lines start with a keyword (ncols, cellsize, ...):
+         * skip the line; values begin at the first numeric word. */
+        if (in_header && ((word[0] >= 'a' && word[0] <= 'z') || (word[0] >= 'A' && word[0] <= 'Z'))) {
+            while ((c = getc(f)) != EOF && c != '\n')
+                ;
+            line++;
+            continue;
+        }
+        in_header = 0;
+        {
+            char *end;
+            (void)strtod(word, &end);
+            if (end == word || *end != '\0')
+                st = dfle_error_set(err, DFLE_EINVAL, "dem: '%s' line %zu: '%s' is not a number "
+                                    "(value %zu of %zu)", path, line, word, count + 1, n);
+        }
+        count++;
+    }
+    if (st == DFLE_OK && ferror(f))
+        st = dfle_error_set(err, DFLE_EIO, "dem: cannot read '%s' again to check it", path);
+    if (st == DFLE_OK && count != n)
+        st = dfle_error_set(err, DFLE_EINVAL, "dem: '%s' holds %zu values where its header "
+                            "(ncols x nrows) says %zu", path, count, n);
+    fclose(f);
+    return st;
+}
 void dfle_dem_free(dfle_dem *d)
 {
     if (d == NULL)
@@ -116,6 +203,10 @@ int dfle_dem_new(size_t nx, size_t ny, const double *z, const dfle_dem_geo *geo,
     if (d->n_nodata == d->n) {
         dfle_dem_free(d);
         return dfle_error_set(err, DFLE_EINVAL, "dem: every cell is NoData");
+    }
+    if ((st = check_elevations(d, NULL, err)) != DFLE_OK) {
+        dfle_dem_free(d);
+        return st;
     }
     *out = d;
     return DFLE_OK;
@@ -239,9 +330,13 @@ static int read_dataset(GDALDatasetH ds, const char *path, const dfle_dem_read_o
     if (gt[2] != 0.0 || gt[4] != 0.0)
         return dfle_error_set(err, DFLE_EINVAL, "dem: '%s' is a rotated grid; warp it to a "
                               "north-up grid first (gdalwarp)", path);
-    if (!(gt[1] > 0 && gt[5] < 0 && isfinite(gt[0]) && isfinite(gt[3])))
+    if (!(gt[1] > 0 && gt[5] < 0 && isfinite(gt[1]) && isfinite(gt[5]) && isfinite(gt[0]) &&
+          isfinite(gt[3])))
         return dfle_error_set(err, DFLE_EINVAL, "dem: '%s' is not a north-up grid (pixel size "
                               "%g x %g); warp it first (gdalwarp)", path, gt[1], gt[5]);
+    if ((st = check_geometry(path, gt, GDALGetRasterXSize(ds), GDALGetRasterYSize(ds), err)) !=
+        DFLE_OK)
+        return st;
     band = GDALGetRasterBand(ds, band_no);
     zunit = GDALGetRasterUnitType(band);
     if (zunit != NULL && !metre_unit(zunit))
@@ -280,6 +375,12 @@ static int read_dataset(GDALDatasetH ds, const char *path, const dfle_dem_read_o
         goto fail;
     scale = GDALGetRasterScale(band, NULL);
     offset = GDALGetRasterOffset(band, NULL);
+    if (!(isfinite(scale) && isfinite(offset) && scale != 0.0)) {
+        st = dfle_error_set(err, DFLE_EINVAL, "dem: '%s' declares a scale %g and offset %g for its "
+                            "values; they must be finite and the scale non-zero", path, scale,
+                            offset);
+        goto fail;
+    }
     for (size_t i = 0; i < d->n; i++) {
         if (scale != 1.0 || offset != 0.0)
             d->z[i] = d->z[i] * scale + offset;
@@ -290,6 +391,11 @@ static int read_dataset(GDALDatasetH ds, const char *path, const dfle_dem_read_o
                             nodata);
         goto fail;
     }
+    if ((st = check_elevations(d, path, err)) != DFLE_OK)
+        goto fail;
+    if (strcmp(GDALGetDriverShortName(GDALGetDatasetDriver(ds)), "AAIGrid") == 0 &&
+        (st = check_ascii_values(path, d->n, err)) != DFLE_OK)
+        goto fail;
     if (o->crs != NULL) {
         srs = OSRNewSpatialReference(NULL);
         if (srs == NULL || OSRSetFromUserInput(srs, o->crs) != OGRERR_NONE) {
@@ -345,4 +451,44 @@ int dfle_dem_read(const char *path, const dfle_dem_read_opts *opts, dfle_dem **o
     }
     CPLPopErrorHandler();
     return st;
+}
+
+/* ---------------------------------------------------------------- */
+/* Plausibility                                                     */
+/* ---------------------------------------------------------------- */
+
+int dfle_dem_check_plausible(const dfle_dem *d, char *msg, size_t cap)
+{
+    /* Markers GIS software writes for "no data"; a file that holds them
+     * without declaring them reads them as real, deep pits or peaks. */
+    static const double markers[] = {-9999.0, -99999.0, -32768.0, -32767.0, 32767.0, 65535.0};
+    size_t count[sizeof markers / sizeof markers[0]] = {0};
+    double lo = INFINITY, hi = -INFINITY;
+
+    for (size_t i = 0; i < d->n; i++) {
+        double z = d->z[i];
+        if (isnan(z))
+            continue;
+        lo = z < lo ? z : lo;
+        hi = z > hi ? z : hi;
+        for (size_t k = 0; k < sizeof markers / sizeof markers[0]; k++)
+            count[k] += z == markers[k];
+    }
+    for (size_t k = 0; k < sizeof markers / sizeof markers[0]; k++)
+        if (count[k] > 0) {
+            snprintf(msg, cap, "%zu cell%s hold %g, a common NoData marker that the file does not "
+                     "declare; read as elevations they make %s that filling and routing honour; if "
+                     "%g marks missing data, pass nodata = %g", count[k], count[k] == 1 ? "" : "s",
+                     markers[k], markers[k] < 0 ? "deep pits" : "high peaks", markers[k],
+                     markers[k]);
+            return 1;
+        }
+    /* The land surface spans -430 m (Dead Sea) to 8849 m (Everest). */
+    if (lo < -500.0 || hi > 9000.0) {
+        snprintf(msg, cap, "elevations run from %g to %g m, beyond any on land (-430 to 8849 m): "
+                 "are they in metres (not feet or centimetres), and is every missing value "
+                 "declared as NoData?", lo, hi);
+        return 1;
+    }
+    return 0;
 }

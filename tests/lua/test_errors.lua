@@ -519,4 +519,45 @@ tests["fields: read-only assignment, dot calls, unknown methods, strict fit resu
     T.has(why, "has not been run", "run_to_steady")
 end
 
+-- Values that run but are almost surely a unit mistake: a warning on
+-- stderr naming the script line, the value and the fix; once per
+-- parameter; warn("@off") silences them.
+tests["plausibility: a likely unit mistake warns once, with the line and the fix"] = function()
+    local out, ok = T.run_dfle([[
+        local m = dfle.model{ U = 0.5, channel = dfle.channel{ A_max = 2e5 }, router = false }
+        for i = 1, 3 do dfle.model{ U = 0.5, channel = dfle.channel{ A_max = 2e5 }, router = false } end
+        local rt = dfle.router.empirical{ tau_y = 0.3 }
+        m:set_U(1e-3)
+        warn("@off")
+        dfle.router.empirical{ rho_b = 1.8 }
+        warn("@on")
+        print("done")
+    ]])
+    T.ok(ok, out)
+    T.has(out, "dfle: warning: ", ".lua:1: dfle.model: U = 0.5 m/yr is far above rock-uplift rates",
+          "write U = 0.0005", ".lua:3: dfle.router.empirical: tau_y = 0.3 Pa", "write tau_y = 300",
+          "done")
+    local _, n = out:gsub("U = 0.5 m/yr", "")
+    T.eq(n, 1, "one warning per parameter")
+    T.ok(not out:find("rho_b", 1, true), "warn('@off') silences")
+    T.ok(not out:find("set_U", 1, true), "a plausible U is quiet")
+end
+
+tests["plausibility: an undeclared -9999 in a DEM warns; declared, it is NoData"] = function()
+    local asc = T.tmpname(".asc")
+    T.write_file(asc, "ncols 4\nnrows 3\nxllcorner 0\nyllcorner 0\ncellsize 10\n" ..
+                      "100 102 103 104\n-9999 -9999 106 107\n107 108 109 110\n")
+    local out, ok = T.run_dfle(string.format([[
+        local d = dfle.dem.read(%q)
+        print("z_min", d.z_min)
+        local e = dfle.dem.read(%q, { nodata = -9999 })
+        print("cells", e.nodata_cells)
+    ]], asc, asc))
+    T.ok(ok, out)
+    T.has(out, ".lua:1: dfle.dem.read: ", "2 cells hold -9999", "pass nodata = -9999",
+          "z_min\t-9999", "cells\t2")
+    local _, n = out:gsub("warning", "")
+    T.eq(n, 1)
+end
+
 return tests

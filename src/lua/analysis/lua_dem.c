@@ -136,6 +136,14 @@ static int l_dem_read(lua_State *L)
     u = dfle_lua_newobject(L, sizeof *u, DFLE_LUA_DEM, 0);
     if (dfle_dem_read(path, &o, &u->dem, &err) != DFLE_OK)
         return dfle_lua_raise(L, &err);
+    {
+        char msg[512];
+        if (dfle_dem_check_plausible(u->dem, msg, sizeof msg)) {
+            lua_pushfstring(L, "%s: %s", path, msg);
+            dfle_lua_warn(L, "dem.read", lua_tostring(L, -1));
+            lua_pop(L, 1);
+        }
+    }
     return 1;
 }
 

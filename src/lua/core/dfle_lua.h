@@ -144,6 +144,14 @@ void dfle_lua_read_params(lua_State *L, int idx, const char *fn,
                           const dfle_lua_param *params, size_t nparams,
                           const char *const *other_keys);
 
+/* Warn (lua_warning, once per state for each fn and name) when a value
+ * is far outside its physically sensible range, naming the likely unit
+ * mistake (dfle/plausible.h).  dfle_lua_read_params calls it for every
+ * value it reads. */
+void dfle_lua_warn_implausible(lua_State *L, const char *fn, const char *name, double v);
+/* A warning "file:line: dfle.<fn>: <msg>" through lua_warning. */
+void dfle_lua_warn(lua_State *L, const char *fn, const char *msg);
+
 /* The string at idx (a string or a number, as luaL_checkstring takes),
  * refusing embedded NUL bytes: C would end it there without a word
  * ("nul\0.csv" would write "nul", "direct\0junk" would select

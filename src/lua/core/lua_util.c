@@ -8,6 +8,7 @@
 #include <math.h>
 #include <stdio.h>
 #include <string.h>
+#include "dfle/plausible.h"
 
 /* Format the list of known keys into the message buffer for an
  * "unknown parameter" error, so the user sees what was meant. */
@@ -118,6 +119,7 @@ void dfle_lua_read_params(lua_State *L, int idx, const char *fn,
                 luaL_error(L, "dfle.%s: parameter '%s' must be a finite number, got %s", fn,
                            params[i].name, dfle_lua_number_text(L, v));
             *params[i].dst = v;
+            dfle_lua_warn_implausible(L, fn, params[i].name, v);
         }
         lua_pop(L, 1);
     }
@@ -284,4 +286,42 @@ void dfle_lua_strict_table(lua_State *L, int idx, const char *what)
     lua_pushcclosure(L, strict_index, 1);
     lua_setfield(L, -2, "__index");
     lua_setmetatable(L, idx);
+}
+
+/* Warnings go through Lua's own channel (lua_warning): the dfle command
+ * prints them on stderr, a host embedding the module decides for itself,
+ * and a script may say warn("@off").  Each (function, parameter) warns
+ * once per state, so an ensemble or a loop over models does not repeat
+ * the same sentence a thousand times. */
+void dfle_lua_warn_implausible(lua_State *L, const char *fn, const char *name, double v)
+{
+    static const char warned_key = 'w';
+    char msg[400];
+    if (!dfle_plausible_check(name, v, msg, sizeof msg))
+        return;
+    if (lua_rawgetp(L, LUA_REGISTRYINDEX, &warned_key) != LUA_TTABLE) {
+        lua_pop(L, 1);
+        lua_newtable(L);
+        lua_pushvalue(L, -1);
+        lua_rawsetp(L, LUA_REGISTRYINDEX, &warned_key);
+    }
+    lua_pushfstring(L, "%s.%s", fn, name);
+    if (lua_rawget(L, -2) != LUA_TNIL) {
+        lua_pop(L, 2);
+        return;
+    }
+    lua_pop(L, 1);
+    lua_pushfstring(L, "%s.%s", fn, name);
+    lua_pushboolean(L, 1);
+    lua_rawset(L, -3);
+    lua_pop(L, 1);
+    dfle_lua_warn(L, fn, msg);
+}
+
+void dfle_lua_warn(lua_State *L, const char *fn, const char *msg)
+{
+    luaL_where(L, 1);
+    lua_pushfstring(L, "%sdfle.%s: %s", lua_tostring(L, -1), fn, msg);
+    lua_warning(L, lua_tostring(L, -1), 0);
+    lua_pop(L, 2);
 }

@@ -186,6 +186,7 @@ static int l_model_set_U(lua_State *L)
     if (dfle_model_set_U(m, luaL_checknumber(L, 2), &err) != DFLE_OK)
         return dfle_lua_raise(L, &err);
     lua_pushnil(L); /* a constant U replaces a U(t) function */
+    dfle_lua_warn_implausible(L, "model:set_U", "U", lua_tonumber(L, 2));
     lua_setiuservalue(L, 1, UV_U);
     lua_settop(L, 1);
     return 1;
