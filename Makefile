@@ -103,6 +103,9 @@ $(BUILD)/tests/%: $(BUILD)/obj/tests/%.o $(LIB_LUA) $(LIB_CORE)
 	@mkdir -p $(dir $@)
 	$(CC) $(ALL_LDFLAGS) $^ $(CMOCKA_LIBS) $(LUA_LIBS) $(GSL_LIBS) $(GDAL_LIBS) -lm -o $@
 
+# The CLI's progress bar (its ETA) is not in the library: link it in.
+$(BUILD)/tests/test_progress: $(BUILD)/obj/src/cli/progress.o
+
 # The tracer's release gate as a Lua release it was not checked against
 # sees it (src/lua/trace/lua_trace_release.c): the gate and its test
 # compiled again as if for Lua 5.4.6, the gate linked ahead of the

@@ -68,7 +68,8 @@ static void usage(FILE *out)
             "Run a dfle experiment script (Lua 5.4 with the dfle module loaded).\n"
             "\n"
             "options:\n"
-            "  -q, --quiet    no progress bar\n"
+            "  -q, --quiet    no progress bar, no notes (warnings and errors still show)\n"
+            "  --verbose      also say what each run did and each file written\n"
             "  -j N           dfle.ensemble workers (default: all cores)\n"
             "  --shard i/n    run shard i of n of each dfle.ensemble (1 <= i <= n);\n"
             "                 --shard slurm takes i, n from SLURM_ARRAY_TASK_*\n"
@@ -84,6 +85,7 @@ static void usage(FILE *out)
 
 typedef struct cli {
     int quiet;
+    int verbosity; /* notes shown: 0 with -q, DFLE_LUA_NOTE, DFLE_LUA_DETAIL with --verbose */
     int warn_off;  /* warn("@off") */
     int warn_cont; /* a warning is being continued (lua_warning tocont) */
     int load_error; /* the script failed to load (no traceback wanted) */
@@ -274,6 +276,28 @@ static int parse_shard(const char *s, size_t *i, size_t *n)
 }
 /* --- end ensembles --- */
 
+/* The run's hooks: the bar when one is drawn, and notes on stderr. */
+static int cli_update(void *ud, const dfle_run_status *st)
+{
+    return dfle_progress_bar_update(&((cli *)ud)->bar, st);
+}
+
+static void cli_finish(void *ud)
+{
+    dfle_progress_bar_finish(&((cli *)ud)->bar);
+}
+
+static void cli_note(void *ud, int level, const char *line)
+{
+    cli *c = ud;
+    if (level > c->verbosity)
+        return;
+    if (c->bar.drawn || c->ens_drawn)
+        fputs("\r\033[K", stderr); /* the bar is drawn again at its next update */
+    fprintf(stderr, "%s: %s\n", progname, line);
+    fflush(stderr);
+}
+
 /* Runs protected: everything that can raise happens here. */
 static int pmain(lua_State *L)
 {
@@ -284,14 +308,15 @@ static int pmain(lua_State *L)
     luaL_openlibs(L);
     luaL_requiref(L, "dfle", luaopen_dfle, 1);
     lua_pop(L, 1);
+    dfle_progress_bar_init(&c->bar, stderr);
+    c->hooks.note = cli_note;
+    c->hooks.ud = c;
+    dfle_lua_set_progress(L, &c->hooks);
     if (!c->quiet && isatty(STDERR_FILENO)) {
         const char *term = getenv("TERM");
         if (term == NULL || strcmp(term, "dumb") != 0) {
-            dfle_progress_bar_init(&c->bar, stderr);
-            c->hooks.update = dfle_progress_bar_update;
-            c->hooks.finish = dfle_progress_bar_finish;
-            c->hooks.ud = &c->bar;
-            dfle_lua_set_progress(L, &c->hooks);
+            c->hooks.update = cli_update;
+            c->hooks.finish = cli_finish;
             c->ens.progress = ens_progress; /* ensembles */
             c->ens.progress_end = ens_progress_end;
         }
@@ -319,6 +344,7 @@ static int pmain(lua_State *L)
 int main(int argc, char **argv)
 {
     cli c = {0};
+    c.verbosity = DFLE_LUA_NOTE;
     lua_State *L;
     int i, status;
 
@@ -333,6 +359,10 @@ int main(int argc, char **argv)
         const char *a = argv[i];
         if (strcmp(a, "-q") == 0 || strcmp(a, "--quiet") == 0) {
             c.quiet = 1;
+            c.verbosity = 0;
+        } else if (strcmp(a, "--verbose") == 0) {
+            c.quiet = 0;
+            c.verbosity = DFLE_LUA_DETAIL;
         } else if (strcmp(a, "-h") == 0 || strcmp(a, "--help") == 0) {
             usage(stdout);
             return EXIT_SUCCESS;

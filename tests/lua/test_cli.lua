@@ -263,4 +263,43 @@ tests["non-string error object: reported, exit 1"] = function()
     T.has(out, "table")
 end
 
+-- Notes: what a user should know (a resumed ensemble) by default, the
+-- story of the script with --verbose, nothing with -q.
+tests["notes: --verbose tells each run and file, a resumed ensemble says so, -q is silent"] = function()
+    local csv, ens = T.tmpname(".csv"), T.tmpname(".csv")
+    os.remove(ens)
+    local script = string.format([[
+        local m = dfle.model{ channel = dfle.channel{ dx = 20 } }
+        m:run_to_steady{}
+        m:run{ years = 1000 }
+        m:write_csv(%q)
+        dfle.ensemble{ params = { k_df = {5e-5, 1e-3, log = true} }, n = 4, seed = 1, out = %q,
+                       limit = tonumber(arg[1]), workers = 1,
+                       build = function(p)
+                           return dfle.model{ channel = dfle.channel{ dx = 20 },
+                                              law = dfle.law.power{ k_df = p.k_df } }
+                       end,
+                       outputs = { "S_df" } }
+        print("end")
+    ]], csv, ens)
+    local out, ok = T.run_dfle(script, { "2" }, { flags = "--verbose" })
+    T.ok(ok, out)
+    T.has(out, "dfle: model:run_to_steady: steady by the direct solve (",
+          "dfle: model:run: done after ", " explicit steps, t = 1000 yr (",
+          "dfle: wrote " .. csv .. " (102 nodes)", "samples run in", "end")
+    T.ok(not out:find("resuming", 1, true), out)
+    out, ok = T.run_dfle(script, { "1" }, { flags = "" })
+    T.ok(ok, out)
+    T.has(out, "dfle: ensemble " .. ens .. ": resuming: 2 finished rows kept, 1 sample to run")
+    out = T.run_dfle(script, {}, { flags = "" })
+    T.has(out, "resuming: 3 finished rows kept, 1 sample to run")
+    T.ok(not out:find("model:run", 1, true), "runs are told only with --verbose")
+    out, ok = T.run_dfle(script, {}, { flags = "-q" })
+    T.ok(ok, out)
+    T.eq(out, "end\n")
+    out = T.run_dfle(script, {}, { flags = "" })
+    T.has(out, "all 4 rows were done before; nothing to run")
+    os.remove(ens)
+end
+
 return tests

@@ -399,6 +399,7 @@ static int l_profile_write_csv(lua_State *L)
     dfle_error err;
     if (dfle_profile_write_csv(p, path, &err) != DFLE_OK)
         return dfle_lua_raise(L, &err);
+    dfle_lua_note(L, DFLE_LUA_DETAIL, "wrote %s (%zu cells)", path, dfle_profile_size(p));
     lua_settop(L, 1);
     return 1;
 }

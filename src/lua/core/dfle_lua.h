@@ -229,13 +229,26 @@ void dfle_lua_push_described(lua_State *L, int obj, const char *prefix, const ch
 void dfle_lua_set_pointer(lua_State *L, const void *key, const void *p);
 void *dfle_lua_get_pointer(lua_State *L, const void *key);
 
-/* Progress reporting, installed by the CLI (library users get none). */
+/* Progress reporting, installed by the CLI (library users get none):
+ * the bar of a run (update, finish; either may be NULL), and notes, one
+ * line each, about what happened: DFLE_LUA_NOTE for what a user should
+ * know (an ensemble resumed from its file), DFLE_LUA_DETAIL for the
+ * story of the run (each run, each file written), which the CLI shows
+ * with --verbose. */
+enum { DFLE_LUA_NOTE = 1, DFLE_LUA_DETAIL = 2 };
 typedef struct dfle_lua_progress {
     dfle_progress_fn update;
     void (*finish)(void *ud);
+    void (*note)(void *ud, int level, const char *line);
     void *ud;
 } dfle_lua_progress;
 void dfle_lua_set_progress(lua_State *L, const dfle_lua_progress *p);
+/* A note (printf format) to the host, if it listens. */
+void dfle_lua_note(lua_State *L, int level, const char *fmt, ...)
+#if defined(__GNUC__)
+    __attribute__((format(printf, 3, 4)))
+#endif
+    ;
 
 /* Interruption (SIGINT/SIGTERM), installed by the CLI: `flag` holds the
  * signal number once one arrived (0 before).  A run in progress stops at

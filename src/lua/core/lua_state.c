@@ -11,6 +11,7 @@
 
 #include <signal.h>
 #include <stdarg.h>
+#include <stdio.h>
 
 /* Registry keys: their addresses are the keys. */
 static const char module_key = 'm';
@@ -57,6 +58,19 @@ void dfle_lua_set_progress(lua_State *L, const dfle_lua_progress *p)
 const dfle_lua_progress *dfle_lua_get_progress(lua_State *L)
 {
     return dfle_lua_get_pointer(L, &progress_key);
+}
+
+void dfle_lua_note(lua_State *L, int level, const char *fmt, ...)
+{
+    const dfle_lua_progress *p = dfle_lua_get_progress(L);
+    char line[512];
+    va_list ap;
+    if (p == NULL || p->note == NULL)
+        return;
+    va_start(ap, fmt);
+    vsnprintf(line, sizeof line, fmt, ap);
+    va_end(ap);
+    p->note(p->ud, level, line);
 }
 
 unsigned long *dfle_lua_epoch(lua_State *L)

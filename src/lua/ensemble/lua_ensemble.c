@@ -50,6 +50,7 @@ static int l_ensemble(lua_State *L)
     run_box *box;
     dfle_error err;
     size_t total, ran = 0;
+    double started;
     const char *path;
 
     lua_settop(L, 1);
@@ -82,6 +83,7 @@ static int l_ensemble(lua_State *L)
     }
 
     dfle_lua_check_interrupt(L, "ensemble");
+    started = dfle_lua_ens_now();
     box = dfle_lua_ens_new_box(L);
     lua_getfield(L, ctx, "meta");
     lua_getfield(L, ctx, "header");
@@ -91,6 +93,13 @@ static int l_ensemble(lua_State *L)
                            box->file, s.limit, &box->queue, &err) != DFLE_OK)
         return luaL_error(L, "dfle.ensemble: %s", err.msg);
     total = dfle_ens_queue_total(box->queue);
+    if (dfle_ens_file_ndone(box->file) > 0 && total > 0)
+        dfle_lua_note(L, DFLE_LUA_NOTE, "ensemble %s: resuming: %zu finished rows kept, %zu "
+                      "sample%s to run", path, dfle_ens_file_ndone(box->file), total,
+                      total == 1 ? "" : "s");
+    else if (dfle_ens_file_ndone(box->file) > 0)
+        dfle_lua_note(L, DFLE_LUA_NOTE, "ensemble %s: all %zu rows were done before; nothing to run",
+                      path, dfle_ens_file_ndone(box->file));
 
     nw = host != NULL && host->workers > 0 ? host->workers : s.workers > 0 ? s.workers : dfle_lua_ens_cores();
     if (host == NULL || host->open_state == NULL)
@@ -166,6 +175,8 @@ static int l_ensemble(lua_State *L)
             dfle_lua_check_interrupt(L, "ensemble");
         }
     }
+    dfle_lua_note(L, DFLE_LUA_DETAIL, "ensemble %s: %zu sample%s run in %.1f s", path, ran,
+                  ran == 1 ? "" : "s", dfle_lua_ens_now() - started);
     dfle_lua_ens_push_result(L, "ensemble", path, host ? host->shard_i : 0, host ? host->shard_n : 0,
                 (lua_Integer)ran);
     return 1;

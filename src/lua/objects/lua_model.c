@@ -15,6 +15,7 @@
 
 #include <stdio.h>
 #include <string.h>
+#include <time.h>
 
 enum { UV_CHANNEL = 1, UV_FLUVIAL, UV_ROUTER, UV_LAW,
        UV_U, /* U(t): the uplift function, or nil */
@@ -250,6 +251,29 @@ static int lua_uplift(void *ud, double t, double *U, dfle_error *err)
 }
 
 /* Shared by run_to_steady and run: `steady` selects the defaults. */
+/* How a run ended, for its --verbose line. */
+static const char *outcome(int steady, int reason)
+{
+    switch (reason) {
+    case DFLE_STOP_STEADY:
+        return "steady";
+    case DFLE_STOP_TIME:
+        return steady ? "not steady at max_time" : "done";
+    case DFLE_STOP_STEPS:
+        return "stopped at max_steps";
+    default:
+        return "interrupted";
+    }
+}
+
+/* Wall-clock seconds, for the --verbose line of a run. */
+static double clock_seconds(void)
+{
+    struct timespec ts;
+    clock_gettime(CLOCK_MONOTONIC, &ts);
+    return (double)ts.tv_sec + 1e-9 * (double)ts.tv_nsec;
+}
+
 static int model_run(lua_State *L, int steady)
 {
     static const char *const steady_keys[] = {"progress", "method", NULL};
@@ -262,6 +286,7 @@ static int model_run(lua_State *L, int steady)
     dfle_error err;
     double max_steps, years = -1;
     const dfle_lua_progress *prog = dfle_lua_get_progress(L);
+    double wall;
     int st;
 
     lua_settop(L, 2);
@@ -350,8 +375,10 @@ static int model_run(lua_State *L, int steady)
     }
     /* In use for the run: U(t), laws and routers written in Lua run in
      * the middle of it, and may neither free the model nor run it again. */
+    wall = clock_seconds();
     dfle_lua_begin_use(L, 1, steady ? "dfle.model:run_to_steady" : "dfle.model:run");
     st = dfle_solver_run(m, &o, &res, &err);
+    wall = clock_seconds() - wall;
     dfle_lua_end_use(L, 1);
     if (prog != NULL && prog->finish != NULL)
         prog->finish(prog->ud);
@@ -361,6 +388,13 @@ static int model_run(lua_State *L, int steady)
         dfle_lua_set_interrupt_note(L, "%s stopped at t = %f yr after %d steps and returned its "
                                        "state so far (reason \"interrupted\")", fn,
                                     dfle_model_time(m), (int)res.steps);
+    if (res.method == DFLE_METHOD_DIRECT)
+        dfle_lua_note(L, DFLE_LUA_DETAIL, "%s: %s by the direct solve (%zu rounds, %zu routings; %.2f s)",
+                      fn, outcome(steady, res.reason), res.iterations, res.routings, wall);
+    else
+        dfle_lua_note(L, DFLE_LUA_DETAIL, "%s: %s after %zu %s steps, t = %g yr%s (%.2f s)", fn,
+                      outcome(steady, res.reason), res.steps, dfle_method_name(res.method),
+                      res.time, res.fallback ? ", after the direct solve fell back" : "", wall);
     push_result(L, &res);
     if (o.n_record > 0) {
         const size_t n = dfle_model_size(m);
@@ -429,6 +463,7 @@ static int l_model_write_csv(lua_State *L)
     dfle_lua_end_use(L, 1);
     if (st != DFLE_OK)
         return dfle_lua_raise(L, &err);
+    dfle_lua_note(L, DFLE_LUA_DETAIL, "wrote %s (%zu nodes)", path, dfle_model_size(m));
     lua_settop(L, 1);
     return 1;
 }
