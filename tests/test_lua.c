@@ -580,7 +580,7 @@ static void progress_hooks(void **state)
 {
     lua_State *L = *state;
     progress_count c = {0, 0, 0, 0.0};
-    dfle_lua_progress hooks = {count_update, count_finish, &c};
+    dfle_lua_progress hooks = {.update = count_update, .finish = count_finish, .ud = &c};
 
     assert_null(dfle_lua_get_progress(L));
     dfle_lua_set_progress(L, &hooks);
