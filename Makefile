@@ -52,6 +52,10 @@ TEST_BIN  := $(TEST_SRC:tests/%.c=$(BUILD)/tests/%)
 BENCH_BIN := $(BENCH_SRC:bench/%.c=$(BUILD)/bench/%)
 
 LIB_CORE  := $(BUILD)/libdfle.a
+# The shared C library: soname libdfle.so.$(SOMAJOR); the Lua binding and
+# the command link the static one, so neither needs it at run time.
+SOMAJOR   := 0
+SHLIB     := $(BUILD)/libdfle.so.$(VERSION)
 LIB_LUA   := $(BUILD)/libdfle_lua.a
 CLI       := $(BUILD)/dfle
 MODULE    := $(BUILD)/dfle.so
@@ -59,7 +63,7 @@ MODULE    := $(BUILD)/dfle.so
 .PHONY: all test check memcheck bench install uninstall clean mpi test-mpi
 # Keep test objects between builds (make would delete them as intermediates).
 .SECONDARY:
-all: $(CLI) $(MODULE)
+all: $(CLI) $(MODULE) $(SHLIB)
 
 # The library is compiled without Lua's headers, so nothing in it can
 # depend on Lua; only the binding and the command see them.
@@ -94,6 +98,9 @@ $(LIB_LUA): $(LUA_OBJ)
 
 $(CLI): $(CLI_OBJ) $(LIB_LUA) $(LIB_CORE)
 	$(CC) $(ALL_LDFLAGS) $^ $(LUA_LIBS) $(GSL_LIBS) $(GDAL_LIBS) -lm -o $@
+
+$(SHLIB): $(CORE_OBJ)
+	$(CC) -shared -Wl,-soname,libdfle.so.$(SOMAJOR) $(ALL_LDFLAGS) $^ $(GSL_LIBS) $(GDAL_LIBS) -lm -o $@
 
 # The Lua module takes its Lua symbols from the host interpreter.
 $(MODULE): $(LUA_OBJ) $(CORE_OBJ)
@@ -133,7 +140,7 @@ HAVE_MPICC := $(if $(SANITIZE),,$(shell command -v $(MPICC) 2>/dev/null))
 
 # The benchmark drivers are built (not run) so they cannot rot.
 test: all $(TEST_BIN) $(GATE_TEST) $(BENCH_BIN)
-	@BUILD=$(BUILD) sh tests/run-tests.sh
+	@BUILD=$(BUILD) SANITIZE='$(SANITIZE)' sh tests/run-tests.sh
 ifneq ($(HAVE_MPICC),)
 	@$(MAKE) --no-print-directory test-mpi
 endif
@@ -166,26 +173,38 @@ test-mpi: all $(MPI_CLI)
 	@BUILD=$(BUILD) sh tests/mpi-ensemble.sh
 # --- end MPI build ---
 
-install: all
-	install -d $(DESTDIR)$(PREFIX)/bin $(DESTDIR)$(PREFIX)/lib/lua/5.4 \
-	    $(DESTDIR)$(PREFIX)/include/dfle $(DESTDIR)$(PREFIX)/lib \
-	    $(DESTDIR)$(PREFIX)/share/doc/dfle/examples
+INSTALL_MPI := $(if $(HAVE_MPICC),$(MPI_CLI))
+DOCDIR := $(DESTDIR)$(PREFIX)/share/doc/dfle
+LIBDIR := $(DESTDIR)$(PREFIX)/lib
+
+# Installs the command (and dfle-mpi where mpicc is), the Lua module, the
+# C library (static and shared, pkg-config file) and headers, the man
+# page, the docs and the examples.  `dfle --help` finds the docs relative
+# to its own path, so a DESTDIR or relocated tree works too.
+install: all $(INSTALL_MPI)
+	install -d $(DESTDIR)$(PREFIX)/bin $(LIBDIR)/lua/5.4 $(LIBDIR)/pkgconfig \
+	    $(DESTDIR)$(PREFIX)/include/dfle $(DESTDIR)$(PREFIX)/share/man/man1 $(DOCDIR)/examples
 	install -m 755 $(CLI) $(DESTDIR)$(PREFIX)/bin/dfle
-	install -m 644 $(MODULE) $(DESTDIR)$(PREFIX)/lib/lua/5.4/dfle.so
-	install -m 644 $(LIB_CORE) $(DESTDIR)$(PREFIX)/lib/libdfle.a
-	install -m 644 $(LIB_LUA) $(DESTDIR)$(PREFIX)/lib/libdfle_lua.a
-	install -d $(DESTDIR)$(PREFIX)/lib/pkgconfig
+	$(if $(INSTALL_MPI),install -m 755 $(MPI_CLI) $(DESTDIR)$(PREFIX)/bin/dfle-mpi)
+	install -m 644 $(MODULE) $(LIBDIR)/lua/5.4/dfle.so
+	install -m 644 $(LIB_CORE) $(LIBDIR)/libdfle.a
+	install -m 644 $(LIB_LUA) $(LIBDIR)/libdfle_lua.a
+	install -m 755 $(SHLIB) $(LIBDIR)/libdfle.so.$(VERSION)
+	ln -sf libdfle.so.$(VERSION) $(LIBDIR)/libdfle.so.$(SOMAJOR)
+	ln -sf libdfle.so.$(SOMAJOR) $(LIBDIR)/libdfle.so
 	printf 'prefix=%s\nincludedir=$${prefix}/include\nlibdir=$${prefix}/lib\n\nName: dfle\nDescription: debris-flow and fluvial channel-profile model (C library)\nVersion: %s\nRequires: gsl gdal\nLibs: -L$${libdir} -ldfle -lm -pthread\nCflags: -I$${includedir}\n' \
-	    '$(PREFIX)' '$(VERSION)' > $(DESTDIR)$(PREFIX)/lib/pkgconfig/dfle.pc
+	    '$(PREFIX)' '$(VERSION)' > $(LIBDIR)/pkgconfig/dfle.pc
 	install -m 644 include/dfle/*.h $(DESTDIR)$(PREFIX)/include/dfle/
-	install -m 644 README.md doc/*.md $(DESTDIR)$(PREFIX)/share/doc/dfle/
-	install -m 644 examples/*.lua $(DESTDIR)$(PREFIX)/share/doc/dfle/examples/
+	install -m 644 doc/dfle.1 $(DESTDIR)$(PREFIX)/share/man/man1/dfle.1
+	install -m 644 README.md doc/*.md $(DOCDIR)/
+	install -m 644 examples/*.lua $(DOCDIR)/examples/
 
 uninstall:
-	rm -f $(DESTDIR)$(PREFIX)/bin/dfle $(DESTDIR)$(PREFIX)/lib/lua/5.4/dfle.so \
-	    $(DESTDIR)$(PREFIX)/lib/libdfle.a $(DESTDIR)$(PREFIX)/lib/libdfle_lua.a \
-	    $(DESTDIR)$(PREFIX)/lib/pkgconfig/dfle.pc
-	rm -rf $(DESTDIR)$(PREFIX)/include/dfle $(DESTDIR)$(PREFIX)/share/doc/dfle
+	rm -f $(DESTDIR)$(PREFIX)/bin/dfle $(DESTDIR)$(PREFIX)/bin/dfle-mpi \
+	    $(LIBDIR)/lua/5.4/dfle.so $(LIBDIR)/libdfle.a $(LIBDIR)/libdfle_lua.a \
+	    $(LIBDIR)/libdfle.so.$(VERSION) $(LIBDIR)/libdfle.so.$(SOMAJOR) $(LIBDIR)/libdfle.so \
+	    $(LIBDIR)/pkgconfig/dfle.pc $(DESTDIR)$(PREFIX)/share/man/man1/dfle.1
+	rm -rf $(DESTDIR)$(PREFIX)/include/dfle $(DOCDIR)
 
 clean:
 	rm -rf build

@@ -2,13 +2,14 @@
 # Installs the Debian packages dfle needs to build, test and plot.
 # Used by the README's set-up command and by .ci/run, so the two never drift.
 #   build:  gcc/clang, make, pkg-config, Lua 5.4 headers, GSL
+#   lua5.4: the stand-alone interpreter, which loads the dfle module (build/dfle.so)
 #   test:   cmocka, valgrind (make memcheck)
 #   plots:  gnuplot (no X11 needed: the png and svg terminals)
 #   DEMs:   GDAL (GeoTIFF, ESRI ASCII and every raster format GDAL reads)
 #   MPI:    OpenMPI, for `make mpi` / `make test-mpi` only (the plain build needs none)
 set -eu
 
-packages="build-essential pkg-config liblua5.4-dev libgsl-dev libcmocka-dev gnuplot-nox valgrind libgdal-dev"
+packages="build-essential pkg-config liblua5.4-dev lua5.4 libgsl-dev libcmocka-dev gnuplot-nox valgrind libgdal-dev"
 packages="$packages openmpi-bin libopenmpi-dev"
 
 if [ "$(id -u)" -ne 0 ]; then

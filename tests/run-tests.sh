@@ -40,6 +40,12 @@ run layers sh tests/check-layers.sh
 # Lua-level tests of the scripting API (ends with "N passed, N failed").
 run lua-tests $vg "$DFLE" -q tests/lua/run.lua "$DFLE"
 
+# The installed tree (not in sanitizer or valgrind runs: it installs the
+# plain build's files and links a program against them).
+if [ -z "${SANITIZE:-}" ] && [ "${MEMCHECK:-0}" != 1 ]; then
+    run install sh tests/install.sh
+fi
+
 # Every example in its quick mode, in a scratch directory.
 tmp=$(mktemp -d)
 for ex in examples/*.lua; do

@@ -9,6 +9,10 @@
  * binding; this file only parses options, reports errors with a
  * traceback and owns the terminal (progress bar).
  */
+/* realpath (XSI) for the documentation path in --help. */
+#define _XOPEN_SOURCE 700
+
+#include <limits.h>
 #include <signal.h>
 #include <stdio.h>
 #include <stdlib.h>
@@ -61,8 +65,37 @@ static void catch_interrupts(void)
     sigaction(SIGTERM, &sa, NULL);
 }
 
+/* Where the documentation is: beside an installed command
+ * (PREFIX/bin/dfle -> PREFIX/share/doc/dfle) or in the source tree of a
+ * built one (build/dfle -> doc), found from the command's own path so
+ * that a staged (DESTDIR) or moved install points to its own copy. */
+static const char *doc_dir(char *buf, size_t cap)
+{
+    static const char *const rel[] = {"/../share/doc/dfle", "/../doc"};
+    char exe[4096], probe[4200];
+    ssize_t len = readlink("/proc/self/exe", exe, sizeof exe - 1);
+    char *slash;
+    if (len <= 0)
+        return NULL;
+    exe[len] = '\0';
+    if ((slash = strrchr(exe, '/')) == NULL)
+        return NULL;
+    *slash = '\0';
+    for (size_t k = 0; k < sizeof rel / sizeof rel[0]; k++) {
+        snprintf(probe, sizeof probe, "%s%s/lua-api.md", exe, rel[k]);
+        if (access(probe, R_OK) == 0) {
+            snprintf(probe, sizeof probe, "%s%s", exe, rel[k]);
+            if (realpath(probe, buf) != NULL && strlen(buf) < cap)
+                return buf;
+        }
+    }
+    return NULL;
+}
+
 static void usage(FILE *out)
 {
+    char dir[PATH_MAX];
+    const char *docs = doc_dir(dir, sizeof dir);
     fprintf(out,
             "usage: %s [options] script.lua [args...]\n"
             "Run a dfle experiment script (Lua 5.4 with the dfle module loaded).\n"
@@ -79,8 +112,13 @@ static void usage(FILE *out)
             "\n"
             "The script sees its arguments in `arg` (arg[0] = script) and `...`.\n"
             "Use `-` as the script name to read it from standard input.\n"
-            "Documentation: doc/lua-api.md, doc/tutorial.md\n",
+            "\n"
+            "Documentation: man dfle; ",
             progname);
+    if (docs != NULL)
+        fprintf(out, "%s/tutorial.md (start here), %s/lua-api.md (reference)\n", docs, docs);
+    else
+        fputs("tutorial.md and lua-api.md in doc/ of the dfle sources\n", out);
 }
 
 typedef struct cli {
