@@ -189,6 +189,14 @@ typedef struct dfle_landscape_run_opts {
     void *progress_ud;
     size_t progress_every;
     const volatile sig_atomic_t *interrupt; /* stop before the next step */
+    /* Records: the steps land exactly on these times [yr since the start
+     * of the run, increasing, <= years or max_time], and on_record is
+     * called at each (k = 0, 1, ...; a time of 0 is recorded before the
+     * first step); nonzero stops the run (DFLE_ECANCELED). */
+    size_t n_record;
+    const double *record_times;
+    int (*on_record)(void *ud, dfle_landscape *ls, size_t k, double t);
+    void *on_record_ud;
 } dfle_landscape_run_opts;
 
 void dfle_landscape_run_opts_default(dfle_landscape_run_opts *o);
@@ -201,6 +209,7 @@ typedef struct dfle_landscape_result {
     dfle_landscape_status last;
     double dt_min, dt_max;
     size_t routings;
+    size_t n_recorded;   /* record times reached                         */
     char note[256];      /* why it stopped, in words                     */
 } dfle_landscape_result;
 

@@ -78,6 +78,21 @@ static int check_run_opts(const dfle_landscape_run_opts *o, dfle_error *err)
     return DFLE_OK;
 }
 
+/* Call on_record for every record time reached at time t of the run. */
+static int take_records(dfle_landscape *ls, const dfle_landscape_run_opts *o, double t,
+                        dfle_landscape_result *res, dfle_error *err)
+{
+    while (res->n_recorded < o->n_record &&
+           t >= o->record_times[res->n_recorded] * (1.0 - 1e-12)) {
+        if (o->on_record != NULL &&
+            o->on_record(o->on_record_ud, ls, res->n_recorded, ls->time) != 0)
+            return dfle_error_set(err, DFLE_ECANCELED, "landscape: run stopped while recording "
+                                  "at t = %g yr", t);
+        res->n_recorded++;
+    }
+    return DFLE_OK;
+}
+
 static int steady_met(const dfle_landscape_run_opts *o, const dfle_landscape_status *st)
 {
     return st->frac_above <= 1.0 - o->quantile + 1e-12 && st->stable >= o->stable_steps;
@@ -169,6 +184,14 @@ int dfle_landscape_run(dfle_landscape *ls, const dfle_landscape_run_opts *o,
         return s;
     if (o->on_step != NULL && o->on_step(o->on_step_ud, ls, &st) != 0)
         return dfle_error_set(err, DFLE_ECANCELED, "landscape: run stopped by its step callback");
+    for (size_t k = 0; k < o->n_record; k++)
+        if (!(o->record_times[k] >= 0 && o->record_times[k] <= max_time &&
+              (k == 0 || o->record_times[k] > o->record_times[k - 1])))
+            return dfle_error_set(err, DFLE_EINVAL, "landscape: record times must increase "
+                                  "within [0, %g yr] (time %zu is %g)", max_time, k + 1,
+                                  o->record_times[k]);
+    if ((s = take_records(ls, o, 0.0, res, err)) != DFLE_OK)
+        return s;
 
     if (method == DFLE_METHOD_DIRECT) {
         dfle_error why;
@@ -243,6 +266,8 @@ int dfle_landscape_run(dfle_landscape *ls, const dfle_landscape_run_opts *o,
         if ((s = ls_update_fields(ls, 0, err)) != DFLE_OK)
             return s;
         dt = fmin(o->dt, max_time - t);
+        if (res->n_recorded < o->n_record && o->record_times[res->n_recorded] - t < dt)
+            dt = o->record_times[res->n_recorded] - t;
         if (method == DFLE_METHOD_EXPLICIT)
             s = ls_explicit_step(ls, dt, o->cfl, o->tol, o->quantile, &dt, &st, err);
         else
@@ -262,6 +287,8 @@ int dfle_landscape_run(dfle_landscape *ls, const dfle_landscape_run_opts *o,
         if (o->on_step != NULL && o->on_step(o->on_step_ud, ls, &st) != 0)
             return dfle_error_set(err, DFLE_ECANCELED, "landscape: run stopped by its step "
                                   "callback at t = %g yr", t);
+        if ((s = take_records(ls, o, t, res, err)) != DFLE_OK)
+            return s;
         if (o->progress != NULL && steps % (o->progress_every ? o->progress_every : 16) == 0 &&
             o->progress(o->progress_ud, &st) != 0)
             return dfle_error_set(err, DFLE_ECANCELED, "landscape: run stopped by the progress "

@@ -259,6 +259,7 @@ void dfle_lua_open_analysis(lua_State *L);
 void dfle_lua_open_plot(lua_State *L);
 void dfle_lua_open_sampling(lua_State *L);
 void dfle_lua_open_dem(lua_State *L);
+void dfle_lua_open_landscape(lua_State *L);
 void dfle_lua_open_ensemble(lua_State *L); /* after sampling: wraps dfle.pawn */
 void dfle_lua_open_trace_hook(lua_State *L); /* a test hook, in the registry */
 
