@@ -174,7 +174,9 @@ typedef struct dfle_landscape_run_opts {
     double years;        /* > 0: a transient of this length (no steady stop) */
     double tol;          /* steady: |dz/dt| <= tol U ...          (1e-3)   */
     double quantile;     /* ... in this fraction of the cells     (0.99)   */
-    size_t stable_steps; /* ... and receivers unchanged this long (5)      */
+    size_t stable_steps; /* ... and the network stable this long (5)       */
+    double rcv_tol;      /* a routing is stable when at most this fraction
+                          * of the cells changed receiver     (0.005)   */
     double max_time;     /* steady runs: give up after [yr]       (1e7)    */
     size_t max_steps;    /* hard cap on steps (direct: rounds)    (1e6)    */
     double dt;           /* IMPLICIT step [yr] (1000); EXPLICIT: the cap   */

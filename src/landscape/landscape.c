@@ -143,7 +143,6 @@ void dfle_landscape_free(dfle_landscape *ls)
     free(ls->node_of);
     free(ls->cell_of);
     free(ls->s_rcv);
-    free(ls->s_stack);
     free(ls->s_len);
     free(ls->s_chan);
     free(ls);
@@ -248,6 +247,7 @@ int dfle_landscape_new(const dfle_landscape_opts *o, dfle_landscape **out, dfle_
     ls->ny = o->ny;
     ls->n = o->nx * o->ny;
     ls->cell_area = o->dx * o->dy;
+    ls->rcv_tol = 0.005;
     for (int k = 0; k < 8; k++)
         ls->len[k] = dfle_drainage_length(ls->dr, k);
     if ((st = dfle_drainage_set_outlets(ls->dr, o->outlets, o->n_outlets, err)) != DFLE_OK)
@@ -410,7 +410,7 @@ int ls_route(dfle_landscape *ls, dfle_error *err)
         ls->rcv_prev[c] = rcv[c];
     }
     ls->rcv_changes = changes;
-    ls->stable = changes == 0 ? ls->stable + 1 : 0;
+    ls->stable = (double)changes <= floor(ls->rcv_tol * (double)ls->n_data) ? ls->stable + 1 : 0;
     ls->routings++;
     ls->routed = 1;
     if (ls->model != NULL) {

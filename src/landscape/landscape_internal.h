@@ -55,6 +55,7 @@ struct dfle_landscape {
     int routed;                /* the routing matches z                 */
     uint32_t *rcv_prev;        /* receivers of the previous routing     */
     size_t rcv_changes, stable, routings;
+    double rcv_tol;            /* the run's: changes a stable routing allows */
     float *dzdt;               /* n: dz/dt of the last step [m/yr]      */
     int have_rates;            /* dzdt holds something                  */
 

@@ -41,6 +41,7 @@ void dfle_landscape_run_opts_default(dfle_landscape_run_opts *o)
     o->tol = 1e-3;
     o->quantile = 0.99;
     o->stable_steps = 5;
+    o->rcv_tol = 0.005;
     o->max_time = 1e7;
     o->max_steps = 1000000;
     o->dt = 1000.0;
@@ -72,6 +73,9 @@ static int check_run_opts(const dfle_landscape_run_opts *o, dfle_error *err)
         o->method != DFLE_METHOD_EXPLICIT && o->method != DFLE_METHOD_DIRECT)
         return dfle_error_set(err, DFLE_EINVAL, "landscape: method %d is not one of explicit, "
                               "implicit, direct, auto", o->method);
+    if (!(o->rcv_tol >= 0 && o->rcv_tol < 1))
+        return dfle_error_set(err, DFLE_EINVAL, "landscape: rcv_tol must be in [0, 1) (got %g)",
+                              o->rcv_tol);
     if (o->method == DFLE_METHOD_DIRECT && o->years > 0)
         return dfle_error_set(err, DFLE_EINVAL, "landscape: method 'direct' finds steady "
                               "states only; a transient (years) needs 'implicit' or 'explicit'");
@@ -134,11 +138,13 @@ static int run_direct(dfle_landscape *ls, const dfle_landscape_run_opts *o,
 
     res->method = DFLE_METHOD_DIRECT;
     ls->stable = 0;
+    ls->routed = 0; /* count from a routing of this state */
     for (;;) {
         if ((s = ls_route(ls, err)) != DFLE_OK)
             return s;
-        /* Settled when this round's surface routes as the last did. */
-        if (rounds > 0 && ls->rcv_changes == 0)
+        /* Settled when this round's surface routes as the last did (but
+         * for the few divide cells rcv_tol allows). */
+        if (rounds > 0 && ls->stable > 0)
             break;
         if (rounds >= limit)
             return dfle_error_set(err, DFLE_EFIT, "direct: the network still changed after "
@@ -175,6 +181,7 @@ int dfle_landscape_run(dfle_landscape *ls, const dfle_landscape_run_opts *o,
     memset(&st, 0, sizeof st);
     if ((s = check_run_opts(o, err)) != DFLE_OK)
         return s;
+    ls->rcv_tol = o->rcv_tol;
     if (method == DFLE_METHOD_AUTO)
         method = transient ? DFLE_METHOD_IMPLICIT : DFLE_METHOD_DIRECT;
     res->method = method;

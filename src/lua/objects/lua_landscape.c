@@ -47,6 +47,9 @@ typedef struct lua_ls {
     int ref_combine;
     field_cb cb[F_COUNT];
     double x0, y0;    /* north-west corner [m] */
+    size_t nx, ny;    /* the grid, for callbacks (also while it is built) */
+    double dx, dy;
+    const double *zmask; /* elevations whose NaN mark NoData */
     char *crs;        /* WKT (a string held as user value UV_CRS) or NULL */
     char cb_err[512]; /* a callback's failure */
 } lua_ls;
@@ -78,9 +81,9 @@ static int field_fn(void *ud, double t, double *out, dfle_error *err)
     field_cb *cb = ud;
     lua_ls *u = cb->u;
     lua_State *L = u->L;
-    const size_t nx = dfle_landscape_nx(u->ls), n = nx * dfle_landscape_ny(u->ls);
-    const double dx = dfle_landscape_dx(u->ls), dy = dfle_landscape_dy(u->ls);
-    const double *z = dfle_landscape_z(u->ls);
+    const size_t nx = u->nx, n = nx * u->ny;
+    const double dx = u->dx, dy = u->dy;
+    const double *z = u->zmask;
     int top = lua_gettop(L);
     lua_pushcfunction(L, msgh);
     for (size_t c = 0; c < n; c++) {
@@ -496,6 +499,8 @@ static int l_landscape_new(lua_State *L)
         lua_settop(L, base + 1);
     }
     o.z = zbuf;
+    u->nx = o.nx, u->ny = o.ny, u->dx = dx, u->dy = dy;
+    u->zmask = zbuf;
     lua_settop(L, base + 1);
 
     /* Edges and outlets. */
@@ -637,6 +642,7 @@ static int l_landscape_new(lua_State *L)
 
         if (dfle_landscape_new(&o, &u->ls, &err) != DFLE_OK)
             return raise_ls(L, u, &err);
+        u->zmask = dfle_landscape_z(u->ls); /* NoData stays NoData */
         for (int k = 0; k < 3; k++)
             if (!lua_isnil(L, comp + k))
                 dfle_lua_hold(L, comp + k);
@@ -844,7 +850,8 @@ static int landscape_run(lua_State *L, int steady)
     {
         const dfle_lua_param sp[] = {{"tol", &o.tol}, {"quantile", &o.quantile},
                                      {"stable_steps", &stable}, {"max_time", &o.max_time},
-                                     {"max_steps", &max_steps}, {"dt", &o.dt}, {"cfl", &o.cfl}};
+                                     {"max_steps", &max_steps}, {"dt", &o.dt}, {"cfl", &o.cfl},
+                                     {"rcv_tol", &o.rcv_tol}};
         const dfle_lua_param tp[] = {{"years", &years}, {"max_steps", &max_steps},
                                      {"dt", &o.dt}, {"cfl", &o.cfl}};
         if (steady)
