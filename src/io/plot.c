@@ -783,12 +783,20 @@ int dfle_plot_hillshade(const char *path, const dfle_plot_map *m, dfle_error *er
         }
     if (zmin > zmax)
         return dfle_error_set(err, DFLE_EINVAL, "plot: every cell of the map is NoData");
+    /* The map frames the data: the box of the cells with elevations. */
+    size_t r0 = m->ny, r1 = 0, c0 = m->nx, c1 = 0;
+    for (size_t i = 0; i < m->nx * m->ny; i++)
+        if (!isnan(m->z[i])) {
+            size_t rr = i / m->nx, cc = i % m->nx;
+            r0 = rr < r0 ? rr : r0, r1 = rr > r1 ? rr : r1;
+            c0 = cc < c0 ? cc : c0, c1 = cc > c1 ? cc : c1;
+        }
     while ((m->nx / step) * (m->ny / step) > 1500000)
         step++;
     cols = (m->nx + step - 1) / step;
     rows = (m->ny + step - 1) / step;
     /* Pixels: the map's aspect, about 900 wide plus room for the key. */
-    double wkm = (double)m->nx * m->dx, hkm = (double)m->ny * m->dy;
+    double wkm = (double)(c1 - c0 + 1) * m->dx, hkm = (double)(r1 - r0 + 1) * m->dy;
     int w = 1000, h = (int)(80 + 820.0 * hkm / wkm);
     if (h > 1400) { h = 1400; w = (int)(150 + 1250.0 * wkm / hkm); }
     if (h < 400) h = 400;
@@ -825,9 +833,9 @@ int dfle_plot_hillshade(const char *path, const dfle_plot_map *m, dfle_error *er
     put_label(r.f, "title", m->title);
     fputs("set xlabel 'Easting (km)'\nset ylabel 'Northing (km)'\n", r.f);
     fputs("set size ratio -1\nset tics out nomirror\nset format x '%.1f'\nset format y '%.1f'\n", r.f);
-    fprintf(r.f, "set xrange [%.17g:%.17g]\nset yrange [%.17g:%.17g]\n", m->x0 / 1000,
-            (m->x0 + (double)m->nx * m->dx) / 1000, (m->y0 - (double)m->ny * m->dy) / 1000,
-            m->y0 / 1000);
+    fprintf(r.f, "set xrange [%.17g:%.17g]\nset yrange [%.17g:%.17g]\n",
+            (m->x0 + (double)c0 * m->dx) / 1000, (m->x0 + (double)(c1 + 1) * m->dx) / 1000,
+            (m->y0 - (double)(r1 + 1) * m->dy) / 1000, (m->y0 - (double)r0 * m->dy) / 1000);
     fprintf(r.f, "set cbrange [%.17g:%.17g]\nset cblabel 'Elevation (m)'\nset colorbox\n", zmin,
             zmax > zmin ? zmax : zmin + 1);
     fputs("set palette defined (", r.f);

@@ -162,8 +162,16 @@ static int run_direct(dfle_landscape *ls, const dfle_landscape_run_opts *o,
                                       "step callback");
         }
     }
-    st->steps = rounds;
-    ls->stable = o->stable_steps; /* one network for the last two rounds: fixed */
+    /* One more round on this routing, kept: the steady state of the
+     * network that its own surface routes to, but for the few divide
+     * cells rcv_tol allows (a flipped divide cell moves the areas of two
+     * whole flow paths, so the state is judged on the network it was
+     * solved on, not on a re-routing that may flip them back). */
+    if ((s = ls_direct_round(ls, err)) != DFLE_OK)
+        return s;
+    ls->routed = 1;
+    st->steps = rounds + 1;
+    ls->stable = o->stable_steps;
     return DFLE_OK;
 }
 

@@ -645,5 +645,6 @@ int ls_direct_round(dfle_landscape *ls, dfle_error *err)
         ls->routed = 1; /* the receivers are those of this round */
         st = ls_diffuse(ls, INFINITY, err);
     }
+    ls->routed = 0;
     return st;
 }
