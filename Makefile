@@ -79,7 +79,7 @@ $(BUILD)/obj/src/%.o: src/%.c
 
 $(BUILD)/obj/tests/%.o: tests/%.c
 	@mkdir -p $(dir $@)
-	$(CC) $(ALL_CFLAGS) -Isrc $(LUA_CFLAGS) $(GSL_CFLAGS) $(GDAL_CFLAGS) $(CMOCKA_CFLAGS) -MMD -MP -c $< -o $@
+	$(CC) $(ALL_CFLAGS) -Isrc $(LUA_CFLAGS) $(GSL_CFLAGS) $(GDAL_CFLAGS) $(NETCDF_CFLAGS) $(CMOCKA_CFLAGS) -MMD -MP -c $< -o $@
 
 # Benchmark drivers in C use the library alone.
 $(BUILD)/obj/bench/%.o: bench/%.c
