@@ -27,6 +27,8 @@ GSL_CFLAGS  ?= $(shell $(PKG_CONFIG) --cflags gsl)
 GSL_LIBS    ?= $(shell $(PKG_CONFIG) --libs gsl)
 GDAL_CFLAGS ?= $(shell $(PKG_CONFIG) --cflags gdal)
 GDAL_LIBS   ?= $(shell $(PKG_CONFIG) --libs gdal)
+NETCDF_CFLAGS ?= $(shell $(PKG_CONFIG) --cflags netcdf)
+NETCDF_LIBS ?= $(shell $(PKG_CONFIG) --libs netcdf)
 CMOCKA_CFLAGS ?= $(shell $(PKG_CONFIG) --cflags cmocka)
 CMOCKA_LIBS ?= $(shell $(PKG_CONFIG) --libs cmocka)
 
@@ -77,11 +79,11 @@ $(BUILD)/obj/src/cli/%.o: src/cli/%.c
 
 $(BUILD)/obj/src/%.o: src/%.c
 	@mkdir -p $(dir $@)
-	$(CC) $(ALL_CFLAGS) -Isrc $(GSL_CFLAGS) $(GDAL_CFLAGS) -MMD -MP -c $< -o $@
+	$(CC) $(ALL_CFLAGS) -Isrc $(GSL_CFLAGS) $(GDAL_CFLAGS) $(NETCDF_CFLAGS) -MMD -MP -c $< -o $@
 
 $(BUILD)/obj/tests/%.o: tests/%.c
 	@mkdir -p $(dir $@)
-	$(CC) $(ALL_CFLAGS) -Isrc $(LUA_CFLAGS) $(GSL_CFLAGS) $(GDAL_CFLAGS) $(CMOCKA_CFLAGS) -MMD -MP -c $< -o $@
+	$(CC) $(ALL_CFLAGS) -Isrc $(LUA_CFLAGS) $(GSL_CFLAGS) $(GDAL_CFLAGS) $(NETCDF_CFLAGS) $(CMOCKA_CFLAGS) -MMD -MP -c $< -o $@
 
 # Benchmark drivers in C use the library alone.
 $(BUILD)/obj/bench/%.o: bench/%.c
@@ -97,18 +99,18 @@ $(LIB_LUA): $(LUA_OBJ)
 	$(AR) rcs $@ $^
 
 $(CLI): $(CLI_OBJ) $(LIB_LUA) $(LIB_CORE)
-	$(CC) $(ALL_LDFLAGS) $^ $(LUA_LIBS) $(GSL_LIBS) $(GDAL_LIBS) -lm -o $@
+	$(CC) $(ALL_LDFLAGS) $^ $(LUA_LIBS) $(GSL_LIBS) $(GDAL_LIBS) $(NETCDF_LIBS) -lm -o $@
 
 $(SHLIB): $(CORE_OBJ)
-	$(CC) -shared -Wl,-soname,libdfle.so.$(SOMAJOR) $(ALL_LDFLAGS) $^ $(GSL_LIBS) $(GDAL_LIBS) -lm -o $@
+	$(CC) -shared -Wl,-soname,libdfle.so.$(SOMAJOR) $(ALL_LDFLAGS) $^ $(GSL_LIBS) $(GDAL_LIBS) $(NETCDF_LIBS) -lm -o $@
 
 # The Lua module takes its Lua symbols from the host interpreter.
 $(MODULE): $(LUA_OBJ) $(CORE_OBJ)
-	$(CC) -shared $(ALL_LDFLAGS) $^ $(GSL_LIBS) $(GDAL_LIBS) -lm -o $@
+	$(CC) -shared $(ALL_LDFLAGS) $^ $(GSL_LIBS) $(GDAL_LIBS) $(NETCDF_LIBS) -lm -o $@
 
 $(BUILD)/tests/%: $(BUILD)/obj/tests/%.o $(LIB_LUA) $(LIB_CORE)
 	@mkdir -p $(dir $@)
-	$(CC) $(ALL_LDFLAGS) $^ $(CMOCKA_LIBS) $(LUA_LIBS) $(GSL_LIBS) $(GDAL_LIBS) -lm -o $@
+	$(CC) $(ALL_LDFLAGS) $^ $(CMOCKA_LIBS) $(LUA_LIBS) $(GSL_LIBS) $(GDAL_LIBS) $(NETCDF_LIBS) -lm -o $@
 
 # The CLI's progress bar (its ETA) is not in the library: link it in.
 $(BUILD)/tests/test_progress: $(BUILD)/obj/src/cli/progress.o
@@ -127,11 +129,11 @@ $(BUILD)/obj/gate/%.o: %.c
 $(GATE_TEST): $(BUILD)/obj/gate/tests/test_trace_release.o \
               $(BUILD)/obj/gate/src/lua/trace/lua_trace_release.o $(LIB_LUA) $(LIB_CORE)
 	@mkdir -p $(dir $@)
-	$(CC) $(ALL_LDFLAGS) $^ $(CMOCKA_LIBS) $(LUA_LIBS) $(GSL_LIBS) $(GDAL_LIBS) -lm -o $@
+	$(CC) $(ALL_LDFLAGS) $^ $(CMOCKA_LIBS) $(LUA_LIBS) $(GSL_LIBS) $(GDAL_LIBS) $(NETCDF_LIBS) -lm -o $@
 
 $(BUILD)/bench/%: $(BUILD)/obj/bench/%.o $(LIB_CORE)
 	@mkdir -p $(dir $@)
-	$(CC) $(ALL_LDFLAGS) $^ $(GSL_LIBS) $(GDAL_LIBS) -lm -o $@
+	$(CC) $(ALL_LDFLAGS) $^ $(GSL_LIBS) $(GDAL_LIBS) $(NETCDF_LIBS) -lm -o $@
 
 # The MPI tests join `make test` wherever mpicc is installed (install-deps
 # installs it), except in sanitizer builds, where OpenMPI's own
@@ -165,7 +167,7 @@ $(BUILD)/obj-mpi/%.o: %.c
 	$(MPICC) $(ALL_CFLAGS) -DDFLE_MPI -Isrc $(LUA_CFLAGS) $(GSL_CFLAGS) -MMD -MP -c $< -o $@
 
 $(MPI_CLI): $(MPI_OBJ) $(BUILD)/obj/src/cli/progress.o $(LIB_LUA) $(LIB_CORE)
-	$(MPICC) $(ALL_LDFLAGS) $^ $(LUA_LIBS) $(GSL_LIBS) $(GDAL_LIBS) -lm -o $@
+	$(MPICC) $(ALL_LDFLAGS) $^ $(LUA_LIBS) $(GSL_LIBS) $(GDAL_LIBS) $(NETCDF_LIBS) -lm -o $@
 
 mpi: $(MPI_CLI)
 
@@ -192,7 +194,7 @@ install: all $(INSTALL_MPI)
 	install -m 755 $(SHLIB) $(LIBDIR)/libdfle.so.$(VERSION)
 	ln -sf libdfle.so.$(VERSION) $(LIBDIR)/libdfle.so.$(SOMAJOR)
 	ln -sf libdfle.so.$(SOMAJOR) $(LIBDIR)/libdfle.so
-	printf 'prefix=%s\nincludedir=$${prefix}/include\nlibdir=$${prefix}/lib\n\nName: dfle\nDescription: debris-flow and fluvial channel-profile model (C library)\nVersion: %s\nRequires: gsl gdal\nLibs: -L$${libdir} -ldfle -lm -pthread\nCflags: -I$${includedir}\n' \
+	printf 'prefix=%s\nincludedir=$${prefix}/include\nlibdir=$${prefix}/lib\n\nName: dfle\nDescription: debris-flow and fluvial channel-profile model (C library)\nVersion: %s\nRequires: gsl gdal netcdf\nLibs: -L$${libdir} -ldfle -lm -pthread\nCflags: -I$${includedir}\n' \
 	    '$(PREFIX)' '$(VERSION)' > $(LIBDIR)/pkgconfig/dfle.pc
 	install -m 644 include/dfle/*.h $(DESTDIR)$(PREFIX)/include/dfle/
 	install -m 644 doc/dfle.1 $(DESTDIR)$(PREFIX)/share/man/man1/dfle.1

@@ -12,8 +12,8 @@ fail=0
 rank() {
     case $1 in
     base) echo 0 ;; domain) echo 1 ;; routers | drainage) echo 2 ;; laws) echo 3 ;;
-    model) echo 4 ;; solvers) echo 5 ;; dem) echo 6 ;; analysis) echo 7 ;; io) echo 8 ;;
-    lua) echo 9 ;; cli | mpi) echo 10 ;; *) echo 99 ;;
+    model) echo 4 ;; solvers) echo 5 ;; dem) echo 6 ;; analysis) echo 7 ;; landscape) echo 8 ;;
+    io) echo 9 ;; lua) echo 10 ;; cli | mpi) echo 11 ;; *) echo 99 ;;
     esac
 }
 header_layer() {
@@ -21,9 +21,9 @@ header_layer() {
     error.h | param.h | file.h | plausible.h) echo base ;; channel.h | network.h) echo domain ;;
     flow.h | flow1d.h | router*.h) echo routers ;; drainage.h) echo drainage ;;
     lua.h) echo lua ;; fluvial.h | law*.h) echo laws ;; model.h) echo model ;;
-    solver.h) echo solvers ;; dem.h) echo dem ;;
+    solver.h) echo solvers ;; dem.h) echo dem ;; landscape.h) echo landscape ;;
     analysis.h | analytical.h | sampling.h | sensitivity.h) echo analysis ;;
-    csv.h | ensemble.h | plot.h) echo io ;; *) echo unknown ;;
+    csv.h | ensemble.h | plot.h | raster.h) echo io ;; *) echo unknown ;;
     esac
 }
 

@@ -130,6 +130,14 @@ void dfle_drainage_opts_default(dfle_drainage_opts *o);
 int dfle_drainage_new(const dfle_drainage_opts *opts, dfle_drainage **out, dfle_error *err);
 void dfle_drainage_free(dfle_drainage *dr);
 
+/* Cells that always drain off the grid, wherever they lie: fixed
+ * base-level points such as a catchment's outlet in a grid whose other
+ * cells are walled in by CLOSED NoData.  n cell indices, copied (NULL
+ * or 0 clears them); each behaves like a cell on a BASE_LEVEL edge.
+ * DFLE_EINVAL for an index off the grid. */
+int dfle_drainage_set_outlets(dfle_drainage *dr, const size_t *cells, size_t n,
+                              dfle_error *err);
+
 /* Route nx * ny elevations [m] (NaN = NoData): directions, receivers,
  * donors, stack and area, replacing those of the last call.  z is read,
  * never changed, and not kept.  DFLE_EINVAL if every cell is NoData or

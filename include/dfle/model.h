@@ -113,6 +113,16 @@ int dfle_model_init_fluvial_steady(dfle_model *m, const dfle_fluvial *fl,
  * no longer matches the model's cached flow). */
 void dfle_model_invalidate_flow(dfle_model *m);
 
+/* Erodibility in space: per-node multipliers of the fluvial K (K_scale)
+ * and of the debris-flow erosion E_df (df_scale), n values each, finite
+ * and >= 0, or NULL for 1 everywhere.  The model reads the arrays where
+ * they are (no copy): they must stay valid until the model is freed or
+ * this is called again, which it must be after their values change.
+ * On a network with a channel mask (network.h) hillslope nodes have no
+ * fluvial or debris-flow erosion whatever the scales say. */
+int dfle_model_set_erodibility(dfle_model *m, const double *K_scale, const double *df_scale,
+                               dfle_error *err);
+
 /* Set elevations [m] (n values; the outlet value is the base level). */
 int dfle_model_set_z(dfle_model *m, const double *z, size_t n,
                      dfle_error *err);

@@ -51,6 +51,10 @@ typedef struct dfle_network_shape {
                                   * every node that no other drains to */
     const size_t *stack;        /* every node after its receiver, base
                                  * levels first; NULL: computed        */
+    const unsigned char *channel; /* 1: a channel node, eroded by rivers
+                                   * and debris flows; 0: a hillslope,
+                                   * which the model does not erode;
+                                   * NULL: every node is a channel     */
 } dfle_network_shape;
 
 /* Give the network a new shape (same n).  Checks that receivers are
@@ -68,6 +72,8 @@ const double *dfle_network_w(const dfle_network *net);
 const double *dfle_network_x(const dfle_network *net);
 const size_t *dfle_network_stack(const dfle_network *net);
 const unsigned char *dfle_network_sources(const dfle_network *net);
+/* The channel mask of the shape, or NULL when every node is a channel. */
+const unsigned char *dfle_network_channel(const dfle_network *net);
 int dfle_network_is_base(const dfle_network *net, size_t i);
 /* Base-level nodes, and for each the donor whose slope it repeats (the
  * one of largest area; (size_t)-1 when it has none). */

@@ -56,6 +56,23 @@ int dfle_plot_profile(const char *path, const char *title, size_t n,
                       const double *x, const double *z, const double *S,
                       dfle_error *err);
 
+/* A map: shaded relief of z (Horn's slope and aspect, light from the
+ * north-west at 45 degrees) over a hypsometric tint with its colour
+ * box, the channel cells in blue and the cells debris flows reach in
+ * vermillion on top, axes in km of map coordinates, equal scales.  Grids
+ * of more than 1.5e6 cells are drawn every k-th cell. */
+typedef struct dfle_plot_map {
+    size_t nx, ny;            /* columns, rows (row 0 at the north)      */
+    double x0, y0, dx, dy;    /* north-west corner and cell size [m]     */
+    const double *z;          /* elevation [m], NaN = NoData (white)     */
+    const double *channel;    /* > 0: a channel cell, or NULL            */
+    const double *reach;      /* > 0: debris flows reach it, or NULL     */
+    const char *title;        /* may be NULL                             */
+    const char *channel_label, *reach_label; /* legend; NULL: defaults   */
+} dfle_plot_map;
+
+int dfle_plot_hillshade(const char *path, const dfle_plot_map *map, dfle_error *err);
+
 #ifdef __cplusplus
 }
 #endif

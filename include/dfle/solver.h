@@ -151,6 +151,17 @@ extern const dfle_solver_ops dfle_solver_direct;   /* solver_direct.c   */
 int dfle_solver_run(dfle_model *m, const dfle_run_opts *opts, dfle_run_result *res,
                     dfle_error *err);
 
+/* The scalar root solve the implicit and direct solvers make at every
+ * node, for a caller that sweeps a network itself (a landscape): the
+ * slope S of node i with
+ *   U_eff = E(S) + c S,   E = dfle_model_node_erosion(m, i, S, flows),
+ * c = L/dt and U_eff = U + (z_old - z_receiver_new)/dt for a backward-
+ * Euler step, c = 0 and U_eff = U for a steady state.  Started from
+ * `guess` when it is > 0; *goes_on (may be NULL) receives whether the
+ * flow goes on at the root.  DFLE_EFIT when no slope balances U_eff. */
+int dfle_solver_node_slope(dfle_model *m, size_t i, double U_eff, double c, double flows,
+                           double guess, double *S, int *goes_on, dfle_error *err);
+
 
 #ifdef __cplusplus
 }

@@ -30,6 +30,8 @@ struct dfle_network {
     size_t *recv, *stack, *base, *base_donor, *ndonor, *first_donor, *donor;
     double *len, *A, *w, *x;
     unsigned char *source;
+    unsigned char *channel; /* n bytes, allocated on first use */
+    int has_channel;        /* the shape gave a channel mask   */
     size_t n_base;
     int uniform_len, chain;
 };
@@ -98,6 +100,7 @@ void dfle_network_free(dfle_network *net)
     free(net->recv);
     free(net->len);
     free(net->source);
+    free(net->channel);
     free(net);
 }
 
@@ -210,6 +213,8 @@ int dfle_network_set(dfle_network *net, const dfle_network_shape *s, dfle_error 
             }
         free(pos);
     }
+    if (s->channel != NULL && net->channel == NULL && (net->channel = malloc(n)) == NULL)
+        return dfle_error_set(err, DFLE_ENOMEM, "network: out of memory");
     memcpy(net->recv, s->receiver, n * sizeof *net->recv);
     memcpy(net->len, s->length, n * sizeof *net->len);
     memcpy(net->A, s->A, n * sizeof *net->A);
@@ -231,6 +236,7 @@ int dfle_network_set(dfle_network *net, const dfle_network_shape *s, dfle_error 
         /* Leave a valid (unshaped) network rather than a broken one. */
         for (size_t i = 0; i < n; i++)
             net->recv[i] = net->stack[i] = i;
+        net->has_channel = 0;
         index_donors(net);
         derive(net);
         net->version = stamp();
@@ -239,6 +245,10 @@ int dfle_network_set(dfle_network *net, const dfle_network_shape *s, dfle_error 
     }
     for (size_t i = 0; i < n; i++)
         net->source[i] = s->source != NULL ? s->source[i] != 0 : net->ndonor[i] == 0;
+    net->has_channel = s->channel != NULL;
+    if (net->has_channel)
+        for (size_t i = 0; i < n; i++)
+            net->channel[i] = s->channel[i] != 0;
     derive(net);
     net->version = stamp();
     return DFLE_OK;
@@ -293,6 +303,10 @@ const double *dfle_network_w(const dfle_network *net) { return net->w; }
 const double *dfle_network_x(const dfle_network *net) { return net->x; }
 const size_t *dfle_network_stack(const dfle_network *net) { return net->stack; }
 const unsigned char *dfle_network_sources(const dfle_network *net) { return net->source; }
+const unsigned char *dfle_network_channel(const dfle_network *net)
+{
+    return net->has_channel ? net->channel : NULL;
+}
 int dfle_network_uniform_length(const dfle_network *net) { return net->uniform_len; }
 int dfle_network_is_chain(const dfle_network *net) { return net->chain; }
 unsigned long long dfle_network_id(const dfle_network *net) { return net->id; }

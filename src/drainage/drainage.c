@@ -102,6 +102,7 @@ void dfle_drainage_free(dfle_drainage *dr)
     free(dr->don);
     free(dr->stack);
     free(dr->area);
+    free(dr->outlet);
     free(dr);
 }
 
@@ -179,6 +180,8 @@ enum dfle_drainage_edge drainage_exit_known(const dfle_drainage *dr, size_t i, i
 {
     size_t r = i / dr->o.nx, c = i % dr->o.nx;
     enum dfle_drainage_edge e = DFLE_DRAINAGE_CLOSED;
+    if (dr->outlet != NULL && dr->outlet[i])
+        return DFLE_DRAINAGE_BASE_LEVEL;
     if (r == 0)
         e = more_open(e, dr->o.edge[DFLE_DRAINAGE_NORTH]);
     if (c + 1 == dr->o.nx)
@@ -211,6 +214,27 @@ unsigned char drainage_code(const dfle_drainage *dr, size_t a, size_t b)
     long long dcol = (long long)(b % dr->o.nx) - (long long)(a % dr->o.nx);
     assert(drow >= -1 && drow <= 1 && dcol >= -1 && dcol <= 1 && (drow != 0 || dcol != 0));
     return code[drow + 1][dcol + 1];
+}
+
+int dfle_drainage_set_outlets(dfle_drainage *dr, const size_t *cells, size_t n,
+                              dfle_error *err)
+{
+    for (size_t k = 0; k < n; k++)
+        if (cells[k] >= dr->n)
+            return dfle_error_set(err, DFLE_EINVAL, "drainage: outlet %zu is cell %zu, off the "
+                                  "grid of %zu cells", k + 1, cells[k], dr->n);
+    dr->routed = 0;
+    if (cells == NULL || n == 0) {
+        free(dr->outlet);
+        dr->outlet = NULL;
+        return DFLE_OK;
+    }
+    if (dr->outlet == NULL && (dr->outlet = malloc(dr->n)) == NULL)
+        return dfle_error_set(err, DFLE_ENOMEM, "drainage: out of memory");
+    memset(dr->outlet, 0, dr->n);
+    for (size_t k = 0; k < n; k++)
+        dr->outlet[cells[k]] = 1;
+    return DFLE_OK;
 }
 
 /* ---------------------------------------------------------------- */
@@ -335,6 +359,7 @@ size_t dfle_drainage_memory(const dfle_drainage *dr)
     bytes += n * (sizeof *dr->rcv + 1 + sizeof *dr->don + sizeof *dr->stack + sizeof *dr->area);
     bytes += (n + 1) * sizeof *dr->don_off;
     bytes += dr->mark != NULL ? n : 0;
+    bytes += dr->outlet != NULL ? n : 0;
     for (int k = 0; k < 3; k++)
         bytes += dr->work[k] != NULL ? n * sizeof *dr->work[k] : 0;
     bytes += dr->zfill != NULL ? n * sizeof *dr->zfill : 0;

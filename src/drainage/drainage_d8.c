@@ -78,6 +78,7 @@ size_t drainage_d8(dfle_drainage *dr, const double *z, size_t *n_data, int *infi
 {
     size_t nx = dr->o.nx, ny = dr->o.ny;
     d8_tally t = {0, 0, 0};
+    const unsigned char *outlet = dr->outlet;
     long long step[8];
     double len[8];
 
@@ -107,11 +108,12 @@ size_t drainage_d8(dfle_drainage *dr, const double *z, size_t *n_data, int *infi
                 best = better ? s : best;
                 nodata_nb |= isnan(zn);
             }
-            if (k_best >= 0 && !nodata_nb) { /* the common case */
+            if (k_best >= 0 && !nodata_nb && (outlet == NULL || !outlet[i])) {
+                /* the common case */
                 dr->dir[i] = (unsigned char)k_best;
                 dr->rcv[i] = (uint32_t)((long long)i + step[k_best]);
             } else {
-                settle(dr, i, k_best, nodata_nb ? dr->o.nodata : DFLE_DRAINAGE_CLOSED, &t);
+                settle(dr, i, k_best, drainage_exit_known(dr, i, nodata_nb), &t);
             }
         }
         ring_cell(dr, z, r, nx - 1, &t);

@@ -63,6 +63,8 @@ struct dfle_drainage {
     double len[8];          /* distance to neighbour k [m]              */
     long long step[8];      /* index offset of neighbour k              */
 
+    unsigned char *outlet;  /* n: cells that always drain off, or NULL  */
+
     /* Outputs of the last route, valid while `routed`. */
     int routed;
     uint32_t *rcv;          /* receiver; own index for roots            */

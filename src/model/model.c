@@ -105,10 +105,17 @@ void dfle_model_sync_domain(dfle_model *m)
         return;
     for (size_t i = 0; i < m->n; i++)
         m->inv_len[i] = 1.0 / L[i];
+    m->channel = dfle_network_channel(m->net);
     if (m->fl != NULL) {
         /* K A^m is fixed per shape: hoist its pow() out of the step loop. */
         for (size_t i = 0; i < m->n; i++)
             m->KAm[i] = dfle_fluvial_K(m->fl) * pow(A[i], dfle_fluvial_m(m->fl));
+        if (m->K_scale != NULL)
+            for (size_t i = 0; i < m->n; i++)
+                m->KAm[i] *= m->K_scale[i];
+        if (m->channel != NULL) /* hillslopes: no fluvial erosion */
+            for (size_t i = 0; i < m->n; i++)
+                m->KAm[i] = m->channel[i] ? m->KAm[i] : 0.0;
     }
     m->net_version = v;
     dfle_model_invalidate_flow(m); /* areas moved: the flow must be routed again */
@@ -305,6 +312,23 @@ int dfle_model_init_fluvial_steady(dfle_model *m, const dfle_fluvial *fl,
     dfle_fluvial_free(own);
     dfle_model_invalidate_flow(m);
     return st;
+}
+
+int dfle_model_set_erodibility(dfle_model *m, const double *K_scale, const double *df_scale,
+                               dfle_error *err)
+{
+    for (size_t i = 0; i < m->n; i++)
+        if ((K_scale != NULL && !(isfinite(K_scale[i]) && K_scale[i] >= 0)) ||
+            (df_scale != NULL && !(isfinite(df_scale[i]) && df_scale[i] >= 0)))
+            return dfle_error_set(err, DFLE_EINVAL, "model: erodibility scale at node %zu is "
+                                  "%g (K) and %g (E_df); both must be finite and >= 0", i + 1,
+                                  K_scale != NULL ? K_scale[i] : 1.0,
+                                  df_scale != NULL ? df_scale[i] : 1.0);
+    m->K_scale = K_scale;
+    m->df_scale = df_scale;
+    m->net_version = 0; /* renew K A^m at the next evaluation */
+    dfle_model_invalidate_flow(m);
+    return DFLE_OK;
 }
 
 int dfle_model_set_z(dfle_model *m, const double *z, size_t n, dfle_error *err)

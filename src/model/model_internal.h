@@ -41,7 +41,9 @@ struct dfle_model {
      * changes (a landscape re-routes): see sync_domain(). */
     unsigned long long net_version;
     double *inv_len; /* 1 / L_i: slopes multiply by it, as they always have */
-    double *KAm;     /* K A^m per node                                      */
+    double *KAm;     /* K A^m per node (times K_scale; 0 off the channels)  */
+    const double *K_scale, *df_scale; /* erodibility in space, or NULL   */
+    const unsigned char *channel;     /* the network's channel mask, or NULL */
 
     /* State and fields: one block of n-arrays, see model_alloc(). */
     double *z, *S, *E_f, *E_df, *dzdt, *F;

@@ -53,6 +53,15 @@ static double combine_factor(const dfle_model *m, double count, double A)
     }
 }
 
+/* The multiplier of E_df at node i: the erodibility scale, 0 on a
+ * hillslope (network.h's channel mask). */
+static double node_df_scale(const dfle_model *m, size_t i)
+{
+    if (m->channel != NULL && !m->channel[i])
+        return 0.0;
+    return m->df_scale != NULL ? m->df_scale[i] : 1.0;
+}
+
 /* The law on the reached nodes r of `flow`: F (after a routing, when
  * route is set) and E.  A prefix is read in place; otherwise the nodes
  * are gathered into contiguous arrays, as every law expects, and the
@@ -141,6 +150,11 @@ static int debris_flow_erosion(dfle_model *m, const double *S, dfle_flow *flow, 
         for (size_t j = 0; j < r->n; j++) {
             const size_t i = r->node[j];
             E[i] *= combine_factor(m, flow->reach[i], A[i]);
+        }
+    if (m->df_scale != NULL || m->channel != NULL)
+        for (size_t j = 0; j < r->n; j++) {
+            const size_t i = r->node[j];
+            E[i] *= node_df_scale(m, i);
         }
     return DFLE_OK;
 }
@@ -327,6 +341,7 @@ int dfle_model_node_erosion(dfle_model *m, size_t i, double S, double flows, dou
     double e = 0.0;
     assert(i < m->n);
     *goes_on = 0;
+    dfle_model_sync_domain(m); /* K A^m of the current shape and scales */
     if (!(S > 0)) { /* no erosion up a reverse slope (model.h) */
         *E = 0.0;
         return DFLE_OK;
@@ -363,6 +378,8 @@ int dfle_model_node_erosion(dfle_model *m, size_t i, double S, double flows, dou
             return st;
         if (m->combine != DFLE_DF_ANY)
             Edf *= combine_factor(m, flows, dfle_network_A(m->net)[i]);
+        if (m->df_scale != NULL || m->channel != NULL)
+            Edf *= node_df_scale(m, i);
         e += Edf;
     }
     if (!isfinite(e))

@@ -140,3 +140,9 @@ int dfle_solve_node(dfle_model *m, size_t i, double U_eff, double c, double flow
                           "model: the slope at node %zu (x = %g m) did not converge (bracket "
                           "[%g, %g])", i + 1, dfle_network_x(dfle_model_network(m))[i], lo, hi);
 }
+
+int dfle_solver_node_slope(dfle_model *m, size_t i, double U_eff, double c, double flows,
+                           double guess, double *S, int *goes_on, dfle_error *err)
+{
+    return dfle_solve_node(m, i, U_eff, c, flows, guess, S, goes_on, err);
+}

@@ -296,6 +296,7 @@ void dfle_lua_open_plot(lua_State *L);
 void dfle_lua_open_sampling(lua_State *L);
 void dfle_lua_open_args(lua_State *L); /* dfle.args, dfle.mkdir (lua_args.c) */
 void dfle_lua_open_dem(lua_State *L);
+void dfle_lua_open_landscape(lua_State *L);
 void dfle_lua_open_ensemble(lua_State *L); /* after sampling: wraps dfle.pawn */
 void dfle_lua_open_trace_hook(lua_State *L); /* a test hook, in the registry */
 

@@ -211,7 +211,8 @@ size_t dfle_lua_slope_area(lua_State *L, int arg, const char *fn, const double *
     }
     /* --- dfle.profile (lua_dem.c): a DEM profile or network gives its
      * own pairs through p:slope_area(), a table read like a user's. --- */
-    if (luaL_testudata(L, arg, "dfle.profile") != NULL) {
+    if (luaL_testudata(L, arg, "dfle.profile") != NULL ||
+        luaL_testudata(L, arg, "dfle.landscape") != NULL) { /* lua_landscape.c: channel cells */
         lua_getfield(L, arg, "slope_area");
         lua_pushvalue(L, arg);
         lua_call(L, 1, 1);
@@ -219,7 +220,7 @@ size_t dfle_lua_slope_area(lua_State *L, int arg, const char *fn, const double *
     }
     /* --- end dfle.profile --- */
     if (!lua_istable(L, arg))
-        luaL_error(L, "dfle.%s: expected a dfle.model, a dfle.profile or a table "
+        luaL_error(L, "dfle.%s: expected a dfle.model, a dfle.profile, a dfle.landscape or a table "
                    "{A = {...}, S = {...}}, got %s", fn, dfle_lua_typename(L, arg));
     lua_getfield(L, arg, "A");
     snprintf(what, sizeof what, "%s: A", fn);

@@ -1,0 +1,152 @@
+/*
+ * landscape.c - time and memory per step of a landscape (landscape.h)
+ * on the set-up of fastscapelib's benchmark: square grids of 250^2 to
+ * 2000^2 cells of 30 m, a random start (uniform noise of 1 m), every
+ * edge a base level, stream power E = K A^m S^n with m = 0.5 and n = 1
+ * or 2.33, uplift 1e-3 m/yr, steps of 1e4 yr, every cell a channel
+ * (A_0 = 0: no hillslope rule, as fastscapelib's).  Each step routes
+ * flow (D8 and depressions through the basin graph) and solves the
+ * implicit stream power law in stack order.
+ *
+ * Reports, per grid: CPU s of the first step (routing the random
+ * surface: about one cell in nine is a pit) and the mean of the next
+ * `steps` steps (routing, erosion, whole step), bytes per cell held, and
+ * the exponent p of t ~ n^p fitted over the grids.  Figures only:
+ * nothing here asserts on time.
+ *
+ *   build/bench/landscape [steps [side ...]]     (default 10; 250 500 1000 2000)
+ */
+#include <math.h>
+#include <stdint.h>
+#include <stdio.h>
+#include <stdlib.h>
+#include <time.h>
+
+#include "dfle/landscape.h"
+
+static double cpu_seconds(void)
+{
+    struct timespec t;
+    clock_gettime(CLOCK_PROCESS_CPUTIME_ID, &t);
+    return (double)t.tv_sec + 1e-9 * (double)t.tv_nsec;
+}
+
+static double exponent(const double *n, const double *t, int k)
+{
+    double sx = 0, sy = 0, sxx = 0, sxy = 0;
+    for (int i = 0; i < k; i++) {
+        double x = log(n[i]), y = log(t[i]);
+        sx += x;
+        sy += y;
+        sxx += x * x;
+        sxy += x * y;
+    }
+    return (k * sxy - sx * sy) / (k * sxx - sx * sx);
+}
+
+typedef struct figures {
+    double first, route, solve, step, bytes;
+} figures;
+
+static int run(size_t side, double n_exp, int steps, figures *f)
+{
+    const size_t n = side * side;
+    uint64_t x = 0x9E3779B97F4A7C15ull; /* xorshift64: the same noise every run */
+    double *z = malloc(n * sizeof *z);
+    dfle_fluvial *fl = NULL;
+    dfle_landscape *ls = NULL;
+    dfle_landscape_opts o;
+    dfle_landscape_status st;
+    dfle_error err;
+    int rc = 1;
+
+    if (z == NULL)
+        return 1;
+    for (size_t i = 0; i < n; i++) {
+        x ^= x << 13;
+        x ^= x >> 7;
+        x ^= x << 17;
+        z[i] = (double)(x >> 11) / 9007199254740992.0;
+    }
+    dfle_landscape_opts_default(&o);
+    o.nx = o.ny = side;
+    o.dx = o.dy = 30.0;
+    o.z = z;
+    o.A0 = 0.0;
+    o.U.value = 1e-3;
+    if (dfle_fluvial_new_stream_power(n_exp == 1 ? 2e-5 : 1e-3, 0.5, n_exp, &fl, &err) != DFLE_OK)
+        goto fail;
+    o.fluvial = fl;
+    if (dfle_landscape_new(&o, &ls, &err) != DFLE_OK) {
+        fprintf(stderr, "landscape bench: %s\n", err.msg);
+        goto done;
+    }
+    {
+        double t0 = cpu_seconds();
+        if (dfle_landscape_step(ls, 1e4, 1e-3, &st, &err) != DFLE_OK)
+            goto fail;
+        f->first = cpu_seconds() - t0;
+    }
+    f->route = f->solve = f->step = 0;
+    for (int s = 0; s < steps; s++) {
+        double t0 = cpu_seconds();
+        if (dfle_landscape_step(ls, 1e4, 1e-3, &st, &err) != DFLE_OK)
+            goto fail;
+        f->step += cpu_seconds() - t0;
+        f->route += st.route_seconds;
+        f->solve += st.solve_seconds;
+    }
+    f->step /= steps;
+    f->route /= steps;
+    f->solve /= steps;
+    f->bytes = (double)dfle_landscape_memory(ls) / (double)n;
+    rc = 0;
+    goto done;
+fail:
+    fprintf(stderr, "landscape bench: %s\n", err.msg);
+done:
+    dfle_landscape_free(ls);
+    dfle_fluvial_free(fl);
+    free(z);
+    return rc;
+}
+
+int main(int argc, char **argv)
+{
+    static const size_t default_sides[] = {250, 500, 1000, 2000};
+    static const double exps[2] = {1.0, 2.33};
+    size_t sides[16];
+    int n_sides = 0, steps = argc > 1 ? atoi(argv[1]) : 10;
+
+    if (steps < 1)
+        steps = 1;
+    for (int a = 2; a < argc && n_sides < 16; a++)
+        sides[n_sides++] = (size_t)strtoul(argv[a], NULL, 10);
+    if (n_sides == 0)
+        for (size_t s = 0; s < sizeof default_sides / sizeof *default_sides; s++)
+            sides[n_sides++] = default_sides[s];
+    printf("Landscape steps (route with depressions + implicit stream power), 30 m cells, "
+           "random start, edges at base level, CPU s (mean of %d steps after the first):\n",
+           steps);
+    for (int e = 0; e < 2; e++) {
+        double cells[16], tr[16], ts[16], tt[16];
+        printf("  m = 0.5, n = %.2f\n  %-9s %10s %9s %9s %9s %9s %8s\n", exps[e], "grid", "cells",
+               "1st step", "route", "erode", "step", "B/cell");
+        for (int k = 0; k < n_sides; k++) {
+            figures f;
+            if (run(sides[k], exps[e], steps, &f) != 0)
+                return 1;
+            cells[k] = (double)(sides[k] * sides[k]);
+            tr[k] = f.route;
+            ts[k] = f.solve;
+            tt[k] = f.step;
+            printf("  %5zu^2   %10.0f %9.4f %9.4f %9.4f %9.4f %8.1f\n", sides[k], cells[k],
+                   f.first, f.route, f.solve, f.step, f.bytes);
+        }
+        if (n_sides >= 2)
+            printf("  time ~ n^p: p = %.3f (routing), %.3f (erosion), %.3f (step)\n",
+                   exponent(cells, tr, n_sides), exponent(cells, ts, n_sides),
+                   exponent(cells, tt, n_sides));
+    }
+    return 0;
+}

@@ -1,0 +1,132 @@
+-- landscape_bigtujunga.lua - the Big Tujunga catchment evolved to steady
+-- state by debris flows and rivers, and its slope-area against the real
+-- network's (issue 12: the paper's Sect. 4.4 step to 2D landscapes).
+--
+-- The catchment above the black outlet of the paper's Fig. 1 (396887 E,
+-- 3799338 N, 10.2 km^2) is cut from the SRTM DEM (30 m, UTM 11N): cells
+-- outside it are NoData and closed, its outlet the base level.  Starting
+-- from the real surface, the model (Fig. 9 components: stochastic-
+-- threshold rivers, the empirical router from every channel head, the
+-- power law; threshold hillslopes at S_c = 0.8, about 39 degrees as in
+-- the San Gabriels) is brought to steady state under U = 0.5 mm/yr by
+-- the direct method.  Both surfaces go through the same analysis: the
+-- network of every cell above the outlet, slope over 90 m of flow path
+-- (dem:network, as examples/fig1_slope_area.lua), 100 log bins, Eq. (2).
+-- Writes
+--   bigtujunga_steady.tif        z, A, S, E_f, E_df, reach (GeoTIFF)
+--   bigtujunga_map.png           shaded relief, channels, debris-flow reach
+--   bigtujunga_slope_area.png    model and DEM slope-area, binned, with fits
+--   bigtujunga_series.nc         a transient from the real surface (NetCDF)
+--
+--   dfle examples/landscape_bigtujunga.lua [--quick] [output-directory]
+--
+-- --quick (the test suite) coarsens the grid to 90 m and skips the
+-- transient.  The DEM is found relative to this script
+-- (../../shared/data/dem/) or in $DFLE_DATA_DIR/dem.
+
+local quick, outdir = false, "."
+for _, a in ipairs(arg) do
+  if a == "--quick" then quick = true else outdir = a end
+end
+local here = arg[0]:match("^(.*)/[^/]*$") or "."
+local data = os.getenv("DFLE_DATA_DIR") or (here .. "/../../shared/data")
+local path = data .. "/dem/srtm_bigtujunga30m_utm11.tif"
+local f = io.open(path, "rb")
+if not f then
+  print(("landscape_bigtujunga: the DEM %s is missing; set DFLE_DATA_DIR to the folder "
+         .. "holding dem/srtm_bigtujunga30m_utm11.tif (the project's shared data). Skipped."):format(path))
+  return
+end
+f:close()
+local function out(name) return outdir .. "/" .. name end
+
+local outlet = { 396887, 3799338 }
+local dem = dfle.dem.read(path)
+if quick then
+  -- every third cell: a 90 m grid of the same area (a quick smoke run)
+  local nx, ny = dem.nx // 3, dem.ny // 3
+  local z, full = {}, dem
+  local e = full.extent
+  local coarse = {}
+  for r = 0, ny - 1 do
+    for c = 0, nx - 1 do
+      coarse[r * nx + c + 1] = full:at(e.E_min + (3 * c + 1.5) * 30, e.N_max - (3 * r + 1.5) * 30)
+    end
+  end
+  local ls0 = dfle.landscape{ nx = nx, ny = ny, dx = 90, z = coarse, x0 = e.E_min,
+                              y0 = e.N_max, router = false, fluvial = false, U = 1e-3 }
+  dem = ls0:dem()
+end
+
+local A0 = 1e4 -- channel heads at 1 ha: about 11 cells of 30 m
+local ls = dfle.landscape{
+  dem = dem, outlet = outlet,
+  U = 5e-4, A0 = A0, S_c = 0.8,
+  router = dfle.router.empirical{ M0 = 3000, gamma = 0.5, mu = 500, tau_y = 300 },
+  law = dfle.law.power{ k_df = 1e-4, alpha = 6, beta = 1 },
+}
+print(("%s: %d cells with data (%.1f km^2)"):format(tostring(ls), ls.data_cells,
+      ls.data_cells * ls.dx * ls.dy / 1e6))
+
+-- the real network, measured as fig1_slope_area.lua does
+local real_dem = ls:dem()
+real_dem:fill() -- the SRTM surface has pits; dem:network needs none
+local ds = 3 * ls.dx
+local real = real_dem:network{ A_min = ls.dx * ls.dy, outlet = outlet, ds = ds }
+local fit_real = dfle.fit_slope_area(real)
+
+if not quick then
+  -- a transient from the real surface, recorded in a NetCDF time series
+  local tr = ls:run{ years = 2e4, dt = 1e3, record = { 0, 1e4, 2e4 },
+                     netcdf = out("bigtujunga_series.nc"), fields = { "z", "E_df", "reach" } }
+  print(("transient: %s, %d records"):format(tr.note, tr.recorded))
+end
+
+local t0 = os.clock()
+local run = ls:run_to_steady{ max_time = 5e7, dt = 2e3, max_steps = quick and 300 or 100000 }
+local reached = 0
+for _, v in ipairs(ls:get("reach")) do reached = reached + (v > 0 and 1 or 0) end
+print(("steady state: %s (%s, %d steps, %.2f s); 99%% of |dz/dt|/U <= %.3g, mean %.3g; "
+       .. "%d channel heads, %d cells reached by debris flows"):format(
+       run.converged and "reached" or "NOT reached", run.method, run.steps, os.clock() - t0,
+       run.q_ratio, run.mean_ratio, run.heads, reached))
+print("  " .. run.note)
+
+local model_dem = ls:dem()
+model_dem:fill() -- (a steady landscape has no pits: this changes nothing)
+local model = model_dem:network{ A_min = ls.dx * ls.dy, outlet = outlet, ds = ds }
+local fit_model = dfle.fit_slope_area(model)
+for _, p in ipairs{ { "DEM", fit_real }, { "model", fit_model } } do
+  local fit = p[2]
+  if fit then
+    print(("%-5s S_df = %.3f, A_df = %.3g m^2, a2 = %.2f, R^2 = %.3f"):format(p[1], fit.S_df,
+          fit.A_df, fit.a2, fit.r2))
+  else
+    print(p[1] .. ": no fit")
+  end
+end
+
+ls:write_geotiff(out("bigtujunga_steady.tif"), { "z", "A", "S", "E_f", "E_df", "reach" })
+ls:plot(out("bigtujunga_map.png"), {
+  title = "Big Tujunga above the black Fig. 1 outlet: steady state, U = 0.5 mm/yr" })
+local series = {}
+local function add(fit, label, color_points)
+  if fit then
+    series[#series + 1] = { x = fit.bins.A, y = fit.bins.S, label = label .. " (binned mean)" }
+    local A, S = {}, {}
+    for k = 0, 100 do
+      A[k + 1] = fit.bins.A[1] * (fit.bins.A[#fit.bins.A] / fit.bins.A[1]) ^ (k / 100)
+      S[k + 1] = fit.S_df / (1 + (A[k + 1] / fit.A_df) ^ fit.a2)
+    end
+    series[#series + 1] = { x = A, y = S, lines = true,
+                            label = ("%s, Eq. (2): S_{df} = %.2f, R^2 = %.2f"):format(label, fit.S_df, fit.r2) }
+  end
+end
+add(fit_real, "DEM")
+add(fit_model, "model")
+if #series > 0 then
+  dfle.plot.xy{ path = out("bigtujunga_slope_area.png"), series = series,
+    title = "Slope-area of the Big Tujunga network: SRTM DEM and steady-state model",
+    xlabel = "Drainage area, {/:Italic A} (m^2)", ylabel = "Slope, {/:Italic S}",
+    logx = true, logy = true }
+end

@@ -1,0 +1,111 @@
+/*
+ * landscape_internal.h - the landscape object, shared by the files of
+ * src/landscape/ (not installed):
+ *   landscape.c        the object, its fields in space, routing and the
+ *                      network of the debris-flow model, output fields;
+ *   landscape_step.c   one step: backward Euler in stack order (the
+ *                      fluvial closed form / Newton, debris-flow cells
+ *                      through the model's root solve), explicit steps,
+ *                      hillslopes (threshold, implicit diffusion);
+ *   landscape_run.c    runs: transients, steady states (the criterion,
+ *                      implicit stepping, the direct method).
+ *
+ * Memory per cell is the constraint (a 2000^2 grid is 4e6 cells): the
+ * state is z (8 bytes), the receivers of the last routing (4, to count
+ * changes) and dz/dt as a float (4), besides the routing's own arrays.
+ * Fields in space cost 8 bytes a cell only when they are not uniform;
+ * the debris-flow model and its network exist only with a router.
+ */
+#ifndef DFLE_LANDSCAPE_INTERNAL_H
+#define DFLE_LANDSCAPE_INTERNAL_H
+
+#include <stdint.h>
+
+#include "dfle/landscape.h"
+#include "dfle/network.h"
+
+#define LS_NONE UINT32_MAX
+
+/* A field in space (and time): value, or grid (owned) filled by fn. */
+typedef struct ls_field {
+    double value;
+    double *grid;              /* n cells, or NULL: uniform */
+    dfle_landscape_field_fn fn;
+    void *ud;
+    int varies;
+    const char *name;          /* for messages: "U", "K_scale", ... */
+    double lo;                 /* values must be >= lo (U: > 0)     */
+    int strict;                /* 1: > lo                            */
+} ls_field;
+
+static inline double ls_value(const ls_field *f, size_t c)
+{
+    return f->grid != NULL ? f->grid[c] : f->value;
+}
+
+struct dfle_landscape {
+    dfle_landscape_opts o;     /* scalars; component pointers borrowed */
+    size_t nx, ny, n, n_data;
+    double cell_area;          /* dx dy [m^2]                           */
+    double len[8];             /* distance to neighbour k [m]           */
+    double time;               /* [yr]                                  */
+
+    double *z;                 /* n: elevations, NaN = NoData           */
+    dfle_drainage *dr;
+    int routed;                /* the routing matches z                 */
+    uint32_t *rcv_prev;        /* receivers of the previous routing     */
+    size_t rcv_changes, stable, routings;
+    double rcv_tol;            /* the run's: changes a stable routing allows */
+    float *dzdt;               /* n: dz/dt of the last step [m/yr]      */
+    int have_rates;            /* dzdt holds something                  */
+
+    ls_field U, K_scale, df_scale;
+    double K, m_exp, n_exp;    /* the fluvial law (K = 0: none)         */
+
+    /* Debris flows (a router): the model on the data cells. */
+    dfle_network *net;
+    dfle_model *model;
+    uint32_t *node_of;         /* n: cell -> node (LS_NONE on NoData)   */
+    uint32_t *cell_of;         /* n_data: node -> cell                  */
+    size_t *s_rcv, *s_stack;   /* shape scratch, n_data each            */
+    double *s_len, *s_A, *s_w, *s_Ks, *s_dfs;
+    unsigned char *s_src, *s_chan;
+    int model_z_current;       /* the model's z and flow match ours     */
+    size_t channel_cells, heads;
+};
+
+/* landscape.c */
+/* Route z if it changed since the last routing; count receiver changes;
+ * give the debris-flow model the new network. */
+int ls_route(dfle_landscape *ls, dfle_error *err);
+/* Fields in time: refresh those that vary for the landscape's time. */
+int ls_update_fields(dfle_landscape *ls, int first, dfle_error *err);
+/* Copy z into the model and evaluate it (routes the debris flows). */
+int ls_model_evaluate(dfle_landscape *ls, dfle_error *err);
+/* The debris flows that go on at cell c (0 without a router). */
+double ls_reach(const dfle_landscape *ls, size_t c);
+/* E_f [m/yr] at cell c for slope S. */
+double ls_fluvial_rate(const dfle_landscape *ls, size_t c, double A, double S);
+
+/* landscape_step.c */
+/* Evaluated dz/dt of the current state into ls->dzdt (explicit
+ * rates; the residual the direct method is judged by); fills the
+ * status's ratios. */
+int ls_evaluate_rates(dfle_landscape *ls, double tol, double quantile,
+                      dfle_landscape_status *st, dfle_error *err);
+/* One explicit step of at most dt_cap (CFL); *dt receives its length. */
+int ls_explicit_step(dfle_landscape *ls, double dt_cap, double cfl, double tol,
+                     double quantile, double *dt, dfle_landscape_status *st, dfle_error *err);
+/* The status's ratios from ls->dzdt. */
+void ls_ratios(const dfle_landscape *ls, double tol, double quantile, dfle_landscape_status *st);
+/* Hillslope diffusion, implicit: (z' - z)/dt = D lap(z') on hillslope
+ * cells with channel and base cells held; dt = INFINITY solves the
+ * steady state D lap(z) = -U with those cells fixed. */
+int ls_diffuse(dfle_landscape *ls, double dt, dfle_error *err);
+/* One backward-Euler sweep as dfle_landscape_step, with the quantile. */
+int ls_implicit_step(dfle_landscape *ls, double dt, double tol, double quantile,
+                     dfle_landscape_status *st, dfle_error *err);
+/* The steady state of the current network, node by node (direct). */
+int ls_direct_round(dfle_landscape *ls, dfle_error *err);
+
+#endif

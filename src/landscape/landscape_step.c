@@ -1,0 +1,650 @@
+/*
+ * landscape_step.c - how the landscape's surface moves: one backward-
+ * Euler step in stack order, one explicit step, hillslope diffusion, and
+ * one round of the direct steady state.
+ *
+ * Backward Euler (Braun and Willett 2013).  The stack lists every data
+ * cell after its receiver, so when cell i is reached its receiver r
+ * already has its new elevation and the cell's own equation,
+ *   z_i' = z_i + dt (U - K A^m ((z_i' - z_r')/L)^n),
+ * is one scalar equation.  With d = z_i' - z_r', d0 = z_i + U dt - z_r'
+ * and F = K A^m dt / L^n it reads d + F d^n = d0:
+ *   n = 1:  d = d0 / (1 + F), exactly;
+ *   n != 1: Newton from min(d0, (d0/F)^(1/n)), an upper bound of the
+ *           root, so for n > 1 (f convex) the iterates fall monotonically
+ *           onto it; bracketed, so n < 1 converges too.
+ * d0 <= 0 (a cell below its receiver after uplift: along a path carved
+ * through a depression) means no erosion: the cell rises with U, as the
+ * model does for S <= 0.  A cell a debris flow reaches is solved by the
+ * model's per-node root solve (solver.h), E = E_f + E_df; the flows are
+ * those routed at the start of the step (lagged one step, as the 1D
+ * implicit solver lags the runout).  Hillslope cells rise with U and are
+ * capped at S_c above their receiver (THRESHOLD), or diffuse after the
+ * sweep (DIFFUSION).  O(n), no linear system, no stability limit.
+ */
+#include "landscape/landscape_internal.h"
+
+#include <math.h>
+#include <stdlib.h>
+#include <string.h>
+#include <time.h>
+
+/* Iterations ahead that the sweep prefetches (see ls_implicit_step). */
+#define LS_AHEAD 8
+#if defined(__GNUC__) || defined(__clang__)
+#define LS_PREFETCH(p) __builtin_prefetch(p)
+#else
+#define LS_PREFETCH(p) ((void)(p))
+#endif
+
+static double cpu_seconds(void)
+{
+    struct timespec t;
+    clock_gettime(CLOCK_PROCESS_CPUTIME_ID, &t);
+    return (double)t.tv_sec + 1e-9 * (double)t.tv_nsec;
+}
+
+/* The quantile of |dz/dt|/U comes from a histogram over the bits of the
+ * ratio as a float: exponent and the top 3 bits of the mantissa, 8 bins
+ * an octave (9 % wide), no logarithm per cell.  Ratios below 2^-40 share
+ * the first bin, above 2^40 the last. */
+#define Q_SHIFT 20                          /* keep exponent + 3 mantissa bits */
+#define Q_FIRST ((127u - 40u) << 3)         /* 2^-40 */
+#define Q_LAST ((127u + 40u) << 3)          /* 2^40  */
+#define Q_BINS (Q_LAST - Q_FIRST + 2)
+
+static unsigned q_bin(float r)
+{
+    uint32_t bits;
+    unsigned k;
+    memcpy(&bits, &r, sizeof bits);
+    k = bits >> Q_SHIFT; /* r >= 0: no sign bit */
+    return k < Q_FIRST ? 0 : k > Q_LAST ? Q_BINS - 1 : k - Q_FIRST + 1;
+}
+
+/* The upper edge of bin b (b in 1 .. Q_BINS - 2). */
+static double q_edge(unsigned b)
+{
+    uint32_t bits = (uint32_t)(b - 1 + Q_FIRST + 1) << Q_SHIFT;
+    float f;
+    memcpy(&f, &bits, sizeof f);
+    return f;
+}
+
+void ls_ratios(const dfle_landscape *ls, double tol, double quantile, dfle_landscape_status *st)
+{
+    const uint32_t *rcv = dfle_drainage_receivers(ls->dr);
+    size_t hist[Q_BINS], count = 0, above = 0;
+    double sum = 0.0, mx = 0.0;
+    const int uniform = ls->U.grid == NULL;
+    const double inv_U = 1.0 / ls->U.value;
+
+    memset(hist, 0, sizeof hist);
+    for (size_t c = 0; c < ls->n; c++) {
+        double r;
+        if (rcv[c] == c) /* base levels and NoData */
+            continue;
+        r = fabs((double)ls->dzdt[c]) * (uniform ? inv_U : 1.0 / ls->U.grid[c]);
+        count++;
+        sum += r;
+        mx = r > mx ? r : mx;
+        above += r > tol;
+        hist[q_bin((float)r)]++;
+    }
+    st->max_ratio = mx;
+    st->mean_ratio = count > 0 ? sum / (double)count : 0.0;
+    st->frac_above = count > 0 ? (double)above / (double)count : 0.0;
+    st->q_ratio = 0.0;
+    if (count > 0) {
+        /* At most one bin (9 %) above the exact value. */
+        size_t want = (size_t)ceil(quantile * (double)count), cum = 0;
+        for (unsigned b = 0; b < Q_BINS; b++) {
+            cum += hist[b];
+            if (cum >= want) {
+                st->q_ratio = b == 0 ? 0.0 : b == Q_BINS - 1 ? mx : q_edge(b);
+                break;
+            }
+        }
+        if (st->q_ratio > mx)
+            st->q_ratio = mx;
+    }
+}
+
+/* d + F d^n = d0 for 0 < d < d0 (see the file comment): Halley's
+ * iteration, cubic, one pow a step for f, f' and f'', kept inside the
+ * bracket.  It starts at d0 when erosion there, F d0^n, is at most d0
+ * (the root is then within a factor 2 of d0), else at the upper bound
+ * (d0/F)^(1/n), where F d^n = d0 needs no pow. */
+static double fluvial_delta(double d0, double F, double n)
+{
+    double lo = 0.0, hi = d0, d = d0, Fd = F * pow(d0, n);
+    if (Fd > d0) {
+        d = d0 * pow(d0 / Fd, 1.0 / n);
+        Fd = d0;
+    }
+    for (int it = 0; it < 100; it++) {
+        const double f = d + Fd - d0, f1 = 1.0 + n * Fd / d, f2 = n * (n - 1.0) * Fd / (d * d);
+        const double step = 2.0 * f * f1 / (2.0 * f1 * f1 - f * f2);
+        double next = d - step;
+        /* Cubic convergence: once a step is this small the error after
+         * it is ~1e-21 (tested before the bracket, which round-off at the
+         * root can leave on either side). */
+        if (fabs(step) <= 1e-7 * d)
+            return next;
+        if (f > 0)
+            hi = d;
+        else
+            lo = d;
+        if (!(next > lo && next < hi))
+            next = 0.5 * (lo + hi);
+        d = next;
+        Fd = F * pow(d, n);
+    }
+    return d;
+}
+
+static void status_network(const dfle_landscape *ls, dfle_landscape_status *st)
+{
+    st->rcv_changes = ls->rcv_changes;
+    st->stable = ls->stable;
+    st->channel_cells = ls->channel_cells;
+    st->heads = ls->model != NULL ? ls->heads : 0;
+}
+
+int ls_implicit_step(dfle_landscape *ls, double dt, double tol, double quantile,
+                     dfle_landscape_status *st, dfle_error *err)
+{
+    const uint32_t *rcv, *stack;
+    const unsigned char *dir;
+    const double *A, *Sm = NULL;
+    const double A0 = ls->o.A0, K = ls->K, mexp = ls->m_exp, nexp = ls->n_exp;
+    const double Sc = ls->o.S_c, ca = ls->cell_area;
+    const int hill = ls->o.hillslope, sqrt_m = mexp == 0.5, n_one = nexp == 1.0;
+    double *z = ls->z;
+    double VU = 0, Vf = 0, Vdf = 0, Vh = 0, dV = 0;
+    size_t n_stack, reached = 0;
+    int st_ = DFLE_OK;
+    double t0 = cpu_seconds(), t1;
+
+    double Ln[8]; /* L^n by direction */
+    for (int d = 0; d < 8; d++)
+        Ln[d] = n_one ? ls->len[d] : pow(ls->len[d], nexp);
+    if ((st_ = ls_route(ls, err)) != DFLE_OK)
+        return st_;
+    t1 = cpu_seconds();
+    if (ls->model != NULL) {
+        if ((st_ = ls_model_evaluate(ls, err)) != DFLE_OK)
+            return st_;
+        Sm = dfle_model_field(ls->model, DFLE_FIELD_S, err);
+    }
+    rcv = dfle_drainage_receivers(ls->dr);
+    dir = dfle_drainage_dir(ls->dr);
+    A = dfle_drainage_area(ls->dr);
+    stack = dfle_drainage_stack(ls->dr, &n_stack);
+    for (size_t k = 0; k < n_stack; k++) {
+        const size_t c = stack[k], r = rcv[c];
+        const double z0 = z[c];
+        double U, L, uz, zn;
+        /* The stack visits the grid in no spatial order: fetch the cells
+         * of coming iterations ahead, in two stages (the receiver's
+         * elevation needs the receiver), or the sweep waits on memory. */
+        if (k + 2 * LS_AHEAD < n_stack) {
+            const size_t c2 = stack[k + 2 * LS_AHEAD], c1 = stack[k + LS_AHEAD];
+            LS_PREFETCH(&rcv[c2]);
+            LS_PREFETCH(&z[c2]);
+            LS_PREFETCH(&A[c2]);
+            LS_PREFETCH(&dir[c2]);
+            LS_PREFETCH(&z[rcv[c1]]);
+        }
+        if (r == c) {
+            ls->dzdt[c] = 0.0f;
+            continue;
+        }
+        U = ls_value(&ls->U, c);
+        L = ls->len[dir[c]];
+        uz = z0 + U * dt;
+        zn = uz;
+        if (A[c] >= A0) {
+            const double flows = ls->model != NULL ? ls_reach(ls, c) : 0.0;
+            if (flows > 0) {
+                const size_t node = ls->node_of[c];
+                double S, Ef;
+                st_ = dfle_solver_node_slope(ls->model, node, U + (z0 - z[r]) / dt, L / dt, flows,
+                                             Sm[node], &S, NULL, err);
+                if (st_ != DFLE_OK)
+                    return st_;
+                zn = z[r] + S * L;
+                Ef = ls_fluvial_rate(ls, c, A[c], S) * dt;
+                Vf += Ef;
+                Vdf += uz - zn - Ef;
+                reached++;
+            } else if (K > 0) {
+                const double d0 = uz - z[r];
+                const double Am = sqrt_m ? sqrt(A[c]) : pow(A[c], mexp);
+                const double F = K * ls_value(&ls->K_scale, c) * Am * dt / Ln[dir[c]];
+                if (d0 > 0 && F > 0) {
+                    const double d = n_one ? d0 / (1.0 + F) : fluvial_delta(d0, F, nexp);
+                    zn = z[r] + d;
+                    Vf += d0 - d;
+                }
+            }
+        } else if (hill == DFLE_HILLSLOPE_THRESHOLD) {
+            const double cap = z[r] + Sc * L;
+            if (zn > cap) {
+                Vh += zn - cap;
+                zn = cap;
+            }
+        }
+        z[c] = zn;
+        ls->dzdt[c] = (float)((zn - z0) / dt);
+        VU += U * dt;
+        dV += zn - z0;
+    }
+    ls->routed = 0;
+    ls->model_z_current = 0;
+    ls->have_rates = 1;
+    if (hill == DFLE_HILLSLOPE_DIFFUSION) {
+        double before = 0.0, after = 0.0;
+        for (size_t c = 0; c < ls->n; c++)
+            before += isnan(z[c]) ? 0.0 : z[c];
+        if ((st_ = ls_diffuse(ls, dt, err)) != DFLE_OK)
+            return st_;
+        for (size_t c = 0; c < ls->n; c++)
+            after += isnan(z[c]) ? 0.0 : z[c];
+        /* What diffusion moved into channel and base cells left the
+         * hillslopes: the hillslope term of the volume balance. */
+        Vh += before - after;
+        dV += after - before;
+    }
+    if (st != NULL) {
+        st->route_seconds = t1 - t0;
+        st->solve_seconds = cpu_seconds() - t1;
+        ls_ratios(ls, tol, quantile, st);
+        status_network(ls, st);
+        st->reached = reached;
+        st->dt = dt;
+        st->dV = dV * ca;
+        st->V_uplift = VU * ca;
+        st->V_fluvial = Vf * ca;
+        st->V_df = Vdf * ca;
+        st->V_hillslope = Vh * ca;
+    }
+    return DFLE_OK;
+}
+
+int dfle_landscape_step(dfle_landscape *ls, double dt, double tol, dfle_landscape_status *st,
+                        dfle_error *err)
+{
+    int s;
+    if (!(isfinite(dt) && dt > 0))
+        return dfle_error_set(err, DFLE_EINVAL, "landscape: the time step must be > 0 yr (got "
+                              "%g)", dt);
+    if (st != NULL)
+        memset(st, 0, sizeof *st);
+    if ((s = ls_update_fields(ls, 0, err)) != DFLE_OK)
+        return s;
+    if ((s = ls_implicit_step(ls, dt, tol, 0.99, st, err)) != DFLE_OK)
+        return s;
+    ls->time += dt;
+    return DFLE_OK;
+}
+
+/* ---------------------------------------------------------------- */
+/* Evaluated rates and explicit steps                               */
+/* ---------------------------------------------------------------- */
+
+/* D lap(z) at cell c (the 9-point stencil of ls_diffuse), data cells only. */
+static double laplacian(const dfle_landscape *ls, size_t c);
+
+int ls_evaluate_rates(dfle_landscape *ls, double tol, double quantile,
+                      dfle_landscape_status *st, dfle_error *err)
+{
+    const uint32_t *rcv;
+    const unsigned char *dir;
+    const double *A, *Edf = NULL;
+    int s;
+
+    if ((s = ls_route(ls, err)) != DFLE_OK)
+        return s;
+    if (ls->model != NULL) {
+        if ((s = ls_model_evaluate(ls, err)) != DFLE_OK)
+            return s;
+        if ((Edf = dfle_model_field(ls->model, DFLE_FIELD_E_DF, err)) == NULL)
+            return err != NULL ? err->code : DFLE_ENUMERIC;
+    }
+    rcv = dfle_drainage_receivers(ls->dr);
+    dir = dfle_drainage_dir(ls->dr);
+    A = dfle_drainage_area(ls->dr);
+    for (size_t c = 0; c < ls->n; c++) {
+        double U, S, r;
+        if (isnan(ls->z[c]))
+            continue;
+        if (rcv[c] == c) {
+            ls->dzdt[c] = 0.0f;
+            continue;
+        }
+        U = ls_value(&ls->U, c);
+        S = (ls->z[c] - ls->z[rcv[c]]) / ls->len[dir[c]];
+        if (A[c] >= ls->o.A0)
+            r = U - ls_fluvial_rate(ls, c, A[c], S) - (Edf != NULL ? Edf[ls->node_of[c]] : 0.0);
+        else if (ls->o.hillslope == DFLE_HILLSLOPE_THRESHOLD)
+            r = S >= ls->o.S_c * (1.0 - 1e-9) ? 0.0 : U; /* held at S_c, or rising */
+        else if (ls->o.hillslope == DFLE_HILLSLOPE_DIFFUSION)
+            r = U + laplacian(ls, c);
+        else
+            r = U;
+        ls->dzdt[c] = (float)r;
+    }
+    ls->have_rates = 1;
+    if (st != NULL) {
+        ls_ratios(ls, tol, quantile, st);
+        status_network(ls, st);
+    }
+    return DFLE_OK;
+}
+
+int ls_explicit_step(dfle_landscape *ls, double dt_cap, double cfl, double tol,
+                     double quantile, double *dt_out, dfle_landscape_status *st,
+                     dfle_error *err)
+{
+    const uint32_t *rcv, *stack;
+    const unsigned char *dir;
+    const double *A, *cel = NULL;
+    double dt = dt_cap, VU = 0, Vh = 0, dV = 0, Vf = 0, Vdf = 0;
+    size_t n_stack;
+    int s;
+
+    if ((s = ls_evaluate_rates(ls, tol, quantile, NULL, err)) != DFLE_OK)
+        return s;
+    if (ls->model != NULL && (s = dfle_model_celerity(ls->model, &cel, err)) != DFLE_OK)
+        return s;
+    rcv = dfle_drainage_receivers(ls->dr);
+    dir = dfle_drainage_dir(ls->dr);
+    A = dfle_drainage_area(ls->dr);
+    stack = dfle_drainage_stack(ls->dr, &n_stack);
+    /* The CFL step: a slope change travels upstream at c = dE/dS. */
+    for (size_t c = 0; c < ls->n; c++) {
+        double L, S, speed;
+        if (isnan(ls->z[c]) || rcv[c] == c || !(A[c] >= ls->o.A0))
+            continue;
+        L = ls->len[dir[c]];
+        S = (ls->z[c] - ls->z[rcv[c]]) / L;
+        speed = S > 0 ? ls->n_exp * ls_fluvial_rate(ls, c, A[c], S) / S : 0.0;
+        if (cel != NULL)
+            speed = fmax(speed, cel[ls->node_of[c]]);
+        if (speed > 0 && cfl * L / speed < dt)
+            dt = cfl * L / speed;
+    }
+    if (ls->o.hillslope == DFLE_HILLSLOPE_DIFFUSION) {
+        double h = fmin(ls->o.dx, ls->o.dy);
+        dt = fmin(dt, cfl * h * h / (4.0 * ls->o.D));
+    }
+    /* Rates were evaluated at the old surface: apply them, then the
+     * threshold in stack order (receivers first). */
+    for (size_t k = 0; k < n_stack; k++) {
+        const size_t c = stack[k], r = rcv[c];
+        const double z0 = ls->z[c], U = ls_value(&ls->U, c);
+        double zn;
+        if (r == c)
+            continue;
+        zn = z0 + dt * ls->dzdt[c];
+        if (A[c] >= ls->o.A0) {
+            double S = (z0 - ls->z[r]) / ls->len[dir[c]]; /* z[r] is new: close enough */
+            double Ef = ls_fluvial_rate(ls, c, A[c], S > 0 ? S : 0);
+            Vf += Ef * dt;
+            Vdf += (U - ls->dzdt[c]) * dt - Ef * dt;
+        }
+        if (!(A[c] >= ls->o.A0) && ls->o.hillslope == DFLE_HILLSLOPE_THRESHOLD) {
+            double cap = ls->z[r] + ls->o.S_c * ls->len[dir[c]];
+            zn = z0 + U * dt;
+            if (zn > cap) {
+                Vh += zn - cap;
+                zn = cap;
+            }
+        }
+        ls->dzdt[c] = (float)((zn - z0) / dt);
+        VU += U * dt;
+        dV += zn - z0;
+        ls->z[c] = zn;
+    }
+    ls->routed = 0;
+    ls->model_z_current = 0;
+    *dt_out = dt;
+    if (st != NULL) {
+        ls_ratios(ls, tol, quantile, st);
+        status_network(ls, st);
+        st->dt = dt;
+        st->dV = dV * ls->cell_area;
+        st->V_uplift = VU * ls->cell_area;
+        st->V_fluvial = Vf * ls->cell_area;
+        st->V_df = Vdf * ls->cell_area;
+        st->V_hillslope = Vh * ls->cell_area;
+    }
+    return DFLE_OK;
+}
+
+/* ---------------------------------------------------------------- */
+/* Hillslope diffusion                                              */
+/* ---------------------------------------------------------------- */
+
+/* The 9-point Laplacian (isotropic for dx = dy): weight 2/3 over the
+ * sides' squared distances and 1/3 over the diagonals', so every D8
+ * receiver is a neighbour of the stencil and no block of hillslope cells
+ * is cut off from the channel cells that hold it.  Fluxes to NoData or
+ * off the grid are zero. */
+static double stencil_weight(const dfle_landscape *ls, int k)
+{
+    return (k % 2 == 0 ? 2.0 / 3.0 : 1.0 / 3.0) / (ls->len[k] * ls->len[k]);
+}
+
+static double laplacian(const dfle_landscape *ls, size_t c)
+{
+    double s = 0.0;
+    for (int k = 0; k < 8; k++) {
+        long long j = dfle_drainage_neighbour(ls->dr, c, k);
+        if (j >= 0 && !isnan(ls->z[j]))
+            s += stencil_weight(ls, k) * (ls->z[j] - ls->z[c]);
+    }
+    return ls->o.D * s;
+}
+
+/* Conjugate gradients with a Jacobi preconditioner on the hillslope
+ * cells (the unknowns); channel and base cells are held. */
+int ls_diffuse(dfle_landscape *ls, double dt, dfle_error *err)
+{
+    const size_t n = ls->n;
+    const uint32_t *rcv;
+    const double *A;
+    const double D = ls->o.D, inv_dt = isinf(dt) ? 0.0 : 1.0 / dt;
+    double *blk, *x, *r, *p, *q, *dg, rz = 0, b2 = 0;
+    unsigned char *unk;
+    size_t n_unk = 0;
+    int st;
+
+    if ((st = ls_route(ls, err)) != DFLE_OK)
+        return st;
+    rcv = dfle_drainage_receivers(ls->dr);
+    A = dfle_drainage_area(ls->dr);
+    blk = malloc(5 * n * sizeof *blk);
+    unk = malloc(n);
+    if (blk == NULL || unk == NULL) {
+        free(blk);
+        free(unk);
+        return dfle_error_set(err, DFLE_ENOMEM, "landscape: out of memory for diffusion");
+    }
+    x = blk, r = blk + n, p = blk + 2 * n, q = blk + 3 * n, dg = blk + 4 * n;
+    for (size_t c = 0; c < n; c++) {
+        unk[c] = !isnan(ls->z[c]) && rcv[c] != c && !(A[c] >= ls->o.A0);
+        n_unk += unk[c];
+    }
+    /* b = z / dt (U for the steady state) + D sum w z_fixed; x0 = z. */
+    for (size_t c = 0; c < n; c++) {
+        double b, d = inv_dt;
+        if (!unk[c])
+            continue;
+        b = isinf(dt) ? ls_value(&ls->U, c) : ls->z[c] * inv_dt;
+        for (int k = 0; k < 8; k++) {
+            long long j = dfle_drainage_neighbour(ls->dr, c, k);
+            if (j < 0 || isnan(ls->z[j]))
+                continue;
+            d += D * stencil_weight(ls, k);
+            if (!unk[j])
+                b += D * stencil_weight(ls, k) * ls->z[j];
+        }
+        dg[c] = d;
+        x[c] = ls->z[c];
+        r[c] = b; /* minus A x below */
+        b2 += b * b;
+    }
+#define APPLY(v, out)                                                             \
+    for (size_t c = 0; c < n; c++) {                                              \
+        double s_;                                                                \
+        if (!unk[c])                                                              \
+            continue;                                                             \
+        s_ = dg[c] * (v)[c];                                                      \
+        for (int k = 0; k < 8; k++) {                                             \
+            long long j = dfle_drainage_neighbour(ls->dr, c, k);                  \
+            if (j >= 0 && unk[j])                                                 \
+                s_ -= D * stencil_weight(ls, k) * (v)[j];                         \
+        }                                                                         \
+        (out)[c] = s_;                                                            \
+    }
+    APPLY(x, q)
+    for (size_t c = 0; c < n; c++)
+        if (unk[c]) {
+            r[c] -= q[c];
+            p[c] = r[c] / dg[c];
+            rz += r[c] * p[c];
+        }
+    st = DFLE_OK;
+    for (size_t it = 0; n_unk > 0; it++) {
+        double pq = 0, alpha, rz_new = 0, rr = 0;
+        if (it > 20000 + 10 * n_unk) {
+            st = dfle_error_set(err, DFLE_ENUMERIC, "landscape: hillslope diffusion did not "
+                                "converge in %zu iterations", it);
+            break;
+        }
+        APPLY(p, q)
+        for (size_t c = 0; c < n; c++)
+            if (unk[c])
+                pq += p[c] * q[c];
+        if (!(pq > 0))
+            break;
+        alpha = rz / pq;
+        for (size_t c = 0; c < n; c++)
+            if (unk[c]) {
+                x[c] += alpha * p[c];
+                r[c] -= alpha * q[c];
+                rr += r[c] * r[c];
+                rz_new += r[c] * r[c] / dg[c];
+            }
+        if (rr <= 1e-26 * b2)
+            break;
+        for (size_t c = 0; c < n; c++)
+            if (unk[c])
+                p[c] = r[c] / dg[c] + rz_new / rz * p[c];
+        rz = rz_new;
+    }
+#undef APPLY
+    if (st == DFLE_OK)
+        for (size_t c = 0; c < n; c++)
+            if (unk[c]) {
+                if (!isinf(dt))
+                    ls->dzdt[c] += (float)((x[c] - ls->z[c]) / dt);
+                ls->z[c] = x[c];
+            }
+    ls->routed = 0;
+    ls->model_z_current = 0;
+    free(blk);
+    free(unk);
+    return st;
+}
+
+/* ---------------------------------------------------------------- */
+/* The direct steady state                                          */
+/* ---------------------------------------------------------------- */
+
+int ls_direct_round(dfle_landscape *ls, dfle_error *err)
+{
+    const uint32_t *rcv, *stack;
+    const unsigned char *dir;
+    const double *A, *Sm = NULL;
+    double *S = NULL, *flows = NULL;
+    size_t n_stack;
+    int st;
+
+    if ((st = ls_route(ls, err)) != DFLE_OK)
+        return st;
+    if (ls->model != NULL) {
+        if ((st = ls_model_evaluate(ls, err)) != DFLE_OK)
+            return st;
+        Sm = dfle_model_field(ls->model, DFLE_FIELD_S, err);
+    }
+    rcv = dfle_drainage_receivers(ls->dr);
+    dir = dfle_drainage_dir(ls->dr);
+    A = dfle_drainage_area(ls->dr);
+    stack = dfle_drainage_stack(ls->dr, &n_stack);
+    S = malloc(ls->n * sizeof *S);
+    if (ls->model != NULL)
+        flows = malloc(ls->n_data * sizeof *flows);
+    if (S == NULL || (ls->model != NULL && flows == NULL)) {
+        free(S);
+        return dfle_error_set(err, DFLE_ENOMEM, "landscape: out of memory");
+    }
+    if (flows != NULL) {
+        const unsigned char *src = dfle_network_sources(ls->net);
+        for (size_t k = 0; k < ls->n_data; k++)
+            flows[k] = src[k];
+    }
+    /* Slopes from the heads down: every cell after its donors, so the
+     * flows arriving at a cell are known when it is solved. */
+    st = DFLE_OK;
+    for (size_t k = n_stack; k-- > 0 && st == DFLE_OK;) {
+        const size_t c = stack[k], r = rcv[c];
+        const double U = ls_value(&ls->U, c);
+        if (r == c)
+            continue;
+        if (A[c] >= ls->o.A0) {
+            const size_t node = flows != NULL ? ls->node_of[c] : 0;
+            const double Kc = ls->K * ls_value(&ls->K_scale, c);
+            if (flows != NULL && flows[node] > 0) {
+                int goes_on = 0;
+                st = dfle_solver_node_slope(ls->model, node, U, 0.0, flows[node],
+                                            Sm[node] > 0 ? Sm[node] : 0.1, &S[c], &goes_on, err);
+                if (st == DFLE_OK && goes_on)
+                    flows[ls->node_of[r]] += flows[node];
+            } else if (Kc > 0) {
+                S[c] = pow(U / (Kc * pow(A[c], ls->m_exp)), 1.0 / ls->n_exp);
+            } else {
+                st = dfle_error_set(err, DFLE_EFIT, "landscape: channel cell %zu (row %zu, "
+                                    "column %zu, A = %g m^2) has no steady slope: no fluvial "
+                                    "erosion and no debris flow reaches it", c, c / ls->nx,
+                                    c % ls->nx, A[c]);
+            }
+        } else if (ls->o.hillslope == DFLE_HILLSLOPE_UPLIFT) {
+            st = dfle_error_set(err, DFLE_EFIT, "landscape: hillslopes that only rise with "
+                                "uplift (hillslope = uplift) have no steady state");
+        } else {
+            S[c] = ls->o.S_c; /* DIFFUSION: a start, solved below */
+        }
+    }
+    if (st == DFLE_OK) {
+        for (size_t k = 0; k < n_stack; k++) {
+            const size_t c = stack[k], r = rcv[c];
+            if (r != c)
+                ls->z[c] = ls->z[r] + S[c] * ls->len[dir[c]];
+        }
+        ls->routed = 0;
+        ls->model_z_current = 0;
+        ls->have_rates = 0;
+    }
+    free(S);
+    free(flows);
+    if (st == DFLE_OK && ls->o.hillslope == DFLE_HILLSLOPE_DIFFUSION) {
+        /* The hillslopes between the channels just built. */
+        ls->routed = 1; /* the receivers are those of this round */
+        st = ls_diffuse(ls, INFINITY, err);
+    }
+    ls->routed = 0;
+    return st;
+}

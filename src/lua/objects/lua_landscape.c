@@ -1,0 +1,1170 @@
+/*
+ * lua_landscape.c - dfle.landscape{...}: the model on a raster grid
+ * (landscape.h) from Lua.
+ *
+ *   local ls = dfle.landscape{ nx = 200, ny = 200, dx = 30, U = 5e-4,
+ *                              noise = { amplitude = 1, seed = 7 } }
+ *   local ls = dfle.landscape{ dem = dfle.dem.read(path), outlet = {E, N} }
+ *   ls:run_to_steady{ tol = 1e-3 }           ls:run{ years = 1e5, dt = 500 }
+ *   ls:get("z"), ls:write_geotiff("z.tif", {"z", "E_df"}), ls:plot("map.png")
+ *
+ * Components are held as a model holds them (user values, pins); fields
+ * given as Lua functions and a custom combine rule are kept as registry
+ * references and called back during runs, under lua_pcall, with the
+ * thread that runs the call; an error in one comes back as the run's
+ * error with the function's own message.
+ */
+#include "lua/core/dfle_lua.h"
+
+#include <math.h>
+#include <stdio.h>
+#include <stdlib.h>
+#include <string.h>
+
+#include "dfle/dem.h"
+#include "dfle/landscape.h"
+#include "dfle/plot.h"
+#include "dfle/raster.h"
+
+#define DFLE_LUA_LANDSCAPE "dfle.landscape"
+
+enum { UV_FLUVIAL = 1, UV_ROUTER, UV_LAW, UV_CRS, UV_COUNT = UV_CRS };
+enum { F_U, F_K, F_DF, F_COUNT };
+
+struct lua_ls;
+typedef struct field_cb {
+    struct lua_ls *u;
+    int ref;          /* the Lua function, or LUA_NOREF */
+    double divide_by; /* a scale: the value over the component's own */
+    int with_t;       /* f(x, y, t): called every step */
+    const char *name;
+} field_cb;
+
+typedef struct lua_ls {
+    dfle_landscape *ls;
+    DFLE_LUA_IN_USE;
+    lua_State *L;     /* the thread of the call running now (callbacks) */
+    int ref_combine;
+    field_cb cb[F_COUNT];
+    double x0, y0;    /* north-west corner [m] */
+    size_t nx, ny;    /* the grid, for callbacks (also while it is built) */
+    double dx, dy;
+    const double *zmask; /* elevations whose NaN mark NoData */
+    char *crs;        /* WKT (a string held as user value UV_CRS) or NULL */
+    char cb_err[512]; /* a callback's failure */
+} lua_ls;
+
+static lua_ls *check_ls(lua_State *L, int arg)
+{
+    dfle_lua_check_object(L, arg, DFLE_LUA_LANDSCAPE);
+    return lua_touserdata(L, arg);
+}
+
+static int msgh(lua_State *L)
+{
+    const char *msg = lua_tostring(L, 1);
+    luaL_traceback(L, L, msg != NULL ? msg : "(error object is not a string)", 1);
+    return 1;
+}
+
+/* Cell centre of index c in map coordinates. */
+static void centre(const lua_ls *u, size_t nx, double dx, double dy, size_t c, double *x,
+                   double *y)
+{
+    *x = u->x0 + ((double)(c % nx) + 0.5) * dx;
+    *y = u->y0 - ((double)(c / nx) + 0.5) * dy;
+}
+
+/* A field written as f(x, y [, t]): one call per data cell. */
+static int field_fn(void *ud, double t, double *out, dfle_error *err)
+{
+    field_cb *cb = ud;
+    lua_ls *u = cb->u;
+    lua_State *L = u->L;
+    const size_t nx = u->nx, n = nx * u->ny;
+    const double dx = u->dx, dy = u->dy;
+    const double *z = u->zmask;
+    int top = lua_gettop(L);
+    lua_pushcfunction(L, msgh);
+    for (size_t c = 0; c < n; c++) {
+        double x, y;
+        if (isnan(z[c]))
+            continue;
+        centre(u, nx, dx, dy, c, &x, &y);
+        lua_rawgeti(L, LUA_REGISTRYINDEX, cb->ref);
+        lua_pushnumber(L, x);
+        lua_pushnumber(L, y);
+        lua_pushnumber(L, t);
+        if (lua_pcall(L, 3, 1, top + 1) != LUA_OK) {
+            dfle_error_set(err, DFLE_ECALLBACK, "landscape: %s(x, y, t) failed at x = %g, y = "
+                           "%g, t = %g yr: %s", cb->name, x, y, t,
+                           lua_tostring(L, -1) ? lua_tostring(L, -1) : "?");
+            lua_settop(L, top);
+            return DFLE_ECALLBACK;
+        }
+        if (lua_type(L, -1) != LUA_TNUMBER) {
+            dfle_error_set(err, DFLE_ECALLBACK, "landscape: %s(x, y, t) must return a number, "
+                           "got %s (at x = %g, y = %g)", cb->name, dfle_lua_typename(L, -1), x, y);
+            lua_settop(L, top);
+            return DFLE_ECALLBACK;
+        }
+        out[c] = lua_tonumber(L, -1) / cb->divide_by;
+        lua_pop(L, 1);
+    }
+    lua_settop(L, top);
+    dfle_lua_touch(L);
+    return DFLE_OK;
+}
+
+/* combine = function(count, A) -> factor. */
+static double combine_fn(void *ud, double count, double A)
+{
+    lua_ls *u = ud;
+    lua_State *L = u->L;
+    int top = lua_gettop(L);
+    double v = NAN;
+    lua_pushcfunction(L, msgh);
+    lua_rawgeti(L, LUA_REGISTRYINDEX, u->ref_combine);
+    lua_pushnumber(L, count);
+    lua_pushnumber(L, A);
+    if (lua_pcall(L, 2, 1, top + 1) != LUA_OK)
+        snprintf(u->cb_err, sizeof u->cb_err, "landscape: combine(count, A) failed: %s",
+                 lua_tostring(L, -1) ? lua_tostring(L, -1) : "?");
+    else if (lua_type(L, -1) != LUA_TNUMBER || !(lua_tonumber(L, -1) >= 0))
+        snprintf(u->cb_err, sizeof u->cb_err, "landscape: combine(count = %g, A = %g) must return "
+                 "a number >= 0, got %s", count, A, lua_tostring(L, -1) ? lua_tostring(L, -1)
+                                                                        : dfle_lua_typename(L, -1));
+    else
+        v = lua_tonumber(L, -1);
+    lua_settop(L, top);
+    return v;
+}
+
+/* Raise err, preferring a callback's own message. */
+static int raise_ls(lua_State *L, lua_ls *u, const dfle_error *err)
+{
+    if (u->cb_err[0] != '\0') {
+        dfle_error e;
+        e.code = DFLE_ECALLBACK;
+        snprintf(e.msg, sizeof e.msg, "%s", u->cb_err);
+        u->cb_err[0] = '\0';
+        return dfle_lua_raise(L, &e);
+    }
+    return dfle_lua_raise(L, err);
+}
+
+/* ---------------------------------------------------------------- */
+/* Construction                                                     */
+/* ---------------------------------------------------------------- */
+
+static enum dfle_drainage_edge check_edge(lua_State *L, int idx, const char *what)
+{
+    static const char *const kinds[] = {"open", "base_level", "closed", NULL};
+    const char *s;
+    if (lua_type(L, idx) != LUA_TSTRING)
+        luaL_error(L, "dfle.landscape: %s must be \"base_level\", \"closed\" or \"open\", got %s",
+                   what, dfle_lua_typename(L, idx));
+    s = lua_tostring(L, idx);
+    for (int k = 0; kinds[k] != NULL; k++)
+        if (strcmp(s, kinds[k]) == 0)
+            return (enum dfle_drainage_edge)k;
+    luaL_error(L, "dfle.landscape: %s must be \"base_level\", \"closed\" or \"open\", got '%s'",
+               what, s);
+    return DFLE_DRAINAGE_OPEN;
+}
+
+/* Keep the value on top of the stack alive until the constructor
+ * returns (scratch arrays the C constructor reads): it goes into the
+ * anchor table at stack index 3, and stays on top. */
+static void anchor(lua_State *L)
+{
+    lua_pushvalue(L, -1);
+    lua_rawseti(L, 3, (lua_Integer)lua_rawlen(L, 3) + 1);
+}
+
+/* A field option: a number, an array of nx * ny, a dfle.dem on the grid,
+ * or a function f(x, y [, t]). */
+static void read_field(lua_State *L, lua_ls *u, int opts, const char *key, int which,
+                       dfle_landscape_field *f, size_t nx, size_t ny, double divide_by)
+{
+    int t = lua_getfield(L, opts, key);
+    field_cb *cb = &u->cb[which];
+    cb->u = u;
+    cb->name = key;
+    cb->divide_by = divide_by;
+    if (t == LUA_TNIL) {
+        lua_pop(L, 1);
+        return;
+    }
+    if (t == LUA_TNUMBER) {
+        f->value = lua_tonumber(L, -1) / divide_by;
+        if (!isfinite(f->value))
+            luaL_error(L, "dfle.landscape: parameter '%s' must be finite", key);
+    } else if (t == LUA_TFUNCTION) {
+        lua_Debug ar;
+        lua_pushvalue(L, -1);
+        lua_getinfo(L, ">u", &ar);
+        cb->with_t = ar.nparams >= 3 || ar.isvararg;
+        cb->ref = luaL_ref(L, LUA_REGISTRYINDEX);
+        f->fn = field_fn;
+        f->ud = cb;
+        f->varies_in_time = cb->with_t;
+        return;
+    } else if (t == LUA_TUSERDATA && luaL_testudata(L, -1, "dfle.dem") != NULL) {
+        dfle_dem *d = dfle_lua_check_object(L, lua_gettop(L), "dfle.dem");
+        double *g;
+        if (dfle_dem_nx(d) != nx || dfle_dem_ny(d) != ny)
+            luaL_error(L, "dfle.landscape: raster '%s' has %d x %d cells, the grid %d x %d", key,
+                       (int)dfle_dem_nx(d), (int)dfle_dem_ny(d), (int)nx, (int)ny);
+        g = lua_newuserdatauv(L, nx * ny * sizeof *g, 0);
+        for (size_t c = 0; c < nx * ny; c++)
+            g[c] = dfle_dem_z(d)[c] / divide_by;
+        anchor(L);
+        f->grid = g;
+        lua_pop(L, 2);
+        return;
+    } else if (t == LUA_TTABLE) {
+        size_t n;
+        char what[64];
+        double *g;
+        snprintf(what, sizeof what, "landscape: %s", key);
+        g = dfle_lua_check_array(L, -1, what, &n);
+        if (n != nx * ny)
+            luaL_error(L, "dfle.landscape: '%s' has %d values, the grid %d x %d = %d cells", key,
+                       (int)n, (int)nx, (int)ny, (int)(nx * ny));
+        for (size_t c = 0; c < n; c++)
+            g[c] /= divide_by;
+        anchor(L);
+        f->grid = g;
+        lua_pop(L, 2);
+        return;
+    } else {
+        luaL_error(L, "dfle.landscape: parameter '%s' must be a number, an array of nx * ny "
+                      "values, a dfle.dem raster or a function f(x, y [, t]), got %s", key,
+                   dfle_lua_typename(L, -1));
+    }
+    lua_pop(L, 1);
+}
+
+/* Push component `key` (or its default, or nil for false). */
+static void push_component(lua_State *L, int opts, const char *key, const char *tname,
+                           const char *sub, const char *ctor)
+{
+    int t = lua_getfield(L, opts, key);
+    if (t == LUA_TBOOLEAN && !lua_toboolean(L, -1)) {
+        lua_pop(L, 1);
+        lua_pushnil(L);
+        return;
+    }
+    if (t == LUA_TNIL) {
+        lua_pop(L, 1);
+        dfle_lua_push_module(L);
+        lua_getfield(L, -1, sub);
+        lua_getfield(L, -1, ctor);
+        lua_call(L, 0, 1);
+        lua_replace(L, -3);
+        lua_pop(L, 1);
+        return;
+    }
+    if (luaL_testudata(L, -1, tname) == NULL)
+        luaL_error(L, "dfle.landscape: parameter '%s' must be a %s or false, got %s", key, tname,
+                   dfle_lua_typename(L, -1));
+}
+
+/* Seeded noise (xorshift64*), the same on every machine. */
+static double noise_next(uint64_t *s)
+{
+    *s ^= *s >> 12;
+    *s ^= *s << 25;
+    *s ^= *s >> 27;
+    return (double)((*s * 0x2545F4914F6CDD1Dull) >> 11) / 9007199254740992.0;
+}
+
+/* The catchment above an outlet of a DEM: its cells, the snapped outlet. */
+static double *catchment(lua_State *L, dfle_dem *dem, double E, double N, size_t *outlet)
+{
+    const size_t n = dfle_dem_nx(dem) * dfle_dem_ny(dem);
+    dfle_dem_geo g;
+    double e[4], *z;
+    dfle_dem *copy = NULL;
+    dfle_profile *net = NULL;
+    dfle_network_opts no;
+    dfle_error err;
+    int st;
+
+    dfle_dem_extent(dem, e);
+    g.x0 = e[0], g.y0 = e[3], g.dx = dfle_dem_dx(dem), g.dy = dfle_dem_dy(dem);
+    z = lua_newuserdatauv(L, n * sizeof *z, 0);
+    st = dfle_dem_new(dfle_dem_nx(dem), dfle_dem_ny(dem), dfle_dem_z(dem), &g, &copy, &err);
+    if (st == DFLE_OK)
+        st = dfle_dem_fill(copy, NULL, &err);
+    dfle_network_opts_default(&no);
+    no.A_min = g.dx * g.dy;
+    no.has_outlet = 1;
+    no.E = E, no.N = N;
+    if (st == DFLE_OK)
+        st = dfle_dem_network(copy, &no, &net, &err);
+    if (st == DFLE_OK) {
+        const size_t m = dfle_profile_size(net);
+        const double *Ec = dfle_profile_field(net, DFLE_PROFILE_E);
+        const double *Nc = dfle_profile_field(net, DFLE_PROFILE_N);
+        double given[2], snapped[2];
+        for (size_t c = 0; c < n; c++)
+            z[c] = NAN;
+        for (size_t k = 0; k < m && st == DFLE_OK; k++) {
+            size_t c;
+            if ((st = dfle_dem_cell_at(dem, Ec[k], Nc[k], "cell", &c, &err)) == DFLE_OK)
+                z[c] = dfle_dem_z(dem)[c];
+        }
+        dfle_profile_point(net, given, snapped);
+        if (st == DFLE_OK)
+            st = dfle_dem_cell_at(dem, snapped[0], snapped[1], "outlet", outlet, &err);
+    }
+    dfle_profile_free(net);
+    dfle_dem_free(copy);
+    if (st != DFLE_OK)
+        dfle_lua_raise(L, &err);
+    return z;
+}
+
+static int l_landscape_new(lua_State *L)
+{
+    dfle_landscape_opts o;
+    double nx = 0, ny = 0, dx = 30, dy = NAN, x0 = 0, y0 = NAN;
+    double *z = NULL, *zbuf;
+    size_t *outs = NULL, n_out = 0, n;
+    lua_ls *u;
+    dfle_dem *dem = NULL;
+    dfle_error err;
+    int base;
+
+    luaL_checktype(L, 1, LUA_TTABLE);
+    lua_settop(L, 1);
+    dfle_landscape_opts_default(&o);
+    {
+        const dfle_lua_param p[] = {{"nx", &nx}, {"ny", &ny}, {"dx", &dx}, {"dy", &dy},
+                                    {"A0", &o.A0}, {"k_w", &o.k_w}, {"b", &o.b},
+                                    {"S_c", &o.S_c}, {"D", &o.D}, {"x0", &x0}, {"y0", &y0}};
+        static const char *const others[] = {"z", "noise", "dem", "outlet", "outlets", "edges",
+                                             "nodata", "fluvial", "router", "law", "combine",
+                                             "hillslope", "U", "K", "k_e", "k_df", NULL};
+        dfle_lua_read_params(L, 1, "landscape", p, sizeof p / sizeof p[0], others);
+    }
+    /* The userdata first (valid and empty), so refs made below are
+     * released by its __gc if anything raises. */
+    u = dfle_lua_newobject(L, sizeof *u, DFLE_LUA_LANDSCAPE, UV_COUNT);
+    u->L = L;
+    u->ref_combine = LUA_NOREF;
+    for (int k = 0; k < F_COUNT; k++)
+        u->cb[k].ref = LUA_NOREF;
+    base = lua_gettop(L); /* 2 */
+    lua_newtable(L);      /* 3: the anchor of scratch arrays */
+
+    /* The grid: a DEM, or nx x ny cells of dx x dy. */
+    if (lua_getfield(L, 1, "dem") != LUA_TNIL) {
+        double e[4];
+        dem = dfle_lua_check_object(L, -1, "dfle.dem");
+        if (dfle_dem_check_metric(dem, "a landscape", &err) != DFLE_OK)
+            return dfle_lua_raise(L, &err);
+        for (const char *const *k = (const char *const[]){"nx", "ny", "dx", "dy", "z", "noise",
+                                                          "x0", "y0", NULL};
+             *k != NULL; k++) {
+            if (lua_getfield(L, 1, *k) != LUA_TNIL)
+                luaL_error(L, "dfle.landscape: '%s' comes from the DEM; do not give it with "
+                              "'dem'", *k);
+            lua_pop(L, 1);
+        }
+        nx = (double)dfle_dem_nx(dem);
+        ny = (double)dfle_dem_ny(dem);
+        dx = dfle_dem_dx(dem);
+        dy = dfle_dem_dy(dem);
+        dfle_dem_extent(dem, e);
+        x0 = e[0];
+        y0 = e[3];
+        if (dfle_dem_crs_wkt(dem) != NULL) {
+            /* Kept as a Lua string (user value): nothing to free if
+             * the constructor raises. */
+            u->crs = (char *)lua_pushstring(L, dfle_dem_crs_wkt(dem));
+            lua_setiuservalue(L, base, UV_CRS);
+        }
+        o.nodata = DFLE_DRAINAGE_OPEN;
+    } else {
+        if (nx == 0 || ny == 0)
+            luaL_error(L, "dfle.landscape: give the grid: 'nx' and 'ny' (and 'dx'), or 'dem'");
+    }
+    lua_pop(L, 1);
+    dfle_lua_check_whole(L, nx, "landscape", "nx", 1, 1e8);
+    dfle_lua_check_whole(L, ny, "landscape", "ny", 1, 1e8);
+    if (isnan(dy))
+        dy = dx;
+    if (!(dx > 0 && dy > 0))
+        luaL_error(L, "dfle.landscape: dx and dy must be > 0 m (got %f, %f)", dx, dy);
+    if (nx * ny > 2e9)
+        luaL_error(L, "dfle.landscape: %f x %f cells is too many", nx, ny);
+    o.nx = (size_t)nx;
+    o.ny = (size_t)ny;
+    o.dx = dx;
+    o.dy = dy;
+    n = o.nx * o.ny;
+    u->x0 = x0;
+    u->y0 = isnan(y0) ? (double)o.ny * dy : y0;
+
+    /* Initial elevations. */
+    zbuf = lua_newuserdatauv(L, n * sizeof *zbuf, 0);
+    anchor(L);
+    lua_pop(L, 1);
+    if (dem != NULL) {
+        double E, N;
+        memcpy(zbuf, dfle_dem_z(dem), n * sizeof *zbuf);
+        lua_getfield(L, 1, "outlet");
+        if (!lua_isnil(L, -1)) {
+            size_t cell;
+            if (!lua_istable(L, -1) || lua_rawgeti(L, -1, 1) != LUA_TNUMBER ||
+                lua_rawgeti(L, -2, 2) != LUA_TNUMBER)
+                luaL_error(L, "dfle.landscape: 'outlet' must be {E, N} in map coordinates (m)");
+            E = lua_tonumber(L, -2), N = lua_tonumber(L, -1);
+            lua_pop(L, 2);
+            z = catchment(L, dem, E, N, &cell);
+            memcpy(zbuf, z, n * sizeof *zbuf);
+            lua_pop(L, 1);
+            outs = lua_newuserdatauv(L, sizeof *outs, 0);
+            anchor(L);
+            lua_pop(L, 1);
+            outs[0] = cell;
+            n_out = 1;
+            o.nodata = DFLE_DRAINAGE_CLOSED;
+            for (int s = 0; s < 4; s++)
+                o.edge[s] = DFLE_DRAINAGE_CLOSED;
+        }
+        lua_pop(L, 1);
+    } else {
+        int t = lua_getfield(L, 1, "z");
+        if (t == LUA_TTABLE) {
+            size_t m;
+            double *v = dfle_lua_check_array(L, -1, "landscape: z", &m);
+            if (m != n)
+                luaL_error(L, "dfle.landscape: 'z' has %d values, the grid %d x %d = %d cells",
+                           (int)m, (int)o.nx, (int)o.ny, (int)n);
+            memcpy(zbuf, v, n * sizeof *zbuf);
+            lua_pop(L, 1);
+        } else if (t == LUA_TFUNCTION) {
+            for (size_t c = 0; c < n; c++) {
+                double x, y;
+                centre(u, o.nx, dx, dy, c, &x, &y);
+                lua_pushvalue(L, -1);
+                lua_pushnumber(L, x);
+                lua_pushnumber(L, y);
+                lua_call(L, 2, 1);
+                if (lua_type(L, -1) != LUA_TNUMBER)
+                    luaL_error(L, "dfle.landscape: z(x, y) must return a number, got %s (at x "
+                                  "= %f, y = %f)", dfle_lua_typename(L, -1), x, y);
+                zbuf[c] = lua_tonumber(L, -1);
+                lua_pop(L, 1);
+            }
+        } else if (t == LUA_TNIL) {
+            for (size_t c = 0; c < n; c++)
+                zbuf[c] = 0.0;
+        } else {
+            luaL_error(L, "dfle.landscape: 'z' must be an array of nx * ny elevations or a "
+                          "function z(x, y), got %s", dfle_lua_typename(L, -1));
+        }
+        lua_pop(L, 1);
+        /* Seeded noise: noise = { amplitude = 1, seed = 1 } (or true);
+         * the default start when z is not given. */
+        {
+            int tz = lua_getfield(L, 1, "z");
+            t = lua_getfield(L, 1, "noise");
+            if (t != LUA_TNIL || tz == LUA_TNIL) {
+                double amp = 1.0, seed = 1.0;
+                uint64_t sd;
+                if (t == LUA_TTABLE) {
+                    const dfle_lua_param p[] = {{"amplitude", &amp}, {"seed", &seed}};
+                    dfle_lua_read_params(L, lua_gettop(L), "landscape: noise", p, 2, NULL);
+                } else if (t != LUA_TNIL && t != LUA_TBOOLEAN) {
+                    luaL_error(L, "dfle.landscape: 'noise' must be { amplitude =, seed = } or "
+                                  "true, got %s", dfle_lua_typename(L, -1));
+                }
+                if (t == LUA_TBOOLEAN && !lua_toboolean(L, -1))
+                    amp = 0.0;
+                if (!(amp >= 0))
+                    luaL_error(L, "dfle.landscape: noise amplitude must be >= 0 m");
+                sd = 0x9E3779B97F4A7C15ull ^
+                     (uint64_t)dfle_lua_check_whole(L, seed, "landscape", "noise seed", 0, 1e15);
+                for (int k = 0; k < 8; k++)
+                    (void)noise_next(&sd);
+                for (size_t c = 0; c < n; c++)
+                    zbuf[c] += amp * noise_next(&sd);
+            }
+        }
+        lua_settop(L, base + 1);
+    }
+    o.z = zbuf;
+    u->nx = o.nx, u->ny = o.ny, u->dx = dx, u->dy = dy;
+    u->zmask = zbuf;
+    lua_settop(L, base + 1);
+
+    /* Edges and outlets. */
+    if (lua_getfield(L, 1, "edges") == LUA_TSTRING) {
+        enum dfle_drainage_edge e = check_edge(L, -1, "'edges'");
+        for (int s = 0; s < 4; s++)
+            o.edge[s] = e;
+    } else if (lua_istable(L, -1)) {
+        static const char *const sides[] = {"north", "east", "south", "west", NULL};
+        lua_pushnil(L);
+        while (lua_next(L, -2)) {
+            int k = -1;
+            if (lua_type(L, -2) == LUA_TSTRING)
+                for (int s = 0; sides[s] != NULL; s++)
+                    if (strcmp(lua_tostring(L, -2), sides[s]) == 0)
+                        k = s;
+            if (k < 0)
+                luaL_error(L, "dfle.landscape: 'edges' keys are north, east, south, west");
+            o.edge[k] = check_edge(L, -1, sides[k]);
+            lua_pop(L, 1);
+        }
+    } else if (!lua_isnil(L, -1)) {
+        luaL_error(L, "dfle.landscape: 'edges' must be a kind (\"base_level\", \"closed\", "
+                      "\"open\") or a table { north =, east =, south =, west = }");
+    }
+    lua_pop(L, 1);
+    if (lua_getfield(L, 1, "nodata") != LUA_TNIL)
+        o.nodata = check_edge(L, -1, "'nodata'");
+    lua_pop(L, 1);
+    if (lua_getfield(L, 1, "outlets") != LUA_TNIL) {
+        size_t m;
+        if (!lua_istable(L, -1))
+            luaL_error(L, "dfle.landscape: 'outlets' must be a list of {E, N} points");
+        m = lua_rawlen(L, -1);
+        outs = lua_newuserdatauv(L, (m ? m : 1) * sizeof *outs, 0);
+        anchor(L);
+        lua_pop(L, 1);
+        for (size_t k = 0; k < m; k++) {
+            double E, N, col, row;
+            if (lua_rawgeti(L, -2, (lua_Integer)k + 1) != LUA_TTABLE ||
+                lua_rawgeti(L, -1, 1) != LUA_TNUMBER || lua_rawgeti(L, -2, 2) != LUA_TNUMBER)
+                luaL_error(L, "dfle.landscape: outlets[%d] must be {E, N}", (int)k + 1);
+            E = lua_tonumber(L, -2), N = lua_tonumber(L, -1);
+            col = floor((E - u->x0) / dx);
+            row = floor((u->y0 - N) / dy);
+            if (!(col >= 0 && col < nx && row >= 0 && row < ny))
+                luaL_error(L, "dfle.landscape: outlets[%d] (%f, %f) is off the grid", (int)k + 1,
+                           E, N);
+            outs[k] = (size_t)row * o.nx + (size_t)col;
+            lua_pop(L, 3);
+        }
+        n_out = m;
+    }
+    lua_pop(L, 1);
+    o.outlets = outs;
+    o.n_outlets = n_out;
+
+    /* Hillslopes. */
+    if (lua_getfield(L, 1, "hillslope") != LUA_TNIL) {
+        static const char *const rules[] = {"threshold", "diffusion", "uplift", NULL};
+        o.hillslope = luaL_checkoption(L, -1, NULL, rules);
+    }
+    lua_pop(L, 1);
+
+    /* Components: the model's defaults (Fig. 9), false switches off. */
+    {
+        int comp = lua_gettop(L) + 1;
+        push_component(L, 1, "fluvial", DFLE_LUA_FLUVIAL, "fluvial", "stochastic_threshold");
+        push_component(L, 1, "router", DFLE_LUA_ROUTER, "router", "empirical");
+        if (lua_isnil(L, comp + 1)) {
+            if (lua_getfield(L, 1, "law") != LUA_TNIL)
+                luaL_error(L, "dfle.landscape: 'law' given but router = false (no debris flows)");
+            lua_pop(L, 1);
+            lua_pushnil(L);
+        } else {
+            push_component(L, 1, "law", DFLE_LUA_LAW, "law", "power");
+        }
+        for (int k = 0; k < 3; k++) {
+            lua_pushvalue(L, comp + k);
+            lua_setiuservalue(L, base, UV_FLUVIAL + k);
+        }
+        o.fluvial = lua_isnil(L, comp) ? NULL : dfle_lua_check_fluvial(L, comp);
+        o.router = lua_isnil(L, comp + 1) ? NULL : dfle_lua_check_router(L, comp + 1);
+        o.law = lua_isnil(L, comp + 2) ? NULL : dfle_lua_check_law(L, comp + 2);
+
+        /* Fields in space.  K and k_e scale the fluvial K, k_df the
+         * law's k_df. */
+        read_field(L, u, 1, "U", F_U, &o.U, o.nx, o.ny, 1.0);
+        if (lua_getfield(L, 1, "K") != LUA_TNIL && lua_getfield(L, 1, "k_e") != LUA_TNIL)
+            luaL_error(L, "dfle.landscape: give 'K' or 'k_e', not both");
+        lua_settop(L, comp + 2);
+        if (lua_getfield(L, 1, "k_e") != LUA_TNIL && lua_getfield(L, 1, "fluvial") != LUA_TNIL)
+            luaL_error(L, "dfle.landscape: 'k_e' scales the default fluvial law (Appendix A, K "
+                          "proportional to k_e = 5e-14); with your own fluvial law give 'K'");
+        lua_settop(L, comp + 2);
+        if (o.fluvial == NULL) {
+            if (lua_getfield(L, 1, "K") != LUA_TNIL || lua_getfield(L, 1, "k_e") != LUA_TNIL)
+                luaL_error(L, "dfle.landscape: 'K'/'k_e' given but fluvial = false");
+            lua_settop(L, comp + 2);
+        } else {
+            double Kl = dfle_fluvial_K(o.fluvial);
+            read_field(L, u, 1, "K", F_K, &o.K_scale, o.nx, o.ny, Kl > 0 ? Kl : 1.0);
+            if (u->cb[F_K].ref == LUA_NOREF && o.K_scale.grid == NULL && o.K_scale.value == 1.0)
+                read_field(L, u, 1, "k_e", F_K, &o.K_scale, o.nx, o.ny, 5e-14);
+        }
+        if (lua_getfield(L, 1, "k_df") != LUA_TNIL) {
+            dfle_param p[32];
+            size_t np = o.law != NULL ? dfle_law_params(o.law, p, 32) : 0;
+            double kdf = NAN;
+            for (size_t k = 0; k < np && k < 32 && np != (size_t)-1; k++)
+                if (strcmp(p[k].name, "k_df") == 0)
+                    kdf = p[k].value;
+            if (o.law == NULL)
+                luaL_error(L, "dfle.landscape: 'k_df' given but router = false");
+            if (!(kdf > 0))
+                luaL_error(L, "dfle.landscape: 'k_df' in space scales the law's own k_df, and "
+                              "law '%s' has none", dfle_law_name(o.law));
+            lua_pop(L, 1);
+            read_field(L, u, 1, "k_df", F_DF, &o.df_scale, o.nx, o.ny, kdf);
+        } else {
+            lua_pop(L, 1);
+        }
+
+        /* How joined debris flows combine. */
+        if (lua_getfield(L, 1, "combine") == LUA_TSTRING) {
+            static const char *const rules[] = {"any", "count", NULL};
+            o.df_combine = luaL_checkoption(L, -1, NULL, rules);
+        } else if (lua_isfunction(L, -1)) {
+            lua_pushvalue(L, -1);
+            u->ref_combine = luaL_ref(L, LUA_REGISTRYINDEX);
+            o.df_combine = DFLE_DF_CUSTOM;
+            o.df_frequency = combine_fn;
+            o.df_frequency_ud = u;
+        } else if (!lua_isnil(L, -1)) {
+            luaL_error(L, "dfle.landscape: 'combine' must be \"any\", \"count\" or a function "
+                          "(count, A) -> factor, got %s", dfle_lua_typename(L, -1));
+        }
+        lua_pop(L, 1);
+
+        if (dfle_landscape_new(&o, &u->ls, &err) != DFLE_OK)
+            return raise_ls(L, u, &err);
+        u->zmask = dfle_landscape_z(u->ls); /* NoData stays NoData */
+        for (int k = 0; k < 3; k++)
+            if (!lua_isnil(L, comp + k))
+                dfle_lua_hold(L, comp + k);
+    }
+    lua_settop(L, base);
+    return 1;
+}
+
+/* ---------------------------------------------------------------- */
+/* Methods                                                          */
+/* ---------------------------------------------------------------- */
+
+/* Begin a call that may run Lua code (fields, combine, Lua laws). */
+static lua_ls *begin(lua_State *L, const char *what)
+{
+    lua_ls *u = check_ls(L, 1);
+    dfle_lua_begin_use(L, 1, what);
+    u->L = L;
+    u->cb_err[0] = '\0';
+    return u;
+}
+
+static int field_id(lua_State *L, int idx, const char *fn)
+{
+    const char *name = dfle_lua_check_string(L, idx, fn, "the field name");
+    int f = dfle_landscape_field_lookup(name);
+    if (f < 0) {
+        luaL_Buffer b;
+        luaL_buffinit(L, &b);
+        for (int k = 0; k < DFLE_LS_NFIELDS; k++) {
+            luaL_addstring(&b, k ? ", " : "");
+            luaL_addstring(&b, dfle_landscape_field_name(k));
+        }
+        luaL_pushresult(&b);
+        luaL_error(L, "dfle.%s: no field '%s' (fields: %s)", fn, name, lua_tostring(L, -1));
+    }
+    return f;
+}
+
+/* The field's nx * ny values into a scratch userdata left on the stack. */
+static double *get_field(lua_State *L, int field, const char *what)
+{
+    lua_ls *u = check_ls(L, 1);
+    size_t n = dfle_landscape_nx(u->ls) * dfle_landscape_ny(u->ls);
+    double *v = lua_newuserdatauv(L, n * sizeof *v, 0);
+    dfle_error err;
+    int st;
+    begin(L, what);
+    st = dfle_landscape_get(u->ls, field, v, &err);
+    dfle_lua_end_use(L, 1);
+    if (st != DFLE_OK)
+        raise_ls(L, u, &err);
+    return v;
+}
+
+static int l_get(lua_State *L)
+{
+    lua_ls *u = check_ls(L, 1);
+    int f = field_id(L, 2, "landscape:get");
+    double *v = get_field(L, f, "dfle.landscape:get");
+    dfle_lua_push_array(L, v, dfle_landscape_nx(u->ls) * dfle_landscape_ny(u->ls));
+    return 1;
+}
+
+static int l_fields(lua_State *L)
+{
+    lua_createtable(L, DFLE_LS_NFIELDS, 0);
+    for (int f = 0; f < DFLE_LS_NFIELDS; f++) {
+        lua_pushstring(L, dfle_landscape_field_name(f));
+        lua_rawseti(L, -2, f + 1);
+    }
+    return 1;
+}
+
+static int l_set_z(lua_State *L)
+{
+    lua_ls *u = check_ls(L, 1);
+    size_t n;
+    double *z = dfle_lua_check_array(L, 2, "landscape:set_z: z", &n);
+    dfle_error err;
+    if (n != dfle_landscape_nx(u->ls) * dfle_landscape_ny(u->ls))
+        return luaL_error(L, "dfle.landscape:set_z: z has %d values, the grid %d", (int)n,
+                          (int)(dfle_landscape_nx(u->ls) * dfle_landscape_ny(u->ls)));
+    begin(L, "dfle.landscape:set_z");
+    dfle_lua_end_use(L, 1);
+    if (dfle_landscape_set_z(u->ls, z, &err) != DFLE_OK)
+        return dfle_lua_raise(L, &err);
+    lua_settop(L, 1);
+    return 1;
+}
+
+static void push_status(lua_State *L, const dfle_landscape_status *s)
+{
+#define NUM(k, v) (lua_pushnumber(L, (v)), lua_setfield(L, -2, k))
+#define INT(k, v) (lua_pushinteger(L, (lua_Integer)(v)), lua_setfield(L, -2, k))
+    NUM("q_ratio", s->q_ratio);
+    NUM("mean_ratio", s->mean_ratio);
+    NUM("max_ratio", s->max_ratio);
+    NUM("frac_above", s->frac_above);
+    INT("rcv_changes", s->rcv_changes);
+    INT("stable", s->stable);
+    INT("channel_cells", s->channel_cells);
+    INT("heads", s->heads);
+    INT("reached", s->reached);
+    NUM("dV", s->dV);
+    NUM("V_uplift", s->V_uplift);
+    NUM("V_fluvial", s->V_fluvial);
+    NUM("V_df", s->V_df);
+    NUM("V_hillslope", s->V_hillslope);
+    NUM("dt", s->dt);
+#undef NUM
+#undef INT
+}
+
+/* ls:step(dt) -> status table */
+static int l_step(lua_State *L)
+{
+    lua_ls *u = check_ls(L, 1);
+    double dt = luaL_checknumber(L, 2);
+    dfle_landscape_status st;
+    dfle_error err;
+    int s;
+    dfle_lua_check_interrupt(L, "landscape:step");
+    begin(L, "dfle.landscape:step");
+    s = dfle_landscape_step(u->ls, dt, 1e-3, &st, &err);
+    dfle_lua_end_use(L, 1);
+    if (s != DFLE_OK)
+        return raise_ls(L, u, &err);
+    lua_createtable(L, 0, 16);
+    push_status(L, &st);
+    return 1;
+}
+
+/* What a run records into a NetCDF file. */
+typedef struct run_ctx {
+    lua_ls *u;
+    dfle_nc *nc;
+    int fields[DFLE_LS_NFIELDS];
+    size_t nf;
+    double *buf;   /* nf * n values (a userdata on the stack) */
+    const dfle_lua_progress *prog;
+    double max_time, tol;
+} run_ctx;
+
+static int record_nc(void *ud, dfle_landscape *ls, size_t k, double t)
+{
+    run_ctx *c = ud;
+    const size_t n = dfle_landscape_nx(ls) * dfle_landscape_ny(ls);
+    const double *vals[DFLE_LS_NFIELDS];
+    dfle_error err;
+    (void)k;
+    for (size_t j = 0; j < c->nf; j++) {
+        if (dfle_landscape_get(ls, c->fields[j], c->buf + j * n, &err) != DFLE_OK) {
+            snprintf(c->u->cb_err, sizeof c->u->cb_err, "%s", err.msg);
+            return 1;
+        }
+        vals[j] = c->buf + j * n;
+    }
+    if (dfle_nc_append(c->nc, t, vals, &err) != DFLE_OK) {
+        snprintf(c->u->cb_err, sizeof c->u->cb_err, "%s", err.msg);
+        return 1;
+    }
+    return 0;
+}
+
+static int progress_cb(void *ud, const dfle_landscape_status *s)
+{
+    run_ctx *c = ud;
+    dfle_run_status rs = {.time = s->time, .max_time = c->max_time, .steps = s->steps,
+                          .dt = s->dt, .rate_ratio = s->q_ratio, .tol = c->tol,
+                          .fraction = s->fraction};
+    return c->prog->update(c->prog->ud, &rs);
+}
+
+static void geo_of(const lua_ls *u, dfle_raster_geo *g)
+{
+    g->x0 = u->x0;
+    g->y0 = u->y0;
+    g->dx = dfle_landscape_dx(u->ls);
+    g->dy = dfle_landscape_dy(u->ls);
+    g->crs_wkt = u->crs;
+}
+
+static int landscape_run(lua_State *L, int steady)
+{
+    static const char *const methods[] = {"explicit", "implicit", "direct", "auto", NULL};
+    static const char *const other[] = {"method", "record", "netcdf", "fields", "progress", NULL};
+    const char *fn = steady ? "landscape:run_to_steady" : "landscape:run";
+    lua_ls *u = check_ls(L, 1);
+    dfle_landscape_run_opts o;
+    dfle_landscape_result res;
+    dfle_error err;
+    double years = 0, max_steps, stable;
+    run_ctx ctx;
+    int st;
+
+    memset(&ctx, 0, sizeof ctx);
+    ctx.u = u;
+    lua_settop(L, 2);
+    if (!steady)
+        luaL_checktype(L, 2, LUA_TTABLE);
+    dfle_landscape_run_opts_default(&o);
+    max_steps = (double)o.max_steps;
+    stable = (double)o.stable_steps;
+    {
+        const dfle_lua_param sp[] = {{"tol", &o.tol}, {"quantile", &o.quantile},
+                                     {"stable_steps", &stable}, {"max_time", &o.max_time},
+                                     {"max_steps", &max_steps}, {"dt", &o.dt}, {"cfl", &o.cfl},
+                                     {"rcv_tol", &o.rcv_tol}};
+        const dfle_lua_param tp[] = {{"years", &years}, {"max_steps", &max_steps},
+                                     {"dt", &o.dt}, {"cfl", &o.cfl}};
+        if (steady)
+            dfle_lua_read_params(L, 2, fn, sp, sizeof sp / sizeof sp[0], other);
+        else
+            dfle_lua_read_params(L, 2, fn, tp, sizeof tp / sizeof tp[0], other);
+    }
+    if (!steady) {
+        if (!(years > 0))
+            luaL_error(L, "dfle.landscape:run: parameter 'years' (> 0) is required");
+        o.years = years;
+    }
+    o.max_steps = (size_t)dfle_lua_check_whole(L, max_steps, fn, "max_steps", 1, 1e15);
+    o.stable_steps = (size_t)dfle_lua_check_whole(L, stable, fn, "stable_steps", 0, 1e9);
+    o.method = steady ? DFLE_METHOD_AUTO : DFLE_METHOD_IMPLICIT;
+    if (lua_istable(L, 2) && lua_getfield(L, 2, "method") != LUA_TNIL) {
+        dfle_lua_check_string(L, -1, fn, "method");
+        o.method = luaL_checkoption(L, -1, NULL, methods);
+        if (!steady && o.method == DFLE_METHOD_DIRECT)
+            luaL_error(L, "dfle.landscape:run: method 'direct' finds steady states only; use "
+                          "run_to_steady, or 'implicit' or 'explicit' here");
+    }
+    lua_settop(L, 2);
+    /* Records into NetCDF: record = {t, ...} [yr], netcdf = path,
+     * fields = {"z", ...} (default z). */
+    if (lua_istable(L, 2) && lua_getfield(L, 2, "record") != LUA_TNIL) {
+        size_t k;
+        double *times = dfle_lua_check_array(L, 3, "landscape:run: record", &k);
+        const char *path;
+        dfle_nc_var vars[DFLE_LS_NFIELDS];
+        dfle_raster_geo g;
+        const size_t n = dfle_landscape_nx(u->ls) * dfle_landscape_ny(u->ls);
+        o.n_record = k;
+        o.record_times = times;
+        if (lua_getfield(L, 2, "netcdf") != LUA_TSTRING)
+            luaL_error(L, "dfle.%s: 'record' needs 'netcdf', the path of the time series", fn);
+        path = dfle_lua_check_string(L, -1, fn, "netcdf");
+        if (lua_getfield(L, 2, "fields") == LUA_TNIL) {
+            ctx.fields[0] = DFLE_LS_Z;
+            ctx.nf = 1;
+        } else {
+            luaL_checktype(L, -1, LUA_TTABLE);
+            ctx.nf = lua_rawlen(L, -1);
+            if (ctx.nf == 0 || ctx.nf > DFLE_LS_NFIELDS)
+                luaL_error(L, "dfle.%s: 'fields' must list 1 to %d field names", fn,
+                           DFLE_LS_NFIELDS);
+            for (size_t j = 0; j < ctx.nf; j++) {
+                lua_rawgeti(L, -1, (lua_Integer)j + 1);
+                ctx.fields[j] = field_id(L, -1, fn);
+                lua_pop(L, 1);
+            }
+        }
+        for (size_t j = 0; j < ctx.nf; j++) {
+            vars[j].name = dfle_landscape_field_name(ctx.fields[j]);
+            vars[j].units = dfle_landscape_field_unit(ctx.fields[j]);
+            if (strcmp(vars[j].units, "-") == 0)
+                vars[j].units = "1";
+            vars[j].long_name = vars[j].name;
+        }
+        ctx.buf = lua_newuserdatauv(L, ctx.nf * n * sizeof(double), 0);
+        geo_of(u, &g);
+        if (dfle_nc_create(path, dfle_landscape_nx(u->ls), dfle_landscape_ny(u->ls), &g, ctx.nf,
+                           vars, "dfle landscape", &ctx.nc, &err) != DFLE_OK)
+            return dfle_lua_raise(L, &err);
+        o.on_record = record_nc;
+        o.on_record_ud = &ctx;
+    }
+    ctx.prog = dfle_lua_get_progress(L);
+    if (lua_istable(L, 2) && lua_getfield(L, 2, "progress") != LUA_TNIL && !lua_toboolean(L, -1))
+        ctx.prog = NULL;
+    ctx.max_time = steady ? o.max_time : years;
+    ctx.tol = o.tol;
+    if (ctx.prog != NULL && ctx.prog->update != NULL) {
+        o.progress = progress_cb;
+        o.progress_ud = &ctx;
+    }
+    if (dfle_lua_interrupted(L)) {
+        dfle_nc_abort(ctx.nc);
+        dfle_lua_check_interrupt(L, fn);
+    }
+    o.interrupt = dfle_lua_get_interrupt(L);
+    begin(L, steady ? "dfle.landscape:run_to_steady" : "dfle.landscape:run");
+    st = dfle_landscape_run(u->ls, &o, &res, &err);
+    dfle_lua_end_use(L, 1);
+    if (ctx.prog != NULL && ctx.prog->finish != NULL)
+        ctx.prog->finish(ctx.prog->ud);
+    if (ctx.nc != NULL) {
+        if (st != DFLE_OK)
+            dfle_nc_abort(ctx.nc); /* nothing half-written */
+        else if (dfle_nc_close(ctx.nc, &err) != DFLE_OK)
+            return dfle_lua_raise(L, &err);
+    }
+    if (st != DFLE_OK)
+        return raise_ls(L, u, &err);
+    if (res.reason == DFLE_STOP_INTERRUPTED)
+        dfle_lua_set_interrupt_note(L, "%s stopped at t = %f yr and kept its state (reason "
+                                       "\"interrupted\")", fn, dfle_landscape_time(u->ls));
+    lua_createtable(L, 0, 24);
+    lua_pushboolean(L, res.converged), lua_setfield(L, -2, "converged");
+    lua_pushstring(L, dfle_stop_reason_name(res.reason)), lua_setfield(L, -2, "reason");
+    lua_pushstring(L, dfle_method_name(res.method)), lua_setfield(L, -2, "method");
+    lua_pushboolean(L, res.fallback), lua_setfield(L, -2, "fallback");
+    lua_pushnumber(L, res.last.time), lua_setfield(L, -2, "time");
+    lua_pushinteger(L, (lua_Integer)res.last.steps), lua_setfield(L, -2, "steps");
+    lua_pushinteger(L, (lua_Integer)res.routings), lua_setfield(L, -2, "routings");
+    lua_pushinteger(L, (lua_Integer)res.n_recorded), lua_setfield(L, -2, "recorded");
+    lua_pushnumber(L, res.dt_min), lua_setfield(L, -2, "dt_min");
+    lua_pushnumber(L, res.dt_max), lua_setfield(L, -2, "dt_max");
+    lua_pushstring(L, res.note), lua_setfield(L, -2, "note");
+    push_status(L, &res.last);
+    return 1;
+}
+
+static int l_run(lua_State *L) { return landscape_run(L, 0); }
+static int l_run_to_steady(lua_State *L) { return landscape_run(L, 1); }
+
+/* ls:write_geotiff(path [, fields]) : one band per field (default z). */
+static int l_write_geotiff(lua_State *L)
+{
+    lua_ls *u = check_ls(L, 1);
+    const char *path = dfle_lua_check_string(L, 2, "landscape:write_geotiff", "the path");
+    const size_t n = dfle_landscape_nx(u->ls) * dfle_landscape_ny(u->ls);
+    int fields[DFLE_LS_NFIELDS];
+    const double *bands[DFLE_LS_NFIELDS];
+    const char *names[DFLE_LS_NFIELDS];
+    size_t nf = 0;
+    dfle_raster_geo g;
+    dfle_error err;
+
+    lua_settop(L, 3);
+    if (lua_isnil(L, 3)) {
+        fields[nf++] = DFLE_LS_Z;
+    } else if (lua_type(L, 3) == LUA_TSTRING) {
+        fields[nf++] = field_id(L, 3, "landscape:write_geotiff");
+    } else {
+        luaL_checktype(L, 3, LUA_TTABLE);
+        for (size_t k = 1; k <= lua_rawlen(L, 3) && nf < DFLE_LS_NFIELDS; k++) {
+            lua_rawgeti(L, 3, (lua_Integer)k);
+            fields[nf++] = field_id(L, -1, "landscape:write_geotiff");
+            lua_pop(L, 1);
+        }
+        if (nf == 0)
+            luaL_error(L, "dfle.landscape:write_geotiff: no fields to write");
+    }
+    for (size_t k = 0; k < nf; k++) {
+        bands[k] = get_field(L, fields[k], "dfle.landscape:write_geotiff");
+        names[k] = dfle_landscape_field_name(fields[k]);
+    }
+    (void)n;
+    geo_of(u, &g);
+    if (dfle_raster_write_geotiff(path, dfle_landscape_nx(u->ls), dfle_landscape_ny(u->ls), &g,
+                                  nf, bands, names, &err) != DFLE_OK)
+        return dfle_lua_raise(L, &err);
+    lua_settop(L, 1);
+    return 1;
+}
+
+/* ls:plot(path [, { title =, channels = true, reach = true }]) */
+static int l_plot(lua_State *L)
+{
+    lua_ls *u = check_ls(L, 1);
+    const char *path = dfle_lua_check_string(L, 2, "landscape:plot", "the path");
+    static const char *const other[] = {"title", "channels", "reach", NULL};
+    dfle_plot_map m;
+    dfle_error err;
+    int channels = 1, reach = dfle_landscape_model(u->ls) != NULL;
+    char chlab[96];
+
+    lua_settop(L, 3);
+    dfle_lua_read_params(L, 3, "landscape:plot", NULL, 0, other);
+    memset(&m, 0, sizeof m);
+    if (lua_istable(L, 3)) {
+        if (lua_getfield(L, 3, "title") != LUA_TNIL)
+            m.title = dfle_lua_check_string(L, -1, "landscape:plot", "title");
+        if (lua_getfield(L, 3, "channels") != LUA_TNIL)
+            channels = lua_toboolean(L, -1);
+        if (lua_getfield(L, 3, "reach") != LUA_TNIL)
+            reach = lua_toboolean(L, -1) && dfle_landscape_model(u->ls) != NULL;
+    }
+    m.nx = dfle_landscape_nx(u->ls);
+    m.ny = dfle_landscape_ny(u->ls);
+    m.x0 = u->x0, m.y0 = u->y0;
+    m.dx = dfle_landscape_dx(u->ls), m.dy = dfle_landscape_dy(u->ls);
+    m.z = get_field(L, DFLE_LS_Z, "dfle.landscape:plot");
+    if (channels)
+        m.channel = get_field(L, DFLE_LS_CHANNEL, "dfle.landscape:plot");
+    if (reach)
+        m.reach = get_field(L, DFLE_LS_REACH, "dfle.landscape:plot");
+    snprintf(chlab, sizeof chlab, "Channel network (A ≥ A_0)");
+    m.channel_label = chlab;
+    if (dfle_plot_hillshade(path, &m, &err) != DFLE_OK)
+        return dfle_lua_raise(L, &err);
+    lua_settop(L, 1);
+    return 1;
+}
+
+/* ls:slope_area() -> {A, S} of the channel cells (slope to the receiver). */
+static int l_slope_area(lua_State *L)
+{
+    lua_ls *u = check_ls(L, 1);
+    const size_t n = dfle_landscape_nx(u->ls) * dfle_landscape_ny(u->ls);
+    const double *A = get_field(L, DFLE_LS_A, "dfle.landscape:slope_area");
+    const double *S = get_field(L, DFLE_LS_S, "dfle.landscape:slope_area");
+    const double *ch = get_field(L, DFLE_LS_CHANNEL, "dfle.landscape:slope_area");
+    const double *bl = get_field(L, DFLE_LS_BASE, "dfle.landscape:slope_area");
+    lua_Integer k = 0;
+    lua_createtable(L, 0, 2);
+    lua_newtable(L);
+    lua_newtable(L);
+    for (size_t c = 0; c < n; c++)
+        if (ch[c] > 0 && bl[c] == 0 && S[c] > 0) {
+            k++;
+            lua_pushnumber(L, A[c]), lua_rawseti(L, -3, k);
+            lua_pushnumber(L, S[c]), lua_rawseti(L, -2, k);
+        }
+    lua_setfield(L, -3, "S");
+    lua_setfield(L, -2, "A");
+    return 1;
+}
+
+/* ls:dem() -> a dfle.dem of the current surface (georeferenced). */
+static int l_dem(lua_State *L)
+{
+    lua_ls *u = check_ls(L, 1);
+    dfle_dem_geo g = {u->x0, u->y0, dfle_landscape_dx(u->ls), dfle_landscape_dy(u->ls)};
+    dfle_lua_object *d = dfle_lua_newobject(L, sizeof(dfle_lua_object), "dfle.dem", 0);
+    dfle_dem *dem;
+    dfle_error err;
+    if (dfle_dem_new(dfle_landscape_nx(u->ls), dfle_landscape_ny(u->ls), dfle_landscape_z(u->ls),
+                     &g, &dem, &err) != DFLE_OK)
+        return dfle_lua_raise(L, &err);
+    d->ptr = dem;
+    return 1;
+}
+
+static int l_property(lua_State *L)
+{
+    lua_ls *u = check_ls(L, 1);
+    const char *key = lua_tostring(L, 2);
+    dfle_landscape *ls = u->ls;
+    if (strcmp(key, "nx") == 0)
+        lua_pushinteger(L, (lua_Integer)dfle_landscape_nx(ls));
+    else if (strcmp(key, "ny") == 0)
+        lua_pushinteger(L, (lua_Integer)dfle_landscape_ny(ls));
+    else if (strcmp(key, "n") == 0)
+        lua_pushinteger(L, (lua_Integer)(dfle_landscape_nx(ls) * dfle_landscape_ny(ls)));
+    else if (strcmp(key, "dx") == 0)
+        lua_pushnumber(L, dfle_landscape_dx(ls));
+    else if (strcmp(key, "dy") == 0)
+        lua_pushnumber(L, dfle_landscape_dy(ls));
+    else if (strcmp(key, "time") == 0)
+        lua_pushnumber(L, dfle_landscape_time(ls));
+    else if (strcmp(key, "data_cells") == 0)
+        lua_pushinteger(L, (lua_Integer)dfle_landscape_data_cells(ls));
+    else if (strcmp(key, "memory") == 0)
+        lua_pushinteger(L, (lua_Integer)dfle_landscape_memory(ls));
+    else if (strcmp(key, "x0") == 0)
+        lua_pushnumber(L, u->x0);
+    else if (strcmp(key, "y0") == 0)
+        lua_pushnumber(L, u->y0);
+    else if (strcmp(key, "fluvial") == 0)
+        lua_getiuservalue(L, 1, UV_FLUVIAL);
+    else if (strcmp(key, "router") == 0)
+        lua_getiuservalue(L, 1, UV_ROUTER);
+    else if (strcmp(key, "law") == 0)
+        lua_getiuservalue(L, 1, UV_LAW);
+    else
+        lua_pushnil(L);
+    return 1;
+}
+
+static void describe(lua_State *L, void *obj)
+{
+    dfle_landscape *ls = obj;
+    char buf[200];
+    snprintf(buf, sizeof buf, "dfle.landscape(%zu x %zu cells of %g x %g m, %zu with data, t = %g "
+             "yr, debris flows %s)", dfle_landscape_nx(ls), dfle_landscape_ny(ls),
+             dfle_landscape_dx(ls), dfle_landscape_dy(ls), dfle_landscape_data_cells(ls),
+             dfle_landscape_time(ls), dfle_landscape_model(ls) != NULL ? "on" : "off");
+    lua_pushstring(L, buf);
+}
+
+static void ls_free(void *obj) { dfle_landscape_free(obj); }
+
+static void release(lua_State *L, int idx)
+{
+    lua_ls *u = lua_touserdata(L, idx);
+    for (int k = UV_FLUVIAL; k <= UV_LAW; k++) {
+        if (lua_getiuservalue(L, idx, k) == LUA_TUSERDATA)
+            dfle_lua_unhold(L, lua_gettop(L));
+        lua_pop(L, 1);
+    }
+    luaL_unref(L, LUA_REGISTRYINDEX, u->ref_combine);
+    for (int k = 0; k < F_COUNT; k++)
+        luaL_unref(L, LUA_REGISTRYINDEX, u->cb[k].ref);
+    u->ref_combine = LUA_NOREF;
+    for (int k = 0; k < F_COUNT; k++)
+        u->cb[k].ref = LUA_NOREF;
+    u->crs = NULL;
+}
+
+void dfle_lua_open_landscape(lua_State *L)
+{
+    static const luaL_Reg methods[] = {
+        {"run", l_run}, {"run_to_steady", l_run_to_steady}, {"step", l_step},
+        {"get", l_get}, {"fields", l_fields}, {"set_z", l_set_z},
+        {"write_geotiff", l_write_geotiff}, {"plot", l_plot}, {"slope_area", l_slope_area},
+        {"dem", l_dem}, {NULL, NULL}};
+    static const dfle_lua_type type = {
+        .name = DFLE_LUA_LANDSCAPE, .free = ls_free, .describe = describe, .methods = methods,
+        .property = l_property, .closable = 1, .release = release,
+    };
+    dfle_lua_register(L, &type);
+    lua_pushcfunction(L, l_landscape_new);
+    lua_setfield(L, -2, "landscape");
+}

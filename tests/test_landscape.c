@@ -1,0 +1,129 @@
+/*
+ * test_landscape.c - the C pieces of landscapes: outlets in the routing,
+ * the network's channel mask and the model's erodibility in space, the
+ * implicit step's stream-power solve (n = 1 and n != 1) against its own
+ * equation, and the NetCDF writer read back with the netCDF library.
+ */
+#include <stdlib.h>
+#include <string.h>
+#include <unistd.h>
+
+#include <netcdf.h>
+
+#include "dfle/drainage.h"
+#include "dfle/landscape.h"
+#include "dfle/raster.h"
+#include "dfle_test.h"
+
+/* A cell named an outlet drains off the grid wherever it is. */
+static void test_outlets(void **state)
+{
+    double z[9] = {5, 5, 5, 5, 1, 5, 5, 5, 5}; /* a pit in the middle */
+    dfle_drainage_opts o;
+    dfle_drainage *dr;
+    dfle_error err;
+    size_t mid = 4;
+    (void)state;
+    dfle_drainage_opts_default(&o);
+    o.nx = o.ny = 3;
+    for (int s = 0; s < 4; s++)
+        o.edge[s] = DFLE_DRAINAGE_CLOSED;
+    assert_ok(dfle_drainage_new(&o, &dr, &err), &err);
+    assert_ok(dfle_drainage_set_outlets(dr, &mid, 1, &err), &err);
+    assert_ok(dfle_drainage_route(dr, z, &err), &err);
+    assert_int_equal(dfle_drainage_dir(dr)[4], DFLE_DRAINAGE_DIR_OUT);
+    assert_close(dfle_drainage_area(dr)[4], 9.0, 0, 0);
+    mid = 9;
+    assert_int_equal(dfle_drainage_set_outlets(dr, &mid, 1, &err), DFLE_EINVAL);
+    dfle_drainage_free(dr);
+}
+
+/* Implicit steps satisfy z' - z = dt (U - K A^m S'^n) at every cell. */
+static void check_step(double n_exp)
+{
+    enum { NX = 12, NY = 10 };
+    double z[NX * NY], z0[NX * NY], Ef[NX * NY], base[NX * NY];
+    dfle_fluvial *fl;
+    dfle_landscape *ls;
+    dfle_landscape_opts o;
+    dfle_landscape_status st;
+    dfle_error err;
+    for (int i = 0; i < NX * NY; i++)
+        z[i] = 10.0 * (i / NX) + 0.37 * (i % 7);
+    assert_ok(dfle_fluvial_new_stream_power(3e-5, 0.5, n_exp, &fl, &err), &err);
+    dfle_landscape_opts_default(&o);
+    o.nx = NX, o.ny = NY, o.dx = o.dy = 30;
+    o.z = z;
+    o.A0 = 0;
+    o.fluvial = fl;
+    o.U.value = 1e-3;
+    assert_ok(dfle_landscape_new(&o, &ls, &err), &err);
+    for (int k = 0; k < 5; k++)
+        assert_ok(dfle_landscape_step(ls, 2e3, 1e-3, &st, &err), &err);
+    memcpy(z0, dfle_landscape_z(ls), sizeof z0);
+    assert_ok(dfle_landscape_step(ls, 50, 1e-3, &st, &err), &err);
+    assert_ok(dfle_landscape_get(ls, DFLE_LS_E_F, Ef, &err), &err);
+    assert_ok(dfle_landscape_get(ls, DFLE_LS_BASE, base, &err), &err);
+    if (st.rcv_changes == 0)
+        for (int i = 0; i < NX * NY; i++)
+            if (base[i] == 0)
+                assert_close(dfle_landscape_z(ls)[i] - z0[i], 50 * (1e-3 - Ef[i]), 1e-8, 1e-12);
+    assert_close(st.dV, st.V_uplift - st.V_fluvial - st.V_df - st.V_hillslope, 1e-9, 1e-6);
+    assert_true(dfle_landscape_memory(ls) / (NX * NY) < 400);
+    dfle_landscape_free(ls);
+    dfle_fluvial_free(fl);
+}
+
+static void test_step_n1(void **state) { (void)state; check_step(1.0); }
+static void test_step_n233(void **state) { (void)state; check_step(2.33); }
+static void test_step_n07(void **state) { (void)state; check_step(0.7); }
+
+/* The NetCDF writer: dims, coordinates, values, read back. */
+static void test_netcdf(void **state)
+{
+    char path[] = "/tmp/dfle-test-nc-XXXXXX";
+    double v[6] = {1, 2, 3, 4, NAN, 6}, w[6], x[3], t;
+    const double *vals[1] = {v};
+    dfle_nc_var var = {"z", "m", "elevation"};
+    dfle_raster_geo g = {100, 2000, 10, 20, NULL};
+    dfle_nc *nc;
+    dfle_error err;
+    int fd = mkstemp(path), id, vid;
+    size_t len, start[3] = {1, 0, 0}, count[3] = {1, 2, 3};
+    (void)state;
+    assert_true(fd >= 0);
+    assert_ok(dfle_nc_create(path, 3, 2, &g, 1, &var, "test", &nc, &err), &err);
+    assert_ok(dfle_nc_append(nc, 0.0, vals, &err), &err);
+    v[0] = 7;
+    assert_ok(dfle_nc_append(nc, 500.0, vals, &err), &err);
+    assert_ok(dfle_nc_close(nc, &err), &err);
+    assert_int_equal(nc_open(path, NC_NOWRITE, &id), NC_NOERR);
+    assert_int_equal(nc_inq_dimid(id, "time", &vid), NC_NOERR);
+    assert_int_equal(nc_inq_dimlen(id, vid, &len), NC_NOERR);
+    assert_int_equal(len, 2);
+    assert_int_equal(nc_inq_varid(id, "x", &vid), NC_NOERR);
+    assert_int_equal(nc_get_var_double(id, vid, x), NC_NOERR);
+    assert_close(x[0], 105, 0, 0);
+    assert_close(x[2], 125, 0, 0);
+    assert_int_equal(nc_inq_varid(id, "time", &vid), NC_NOERR);
+    assert_int_equal(nc_get_var1_double(id, vid, &start[0], &t), NC_NOERR);
+    assert_close(t, 500, 0, 0);
+    assert_int_equal(nc_inq_varid(id, "z", &vid), NC_NOERR);
+    assert_int_equal(nc_get_vara_double(id, vid, start, count, w), NC_NOERR);
+    assert_close(w[0], 7, 0, 0);
+    assert_close(w[5], 6, 0, 0);
+    assert_true(isnan(w[4]));
+    nc_close(id);
+    close(fd);
+    unlink(path);
+}
+
+int main(void)
+{
+    const struct CMUnitTest tests[] = {
+        cmocka_unit_test(test_outlets),  cmocka_unit_test(test_step_n1),
+        cmocka_unit_test(test_step_n233), cmocka_unit_test(test_step_n07),
+        cmocka_unit_test(test_netcdf),
+    };
+    return cmocka_run_group_tests(tests, NULL, NULL);
+}
