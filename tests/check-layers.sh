@@ -23,7 +23,7 @@ header_layer() {
     lua.h) echo lua ;; fluvial.h | law*.h) echo laws ;; model.h) echo model ;;
     solver.h) echo solvers ;; dem.h) echo dem ;; landscape.h) echo landscape ;;
     analysis.h | analytical.h | sampling.h | sensitivity.h) echo analysis ;;
-    csv.h | ensemble.h | plot.h | raster.h) echo io ;; *) echo unknown ;;
+    csv.h | ensemble.h | plot.h | raster.h | netcdf.h) echo io ;; *) echo unknown ;;
     esac
 }
 

@@ -423,4 +423,19 @@ tests["errors name the parameter and the calling line"] = function()
     T.raises_here(function() dfle.gather{ out = "x.csv" } end, "either 'files'")
 end
 
+tests["ens:write_netcdf: the rows, the design and units as a NetCDF table"] = function()
+    local dir = scratch()
+    local ens = dfle.ensemble{
+        params = { k_df = {5e-5, 1e-3, log = true}, U = {1e-4, 1e-3} },
+        n = 4, seed = 3, out = dir .. "/e.csv", workers = 1, build = small_build,
+        outputs = { "S_df", "A_df" } }
+    T.ok(rawequal(ens:write_netcdf(dir .. "/e.nc"), ens))
+    local s = assert(T.read_file(dir .. "/e.nc"))
+    T.eq(s:sub(1, 4), "CDF\2")
+    T.has(s, "sample", "k_df", "S_df", "status", "reason", "dfle_design",
+          "dfle.ensemble v1 n=4 seed=3", "m/yr", "m2")
+    T.raises_here(function() return ens:write_netcdf() end, "string expected")
+    T.raises_here(function() return ens:write_netcdf(dir .. "/no/such/dir.nc") end, "no/such/dir.nc")
+end
+
 return tests

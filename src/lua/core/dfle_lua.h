@@ -149,6 +149,10 @@ void dfle_lua_read_params(lua_State *L, int idx, const char *fn,
  * mistake (dfle/plausible.h).  dfle_lua_read_params calls it for every
  * value it reads. */
 void dfle_lua_warn_implausible(lua_State *L, const char *fn, const char *name, double v);
+/* Push and return the provenance line of files dfle writes: the UTC
+ * time and the command (the global `arg`: program, options, script and
+ * its arguments), e.g. "2026-12-01T19:50:00Z: dfle -j 2 run.lua --quick". */
+const char *dfle_lua_push_history(lua_State *L);
 /* A warning "file:line: dfle.<fn>: <msg>" through lua_warning. */
 void dfle_lua_warn(lua_State *L, const char *fn, const char *msg);
 

@@ -8,6 +8,7 @@
 #include <math.h>
 #include <stdio.h>
 #include <string.h>
+#include <time.h>
 #include "dfle/plausible.h"
 
 /* Format the list of known keys into the message buffer for an
@@ -325,4 +326,45 @@ void dfle_lua_warn(lua_State *L, const char *fn, const char *msg)
     lua_pushfstring(L, "%sdfle.%s: %s", lua_tostring(L, -1), fn, msg);
     lua_warning(L, lua_tostring(L, -1), 0);
     lua_pop(L, 2);
+}
+
+const char *dfle_lua_push_history(lua_State *L)
+{
+    char when[32];
+    time_t now = time(NULL);
+    struct tm utc;
+    luaL_Buffer b;
+    lua_Integer lo = 0, hi;
+
+    if (gmtime_r(&now, &utc) == NULL || strftime(when, sizeof when, "%Y-%m-%dT%H:%M:%SZ", &utc) == 0)
+        snprintf(when, sizeof when, "(unknown time)");
+    int a;
+    lua_getglobal(L, "arg");
+    a = lua_gettop(L);
+    if (lua_istable(L, a)) {
+        while (lo > -64 && lua_rawgeti(L, a, lo - 1) == LUA_TSTRING) {
+            lua_pop(L, 1);
+            lo--;
+        }
+        lua_pop(L, 1);
+    }
+    luaL_buffinit(L, &b);
+    luaL_addstring(&b, when);
+    luaL_addstring(&b, ":");
+    if (lua_istable(L, a)) {
+        hi = (lua_Integer)lua_rawlen(L, a);
+        for (lua_Integer i = lo; i <= hi && i - lo < 256; i++) {
+            if (lua_rawgeti(L, a, i) == LUA_TSTRING) {
+                luaL_addchar(&b, ' ');
+                luaL_addvalue(&b);
+            } else {
+                lua_pop(L, 1);
+            }
+        }
+    } else {
+        luaL_addstring(&b, " dfle (embedded)");
+    }
+    luaL_pushresult(&b);
+    lua_remove(L, -2);
+    return lua_tostring(L, -1);
 }

@@ -382,6 +382,7 @@ void dfle_lua_open_ensemble(lua_State *L)
     if (luaL_newmetatable(L, RESULT_MT)) {
         lua_pushliteral(L, RESULT_MT);
         lua_setfield(L, -2, "__name");
+        dfle_lua_ens_result_methods(L); /* ens:write_netcdf */
     }
     lua_pop(L, 1);
     lua_pushcfunction(L, l_ensemble);

@@ -12,6 +12,7 @@
  * script may drop its own references to them.
  */
 #include "lua/core/dfle_lua.h"
+#include "dfle/netcdf.h"
 
 #include <stdio.h>
 #include <string.h>
@@ -251,6 +252,32 @@ static int lua_uplift(void *ud, double t, double *U, dfle_error *err)
 }
 
 /* Shared by run_to_steady and run: `steady` selects the defaults. */
+/* m:run{ record = {...}, netcdf = path }: the recorded states z(t, x) as
+ * a CF NetCDF file (netcdf.h), with the run's provenance. */
+static void write_records(lua_State *L, dfle_model *m, const char *path, const dfle_run_opts *o,
+                          const dfle_run_result *res)
+{
+    static const dfle_nc_var z_var = {"z", "m", "elevation above the outlet"};
+    const double *x, *A, *values[1];
+    dfle_nc_attr attrs[3];
+    dfle_error err;
+    if ((x = dfle_model_field(m, DFLE_FIELD_X, &err)) == NULL ||
+        (A = dfle_model_field(m, DFLE_FIELD_A, &err)) == NULL)
+        dfle_lua_raise(L, &err);
+    if (res->n_recorded == 0)
+        luaL_error(L, "dfle.model:run: no record time was reached; '%s' not written", path);
+    values[0] = o->record_z;
+    attrs[0] = (dfle_nc_attr){"title", "dfle: a channel profile's recorded states (m:run)"};
+    attrs[1] = (dfle_nc_attr){"history", dfle_lua_push_history(L)};
+    attrs[2] = (dfle_nc_attr){"U_m_per_yr", lua_pushfstring(L, "%f", dfle_model_U(m))};
+    if (dfle_nc_write_profiles(path, dfle_model_size(m), x, A, res->n_recorded, o->record_times,
+                               1, &z_var, values, 3, attrs, &err) != DFLE_OK)
+        dfle_lua_raise(L, &err);
+    lua_pop(L, 2);
+    dfle_lua_note(L, DFLE_LUA_DETAIL, "wrote %s (%zu states of %zu nodes)", path, res->n_recorded,
+                  dfle_model_size(m));
+}
+
 /* How a run ended, for its --verbose line. */
 static const char *outcome(int steady, int reason)
 {
@@ -277,7 +304,7 @@ static double clock_seconds(void)
 static int model_run(lua_State *L, int steady)
 {
     static const char *const steady_keys[] = {"progress", "method", NULL};
-    static const char *const run_keys[] = {"progress", "method", "record", NULL};
+    static const char *const run_keys[] = {"progress", "method", "record", "netcdf", NULL};
     static const char *const methods[] = {"explicit", "implicit", "direct", "auto", NULL};
     dfle_model *m = dfle_lua_check_model(L, 1);
     const char *fn = steady ? "model:run_to_steady" : "model:run";
@@ -286,6 +313,8 @@ static int model_run(lua_State *L, int steady)
     dfle_error err;
     double max_steps, years = -1;
     const dfle_lua_progress *prog = dfle_lua_get_progress(L);
+    const char *netcdf = NULL;
+    int keep;
     double wall;
     int st;
 
@@ -353,6 +382,17 @@ static int model_run(lua_State *L, int steady)
         o.record_times = times;
         o.record_z = lua_newuserdatauv(L, (k ? k : 1) * dfle_model_size(m) * sizeof(double), 0);
     }
+    keep = lua_gettop(L); /* the record arrays stay for the run */
+    if (lua_istable(L, 2) && lua_getfield(L, 2, "netcdf") != LUA_TNIL) {
+        if (lua_type(L, -1) != LUA_TSTRING)
+            luaL_error(L, "dfle.%s: parameter 'netcdf' must be a file name, got %s", fn,
+                       dfle_lua_typename(L, -1));
+        netcdf = dfle_lua_check_string(L, -1, fn, "netcdf"); /* the options table keeps it */
+        if (o.n_record == 0)
+            luaL_error(L, "dfle.model:run: 'netcdf' writes the recorded states: give 'record' "
+                          "times too");
+    }
+    lua_settop(L, keep);
     if (lua_istable(L, 2) && lua_getfield(L, 2, "progress") != LUA_TNIL) {
         if (!lua_isboolean(L, -1))
             luaL_error(L, "dfle.%s: parameter 'progress' must be a boolean", fn);
@@ -407,6 +447,8 @@ static int model_run(lua_State *L, int steady)
         }
         lua_setfield(L, -2, "records");
     }
+    if (netcdf != NULL)
+        write_records(L, m, netcdf, &o, &res);
     return 1;
 }
 
