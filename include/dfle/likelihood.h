@@ -30,7 +30,8 @@ extern "C" {
 
 /* Slopes S_q at areas A_q [m^2] of a profile of n nodes (A [m^2]
  * non-decreasing, S > 0 where used), interpolated linearly in
- * (ln A, ln S).  DFLE_EINVAL if an A_q lies outside [A[0], A[n-1]] or a
+ * (ln A, ln S).  DFLE_EINVAL if an A_q lies outside [A[0], A[n-1]]
+ * (beyond a relative 1e-9, rounding in a bin's mean area) or a
  * bracketing node's slope is not positive (the message says which). */
 int dfle_slope_at(size_t n, const double *A, const double *S, size_t nq, const double *A_q,
                   double *S_q, dfle_error *err);

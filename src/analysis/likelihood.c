@@ -20,6 +20,12 @@ int dfle_slope_at(size_t n, const double *A, const double *S, size_t nq, const d
     for (size_t q = 0; q < nq; q++) {
         double a = A_q[q], t, lo, hi;
         size_t i0 = 0, i1 = n - 1;
+        /* A bin's geometric-mean area, exp(mean ln A), can miss the end
+         * node's area by a rounding error: that is still the end. */
+        if (a < A[0] && a >= A[0] * (1 - 1e-9))
+            a = A[0];
+        if (a > A[n - 1] && a <= A[n - 1] * (1 + 1e-9))
+            a = A[n - 1];
         if (!(a >= A[0] && a <= A[n - 1]))
             return dfle_error_set(err, DFLE_EINVAL, "likelihood: data area %g m^2 lies outside "
                                   "the model channel's areas (%g .. %g m^2)", a, A[0], A[n - 1]);

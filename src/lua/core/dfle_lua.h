@@ -200,6 +200,7 @@ void dfle_lua_open_plot(lua_State *L);
 void dfle_lua_open_sampling(lua_State *L);
 void dfle_lua_open_dem(lua_State *L);
 void dfle_lua_open_ensemble(lua_State *L); /* after sampling: wraps dfle.pawn */
+void dfle_lua_open_invert(lua_State *L);   /* after plot: adds dfle.plot.corner, ... */
 void dfle_lua_open_trace_hook(lua_State *L); /* a test hook, in the registry */
 
 #endif
