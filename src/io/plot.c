@@ -418,6 +418,26 @@ void dfle_gp_log_axis(FILE *f, char c, double lo, double hi, int labels)
         fprintf(f, "set %ctics autofreq\n", c);
         return;
     }
+    if (span < 0.5) {
+        /* Under half a decade 1, 2, 5 x 10^n leave one tic or none: take
+         * 3 to 6 evenly spaced round values, 1, 2 or 5 times a power of 10. */
+        double v0 = pow(10, lo), v1 = pow(10, hi), raw = (v1 - v0) / 4;
+        double p10 = pow(10, floor(log10(raw))), step = raw / p10 < 1.5 ? p10
+                     : raw / p10 < 3.5 ? 2 * p10 : raw / p10 < 7.5 ? 5 * p10 : 10 * p10;
+        int dec = (int)floor(log10(v1)) - (int)floor(log10(step));
+        char fmt[32];
+        if (dec < 0)
+            dec = 0;
+        if (hi < -2 || lo >= 4)
+            snprintf(fmt, sizeof fmt, "%%.%dt×10^{%%T}", dec);
+        else
+            snprintf(fmt, sizeof fmt, "%%g");
+        fprintf(f, "set format %c '%s'\nset %ctics (", c, labels ? fmt : "", c);
+        for (double v = ceil(v0 / step) * step, k = 0; v <= v1 * (1 + 1e-12); v += step, k++)
+            fprintf(f, "%s%.17g", k > 0 ? ", " : "", v);
+        fputs(")\n", f);
+        return;
+    }
     const char *sep = "(";
     fprintf(f, "set %ctics ", c);
     for (double d = floor(lo); d <= ceil(hi); d++)

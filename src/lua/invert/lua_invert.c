@@ -245,11 +245,11 @@ static int start(lua_State *L, int ctx, inv_run *R, loop *lp, char *msg, size_t 
                 note(lp, lp->st[i], lp->msgs + i * INV_MSG);
                 R->init_failed++;
                 attempt[k]++;
-                idx[keep++] = k;
-                if (round == INIT_ROUNDS - 1)
+                if (round == INIT_ROUNDS - 1 && keep == 0) /* name the first */
                     snprintf(msg, msglen, "no starting point with a non-zero posterior for walker "
                              "%zu in %d draws from the prior; the last: %.*s", k + 1,
                              INIT_ROUNDS, INV_MSG, lp->msgs + i * INV_MSG);
+                idx[keep++] = k;
             }
         }
         npend = keep;
@@ -334,25 +334,56 @@ static void *loop_alloc(size_t n, size_t size, int *ok)
 
 /* Open the chain file: a longer chain in it is fine (its first steps
  * serve), so the file's own length sets how many rows it may hold. */
+/* The first setting in which two identity lines differ, as
+ * "seed=3 in the file, seed=4 here". */
+static void push_difference(lua_State *L, const char *file, const char *mine)
+{
+    const char *a = file, *b = mine;
+    while (*a != '\0' && *b != '\0') {
+        size_t la = strcspn(a, " "), lb = strcspn(b, " ");
+        if (la != lb || strncmp(a, b, la) != 0) {
+            lua_pushfstring(L, "%s in the file, %s here", lua_pushlstring(L, a, la),
+                            lua_pushlstring(L, b, lb));
+            lua_replace(L, -3);
+            lua_pop(L, 1);
+            return;
+        }
+        a += la + (a[la] == ' ');
+        b += lb + (b[lb] == ' ');
+    }
+    lua_pushliteral(L, "the file's first lines differ");
+}
+
+/* Open the chain file: a longer chain in it is fine (its first steps
+ * serve), so the file's own length sets how many rows it may hold. */
 static void open_chain(lua_State *L, int ctx, inv_run *R, const char *path)
 {
     size_t n = (R->steps + 1) * R->walkers;
     dfle_error err;
     char msg[DFLE_ERROR_MSG_MAX];
+    lua_getfield(L, ctx, "meta");
+    lua_getfield(L, ctx, "header");
     if (R->resume) {
         dfle_ens_table *t = NULL;
         FILE *f = fopen(path, "r");
         if (f != NULL) {
             fclose(f);
             if (dfle_ens_table_read(path, &t, &err) == DFLE_OK) {
+                int same = strcmp(t->meta, lua_tostring(L, -2)) == 0 &&
+                           strcmp(t->header, lua_tostring(L, -1)) == 0;
                 if (t->nrows > 0 && t->index[t->nrows - 1] > n)
                     n = t->index[t->nrows - 1];
+                if (!same) {
+                    push_difference(L, t->meta, lua_tostring(L, -2));
+                    dfle_ens_table_free(t);
+                    luaL_error(L, "dfle.invert: %s holds another inversion's chain (%s); remove "
+                                  "it, pass resume = false, or choose another 'out'", path,
+                               lua_tostring(L, -1));
+                }
                 dfle_ens_table_free(t);
             }
         }
     }
-    lua_getfield(L, ctx, "meta");
-    lua_getfield(L, ctx, "header");
     if (dfle_ens_file_open(path, lua_tostring(L, -2), lua_tostring(L, -1), n, R->resume,
                            &R->file, &err) != DFLE_OK)
         luaL_error(L, "dfle.invert: %s", err.msg);
@@ -443,7 +474,8 @@ static int l_invert(lua_State *L)
         if (rc == 0)
             rc = run_chain(L, ctx, R, &lp, msg, sizeof msg);
         dfle_lua_par_depth(L, -1);
-        inv_pool_stop(R);
+        if (inv_pool_stop(R, rc == 0 ? msg : NULL, sizeof msg) != 0)
+            rc = -1;
         {
             const dfle_lua_ensemble_host *h = host;
             if (h != NULL && h->progress_end != NULL && !R->nested)

@@ -116,7 +116,8 @@ int inv_pool_start(lua_State *L, inv_run *R, int nthreads, lua_Integer call, con
  * Returns 0, or -1 when a worker failed (message in msg). */
 int inv_pool_eval(lua_State *L, int ctx, inv_run *R, size_t n, const double *x, double *lp,
                   double *ll, unsigned char *st, char *msgs, char *msg, size_t msglen);
-void inv_pool_stop(inv_run *R);
+/* Stop and join the workers; -1 with msg if one of them failed. */
+int inv_pool_stop(inv_run *R, char *msg, size_t msglen);
 
 /* lua_invert_chain.c */
 /* Format the row of (step, walker) from the chain in R into R->row. */

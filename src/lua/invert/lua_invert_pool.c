@@ -190,17 +190,24 @@ int inv_pool_eval(lua_State *L, int ctx, inv_run *R, size_t n, const double *x, 
     return 0;
 }
 
-void inv_pool_stop(inv_run *R)
+int inv_pool_stop(inv_run *R, char *msg, size_t msglen)
 {
     inv_pool *pl = R->pool;
+    int rc;
     if (pl == NULL)
-        return;
+        return 0;
     pthread_mutex_lock(&pl->lock);
     pl->quit = 1;
     pthread_cond_broadcast(&pl->work);
     pthread_mutex_unlock(&pl->lock);
     for (int k = 0; k < pl->started; k++)
         pthread_join(pl->tid[k], NULL);
+    /* A worker that failed after the last batch (still replaying when
+     * the main thread finished) has broken the replay rule all the same:
+     * say so whatever the timing. */
+    rc = pl->error ? -1 : 0;
+    if (rc != 0 && msg != NULL)
+        snprintf(msg, msglen, "%s", pl->errmsg);
     R->fwd_seconds += pl->fwd;
     pthread_cond_destroy(&pl->work);
     pthread_cond_destroy(&pl->done_cv);
@@ -208,4 +215,5 @@ void inv_pool_stop(inv_run *R)
     free(pl->tid);
     free(pl);
     R->pool = NULL;
+    return rc;
 }

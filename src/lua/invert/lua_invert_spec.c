@@ -33,7 +33,7 @@ const char *const inv_status_name[INV_NSTATUS] = {
 static int box_gc(lua_State *L)
 {
     inv_run *R = luaL_checkudata(L, 1, INV_BOX);
-    inv_pool_stop(R);
+    inv_pool_stop(R, NULL, 0);
     dfle_ens_file_close(R->file, 0, NULL);
     dfle_mcmc_free(R->mc);
     free(R->prior);
