@@ -3,7 +3,8 @@
  *
  *   dfle.plot.slope_area(m, "slope_area.png" [, fit [, {title =, nbins =}]])
  *   dfle.plot.profile(m, "profile.png" [, {title =}])
- *   dfle.plot.xy{ path =, series = {{x =, y =, label =, lines =}, ...},
+ *   dfle.plot.xy{ path =, series = {{x =, y =, label =, lines =, lo =, hi =,
+ *                                     rgb =, dash =}, ...},
  *                 title =, xlabel =, ylabel =, logx =, logy = }
  */
 #include "lua/core/dfle_lua.h"
@@ -201,7 +202,8 @@ static int l_plot_xy(lua_State *L)
 {
     static const char *const keys[] = {"path", "series", "title", "xlabel", "ylabel",
                                        "logx", "logy", "clabel", "logc", NULL};
-    static const char *const series_keys[] = {"x", "y", "label", "lines", "color", NULL};
+    static const char *const series_keys[] = {"x", "y", "label", "lines", "color", "lo", "hi",
+                                              "rgb", "dash", NULL};
     dfle_plot_opts o;
     dfle_plot_series *series;
     const char *path;
@@ -242,11 +244,29 @@ static int l_plot_xy(lua_State *L)
         series[k].lines = opt_bool(L, s_idx, "lines", "plot.xy");
         lua_getfield(L, s_idx, "x");
         series[k].x = dfle_lua_check_array(L, -1, "plot.xy: series.x", &series[k].n);
-        lua_getfield(L, s_idx, "y");
-        series[k].y = dfle_lua_check_array(L, -1, "plot.xy: series.y", &ny);
-        if (ny != series[k].n)
-            luaL_error(L, "dfle.plot.xy: series[%d] has %d x but %d y values", (int)k + 1,
-                       (int)series[k].n, (int)ny);
+        series[k].lo = series[k].hi = NULL;
+        series[k].rgb = opt_string(L, s_idx, "rgb", "plot.xy");
+        series[k].dash = opt_bool(L, s_idx, "dash", "plot.xy");
+        if (lua_getfield(L, s_idx, "lo") != LUA_TNIL) {
+            /* a band between lo and hi: y is not needed */
+            size_t nl, nh;
+            series[k].lo = dfle_lua_check_array(L, -1, "plot.xy: series.lo", &nl);
+            lua_getfield(L, s_idx, "hi");
+            series[k].hi = dfle_lua_check_array(L, -1, "plot.xy: series.hi", &nh);
+            if (nl != series[k].n || nh != series[k].n)
+                luaL_error(L, "dfle.plot.xy: series[%d] has %d x but %d lo and %d hi values",
+                           (int)k + 1, (int)series[k].n, (int)nl, (int)nh);
+        }
+        if (series[k].lo == NULL || lua_getfield(L, s_idx, "y") != LUA_TNIL) {
+            if (series[k].lo == NULL)
+                lua_getfield(L, s_idx, "y");
+            series[k].y = dfle_lua_check_array(L, -1, "plot.xy: series.y", &ny);
+            if (ny != series[k].n)
+                luaL_error(L, "dfle.plot.xy: series[%d] has %d x but %d y values", (int)k + 1,
+                           (int)series[k].n, (int)ny);
+        } else {
+            series[k].y = NULL;
+        }
         series[k].c = NULL;
         if (lua_getfield(L, s_idx, "color") != LUA_TNIL) {
             size_t nc;
