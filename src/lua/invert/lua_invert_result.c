@@ -195,6 +195,11 @@ void inv_push_result(lua_State *L, int ctx, inv_run *R, int lsq_idx, double elap
             add_warning(L, warn, "the chain is too short to estimate the autocorrelation time "
                                  "(%zu steps after burn-in); the intervals are unreliable: run "
                                  "many more steps", npost);
+        else if ((double)npost < 50 * tau_max && npost < 100)
+            add_warning(L, warn, "the chain is too short: %zu steps after burn-in are fewer than "
+                                 "50 autocorrelation times (tau = %.1f steps, itself "
+                                 "underestimated on so short a chain); the intervals are rough: "
+                                 "run many more steps", npost, tau_max);
         else if ((double)npost < 50 * tau_max)
             add_warning(L, warn, "the chain is too short: %zu steps after burn-in are fewer than "
                                  "50 autocorrelation times (tau = %.1f steps); the intervals are "
@@ -454,6 +459,13 @@ static int l_tostring(lua_State *L)
         luaL_addvalue(&b);
     }
     luaL_pushresult(&b);
+    {
+        /* no final line break: print() adds one */
+        size_t len;
+        const char *text = lua_tolstring(L, -1, &len);
+        if (len > 0 && text[len - 1] == '\n')
+            lua_pushlstring(L, text, len - 1);
+    }
     return 1;
 }
 
