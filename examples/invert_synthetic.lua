@@ -67,7 +67,7 @@ local res = dfle.invert{
     k_df = { 5e-5, 1e-3, log = true },
     gamma = { 0, 1 },
   },
-  walkers = quick and 8 or 32, steps = quick and 60 or 2000, burn = quick and 20 or 500,
+  walkers = quick and 8 or 32, steps = quick and 60 or 3000, burn = quick and 20 or 500,
   seed = 1, out = outdir .. "/synthetic_chain.csv",
 }
 if dfle.worker() then return end

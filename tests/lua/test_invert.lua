@@ -350,6 +350,16 @@ tests["DEM profile: binned by nbins, the default channel on its main stem"] = fu
     local dem = dfle.dem.read(path)
     dem:fill()
     local net = dem:network{ A_min = 900, outlet = { 396887, 3799338 } }
+    -- the network's main stem is the profile traced from the same outlet
+    local stem, prof = net:main_stem(), dem:profile{ outlet = { 396887, 3799338 } }
+    T.eq(stem.kind, "profile")
+    T.eq(stem.n, prof.n)
+    local sa, pa, sx, px = stem:get("A"), prof:get("A"), stem:get("x"), prof:get("x")
+    for i = 1, prof.n do
+        T.eq(sa[i], pa[i])
+        T.close(sx[i], px[i], 1e-12, 1e-9)
+    end
+    T.eq(prof:main_stem().n, prof.n)
     local res = dfle.invert{
         data = net, nbins = 20, channel = { dx = 30 }, workers = 1, lsq = false,
         build = build, params = { U = { 1e-4, 1e-3, log = true } },

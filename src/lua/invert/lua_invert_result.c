@@ -15,11 +15,11 @@
 #include <stdlib.h>
 #include <string.h>
 
+#include <gsl/gsl_cdf.h>
+
 #include "lua/invert/lua_invert_internal.h"
 
-#include "dfle/likelihood.h"
 #include "dfle/mcmc_diag.h"
-#include "dfle/stream.h"
 
 static const char ctx_key = 'r'; /* registry: weak table result -> context */
 
@@ -257,7 +257,12 @@ void inv_push_result(lua_State *L, int ctx, inv_run *R, int lsq_idx, double elap
 }
 
 /* ------------------------------------------------------------------ */
-/* res:predict{ n = 100, A = {...} }                                    */
+/* res:predict{ n = 100, A = {...} }: the model's slopes at areas A for
+ * n draws spread evenly over the samples after burn-in, and their
+ * quantiles; obs_* add the noise of each draw's sigma (the band a new
+ * set of binned slopes would fall in). */
+
+enum { NOISE = 20 }; /* noise values per draw in the observation band */
 
 static int cmp_double(const void *a, const void *b)
 {
@@ -267,8 +272,8 @@ static int cmp_double(const void *a, const void *b)
 
 static int l_predict(lua_State *L)
 {
-    double nd = 100, seed = 1;
-    const dfle_lua_param nums[] = {{"n", &nd}, {"seed", &seed}};
+    double nd = 100;
+    const dfle_lua_param nums[] = {{"n", &nd}};
     static const char *const other[] = {"A", NULL};
     int ctx, out;
     inv_run *R;
@@ -277,7 +282,7 @@ static int l_predict(lua_State *L)
 
     lua_settop(L, 2);
     ctx = inv_result_ctx(L, 1);
-    dfle_lua_read_params(L, 2, "inversion:predict", nums, 2, other);
+    dfle_lua_read_params(L, 2, "inversion:predict", nums, 1, other);
     n = (size_t)dfle_lua_check_whole(L, nd, "inversion:predict", "n", 1, 100000);
     lua_getfield(L, ctx, "box");
     R = luaL_checkudata(L, -1, INV_BOX);
@@ -305,23 +310,24 @@ static int l_predict(lua_State *L)
     }
     if (n > npost)
         n = npost;
-    S = lua_newuserdatauv(L, (n * 5 + 1) * nA * sizeof *S, 0);
+    S = lua_newuserdatauv(L, (n * (NOISE + 1) + 1) * nA * sizeof *S, 0);
     noisy = S + n * nA;
-    row = noisy + 4 * n * nA;
-    col = lua_newuserdatauv(L, 4 * n * sizeof *col, 0);
+    row = noisy + NOISE * n * nA;
+    col = lua_newuserdatauv(L, NOISE * n * sizeof *col, 0);
     for (size_t i = 0; i < n; i++) {
         /* draws spread evenly over the samples after burn-in */
         size_t at = (R->burn + 1) * K + (size_t)(((double)i + 0.5) * (double)npost / (double)n);
         const double *x = R->X + at * d;
         double sigma = R->sigma_free ? x[d - 1] : R->sigma;
-        dfle_stream st;
         if (inv_predict_at(L, ctx, R, x, nA, A, row, NULL, 0) != INV_ACCEPTED)
             continue;
-        dfle_stream_init(&st, (uint64_t)seed, 1000003, i, 0);
+        /* The noise at the NOISE quantiles of N(0, 1), the same at every
+         * area: a smooth band, and no random numbers. */
         for (size_t q = 0; q < nA; q++) {
             S[ok * nA + q] = row[q];
-            for (int c = 0; c < 4; c++)
-                noisy[(4 * ok + (size_t)c) * nA + q] = row[q] * exp(sigma * dfle_stream_normal(&st));
+            for (int c = 0; c < NOISE; c++)
+                noisy[(NOISE * ok + (size_t)c) * nA + q] =
+                    row[q] * exp(sigma * gsl_cdf_ugaussian_Pinv((c + 0.5) / NOISE));
         }
         ok++;
     }
@@ -338,7 +344,7 @@ static int l_predict(lua_State *L)
         static const double ps[] = {0.5, 0.15865525393145707, 0.8413447460685429, 0.025, 0.975,
                                     0.15865525393145707, 0.8413447460685429, 0.025, 0.975};
         for (int k = 0; k < 9; k++) {
-            size_t m = k < 5 ? ok : 4 * ok;
+            size_t m = k < 5 ? ok : NOISE * ok;
             const double *src = k < 5 ? S : noisy;
             lua_createtable(L, (int)nA, 0);
             for (size_t q = 0; q < nA; q++) {
