@@ -135,6 +135,23 @@ static void density(size_t n, size_t d, const double *x, size_t a, size_t b, con
     }
 }
 
+/* Parameter j's axis label: the caller's, or "x_{j}". */
+static const char *axis_label(const dfle_corner_opts *o, size_t j, char *buf, size_t cap)
+{
+    if (o->labels != NULL && o->labels[j] != NULL)
+        return o->labels[j];
+    snprintf(buf, cap, "x_{%zu}", j + 1);
+    return buf;
+}
+
+/* "set xlabel ..." or "set ylabel ..." with an offset. */
+static void put_axis_label(FILE *f, char axis, const char *text, const char *offset)
+{
+    fprintf(f, "set %clabel ", axis);
+    dfle_gp_str(f, text);
+    fprintf(f, " offset %s\n", offset);
+}
+
 static void put_ticks(FILE *f, char axis, int lg, double lo, double hi, int labels)
 {
     if (lg) {
@@ -257,9 +274,9 @@ int dfle_plot_corner(const char *path, const dfle_corner_opts *opts, size_t d, s
     for (size_t i = 0; i < d; i++)         /* row, top to bottom */
         for (size_t j = 0; j <= i; j++) {  /* column */
             double L0 = left + (double)j * (w + gap), T0 = top - (double)i * (w + gap);
-            const char *lab_j = o->labels != NULL ? o->labels[j] : NULL;
-            const char *lab_i = o->labels != NULL ? o->labels[i] : NULL;
-            char lb[32];
+            char bj[32], bi[32];
+            const char *lab_j = axis_label(o, j, bj, sizeof bj);
+            const char *lab_i = axis_label(o, i, bi, sizeof bi);
             fprintf(r.f, "set lmargin at screen %.5f\nset rmargin at screen %.5f\n"
                     "set tmargin at screen %.5f\nset bmargin at screen %.5f\n", L0, L0 + w, T0,
                     T0 - w);
@@ -268,25 +285,17 @@ int dfle_plot_corner(const char *path, const dfle_corner_opts *opts, size_t d, s
             put_ticks(r.f, 'x', lg[j], lo[j], hi[j], i == d - 1);
             /* slanted: neighbouring panels' end labels would touch */
             fputs("set xtics rotate by 35 right offset 0.4,0.2\n", r.f);
-            if (i == d - 1) {
-                if (lab_j == NULL) {
-                    snprintf(lb, sizeof lb, "x_%zu", j + 1);
-                    lab_j = lb;
-                }
-                fputs("set xlabel ", r.f);
-                dfle_gp_str(r.f, lab_j);
-                fputs(" offset 0,-0.2\n", r.f);
-            }
+            if (i == d - 1)
+                put_axis_label(r.f, 'x', lab_j, "0,-0.2");
             if (i == j) {
                 dfle_summary s;
                 char txt[200], head[320];
                 dfle_summarize(x + j, n, d, &s, NULL);
                 fputs("unset logscale y\nset yrange [0:1.12]\nunset ytics\nunset mytics\n", r.f);
                 fmt_interval(txt, sizeof txt, s.median, s.lo68, s.hi68);
-                snprintf(head, sizeof head, "%s = %s",
-                         o->labels != NULL ? o->labels[j] : "", txt);
+                snprintf(head, sizeof head, "%s = %s", lab_j, txt);
                 fputs("set label 1 ", r.f);
-                dfle_gp_str(r.f, o->labels != NULL ? head : txt);
+                dfle_gp_str(r.f, head);
                 fputs(" at graph 0.5, graph 1.1 center font ',10'\n", r.f);
                 fprintf(r.f, "set arrow 1 from %.10g, graph 0 to %.10g, graph 1 nohead lc rgb "
                         "'#1f3b73' lw 1.6 front\n", s.median, s.median);
@@ -302,15 +311,8 @@ int dfle_plot_corner(const char *path, const dfle_corner_opts *opts, size_t d, s
                         "'#0a4a78'\n", j, j);
             } else {
                 put_ticks(r.f, 'y', lg[i], lo[i], hi[i], j == 0);
-                if (j == 0) {
-                    if (lab_i == NULL) {
-                        snprintf(lb, sizeof lb, "x_%zu", i + 1);
-                        lab_i = lb;
-                    }
-                    fputs("set ylabel ", r.f);
-                    dfle_gp_str(r.f, lab_i);
-                    fputs(" offset 0.6,0\n", r.f);
-                }
+                if (j == 0)
+                    put_axis_label(r.f, 'y', lab_i, "0.6,0");
                 if (o->truth != NULL && isfinite(o->truth[j]))
                     fprintf(r.f, "set arrow 4 from %.10g, graph 0 to %.10g, graph 1 nohead lc "
                             "rgb '#d01c1c' lw 1.4 front\n", o->truth[j], o->truth[j]);

@@ -12,19 +12,7 @@ local tests = {}
 
 local q = T.shquote
 
-local function scratch()
-    local h = io.popen("mktemp -d")
-    local dir = h:read("l")
-    h:close()
-    return dir, function() os.execute("rm -rf " .. q(dir)) end
-end
-
-local function sh(cmd)
-    local h = io.popen(cmd .. " 2>&1")
-    local out = h:read("a")
-    local ok, _, code = h:close()
-    return out, ok, code
-end
+local scratch, sh = T.scratch, T.sh
 
 -- The synthetic problem: the empirical model on the paper's channel
 -- (dx = 20 m), data = its binned slopes times log-normal noise drawn

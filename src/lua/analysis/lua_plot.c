@@ -18,20 +18,6 @@
 
 #define DEFAULT_NBINS 100
 
-static const char *opt_string(lua_State *L, int idx, const char *key, const char *fn)
-{
-    const char *s = NULL;
-    if (lua_istable(L, idx)) {
-        int t = lua_getfield(L, idx, key);
-        if (t != LUA_TNIL && t != LUA_TSTRING)
-            luaL_error(L, "dfle.%s: parameter '%s' must be a string, got %s", fn, key,
-                       luaL_typename(L, -1));
-        s = lua_tostring(L, -1); /* stays valid: the table holds it */
-        lua_pop(L, 1);
-    }
-    return s;
-}
-
 static int opt_bool(lua_State *L, int idx, const char *key, const char *fn)
 {
     int v = 0;
@@ -81,7 +67,7 @@ static int l_plot_slope_area(lua_State *L)
     lua_settop(L, 4); /* scratch arrays go above the arguments */
     path = luaL_checkstring(L, 2);
     check_opts(L, 4, "plot.slope_area", params, 1);
-    title = opt_string(L, 4, "title", "plot.slope_area");
+    title = dfle_lua_opt_string(L, 4, "title", "plot.slope_area");
     dfle_lua_check_whole(L, nbins, "plot.slope_area", "nbins", 1, 1e6);
     memset(&fit, 0, sizeof fit);
     if (lua_istable(L, 3)) {
@@ -120,7 +106,7 @@ static int l_plot_profile(lua_State *L)
     dfle_error err;
 
     check_opts(L, 3, "plot.profile", NULL, 0);
-    title = opt_string(L, 3, "title", "plot.profile");
+    title = dfle_lua_opt_string(L, 3, "title", "plot.profile");
     if ((x = dfle_model_field(m, DFLE_FIELD_X, &err)) == NULL ||
         (z = dfle_model_field(m, DFLE_FIELD_Z, &err)) == NULL ||
         (S = dfle_model_field(m, DFLE_FIELD_S, &err)) == NULL)
@@ -162,7 +148,7 @@ static int l_plot_flow(lua_State *L)
     series = lua_newuserdatauv(L, (ns + 1) * sizeof *series, 0);
     labels = lua_newuserdatauv(L, (ns + 1) * 48, 0);
     memset(&o, 0, sizeof o);
-    o.title = opt_string(L, 4, "title", "plot.flow");
+    o.title = dfle_lua_opt_string(L, 4, "title", "plot.flow");
     o.xlabel = "Distance from channel head, x (m)";
     o.ylabel = "Elevation (m)";
     series[k++] = (dfle_plot_series){.label = "bed", .n = n, .x = x, .y = z, .lines = 1};
@@ -213,16 +199,16 @@ static int l_plot_xy(lua_State *L)
 
     luaL_checktype(L, 1, LUA_TTABLE);
     dfle_lua_read_params(L, 1, "plot.xy", NULL, 0, keys);
-    path = opt_string(L, 1, "path", "plot.xy");
+    path = dfle_lua_opt_string(L, 1, "path", "plot.xy");
     if (path == NULL)
         luaL_error(L, "dfle.plot.xy: parameter 'path' is required");
     memset(&o, 0, sizeof o);
-    o.title = opt_string(L, 1, "title", "plot.xy");
-    o.xlabel = opt_string(L, 1, "xlabel", "plot.xy");
-    o.ylabel = opt_string(L, 1, "ylabel", "plot.xy");
+    o.title = dfle_lua_opt_string(L, 1, "title", "plot.xy");
+    o.xlabel = dfle_lua_opt_string(L, 1, "xlabel", "plot.xy");
+    o.ylabel = dfle_lua_opt_string(L, 1, "ylabel", "plot.xy");
     o.logx = opt_bool(L, 1, "logx", "plot.xy");
     o.logy = opt_bool(L, 1, "logy", "plot.xy");
-    o.clabel = opt_string(L, 1, "clabel", "plot.xy");
+    o.clabel = dfle_lua_opt_string(L, 1, "clabel", "plot.xy");
     o.logc = opt_bool(L, 1, "logc", "plot.xy");
     if (lua_getfield(L, 1, "series") != LUA_TTABLE)
         luaL_error(L, "dfle.plot.xy: parameter 'series' must be an array of {x =, y =}");
@@ -240,12 +226,12 @@ static int l_plot_xy(lua_State *L)
         if (!lua_istable(L, s_idx))
             luaL_error(L, "dfle.plot.xy: series[%d] must be a table", (int)k + 1);
         dfle_lua_read_params(L, s_idx, "plot.xy series", NULL, 0, series_keys);
-        series[k].label = opt_string(L, s_idx, "label", "plot.xy");
+        series[k].label = dfle_lua_opt_string(L, s_idx, "label", "plot.xy");
         series[k].lines = opt_bool(L, s_idx, "lines", "plot.xy");
         lua_getfield(L, s_idx, "x");
         series[k].x = dfle_lua_check_array(L, -1, "plot.xy: series.x", &series[k].n);
         series[k].lo = series[k].hi = NULL;
-        series[k].rgb = opt_string(L, s_idx, "rgb", "plot.xy");
+        series[k].rgb = dfle_lua_opt_string(L, s_idx, "rgb", "plot.xy");
         series[k].dash = opt_bool(L, s_idx, "dash", "plot.xy");
         if (lua_getfield(L, s_idx, "lo") != LUA_TNIL) {
             /* a band between lo and hi: y is not needed */

@@ -201,15 +201,21 @@ static void run_job(lua_State *L, int ctx, job *jb)
     lua_gc(L, LUA_GCSTEP, 0);
 }
 
+/* A job of `mode` at x, run in L; the job is left for the caller. */
+static void run(lua_State *L, int ctx, inv_run *R, const double *x, int mode, job *jb)
+{
+    memset(jb, 0, sizeof *jb);
+    jb->R = R;
+    jb->x = x;
+    jb->mode = mode;
+    run_job(L, ctx, jb);
+}
+
 int inv_eval(lua_State *L, int ctx, inv_run *R, const double *x, double *lp, double *ll,
              double *fwd, char *msg, size_t msglen)
 {
     job jb;
-    memset(&jb, 0, sizeof jb);
-    jb.R = R;
-    jb.x = x;
-    jb.mode = MODE_POSTERIOR;
-    run_job(L, ctx, &jb);
+    run(L, ctx, R, x, MODE_POSTERIOR, &jb);
     *lp = jb.lp;
     *ll = jb.ll;
     *fwd += jb.fwd;
@@ -222,11 +228,7 @@ int inv_residuals(lua_State *L, int ctx, inv_run *R, const double *x, double *fw
                   dfle_error *err)
 {
     job jb;
-    memset(&jb, 0, sizeof jb);
-    jb.R = R;
-    jb.x = x;
-    jb.mode = MODE_RESIDUALS;
-    run_job(L, ctx, &jb);
+    run(L, ctx, R, x, MODE_RESIDUALS, &jb);
     *fwd += jb.fwd;
     if (jb.status != INV_ACCEPTED)
         return dfle_error_set(err, DFLE_EFIT, "%s", jb.msg);

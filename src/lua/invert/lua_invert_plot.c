@@ -18,18 +18,19 @@
 
 #include "dfle/plot.h"
 
-static const char *opt_str(lua_State *L, int opts, const char *key, const char *fn)
+/* The arguments (res, path [, opts]) of both figures: the result's
+ * context index; *path the image. */
+static int plot_args(lua_State *L, const char *fn, const dfle_lua_param *nums, size_t nnums,
+                     const char *const *keys, const char **path)
 {
-    const char *s = NULL;
-    if (lua_istable(L, opts)) {
-        int t = lua_getfield(L, opts, key);
-        if (t != LUA_TNIL && t != LUA_TSTRING)
-            luaL_error(L, "dfle.%s: parameter '%s' must be a string, got %s", fn, key,
-                       luaL_typename(L, -1));
-        s = lua_tostring(L, -1); /* held by the options table */
-        lua_pop(L, 1);
-    }
-    return s;
+    int ctx;
+    lua_settop(L, 3);
+    ctx = inv_result_ctx(L, 1);
+    *path = luaL_checkstring(L, 2);
+    if (!lua_isnil(L, 3) && !lua_istable(L, 3))
+        luaL_argerror(L, 3, "expected a table of options");
+    dfle_lua_read_params(L, 3, fn, nums, nnums, keys);
+    return ctx;
 }
 
 /* dfle.plot.corner(res, path [, opts]) */
@@ -46,12 +47,7 @@ static int l_corner(lua_State *L)
     dfle_corner_opts o;
     dfle_error err;
 
-    lua_settop(L, 3);
-    ctx = inv_result_ctx(L, 1);
-    path = luaL_checkstring(L, 2);
-    if (!lua_isnil(L, 3) && !lua_istable(L, 3))
-        luaL_argerror(L, 3, "expected a table of options");
-    dfle_lua_read_params(L, 3, "plot.corner", nums, 2, keys);
+    ctx = plot_args(L, "plot.corner", nums, 2, keys, &path);
     lua_getfield(L, ctx, "box");
     R = luaL_checkudata(L, -1, INV_BOX);
     lua_pop(L, 1);
@@ -133,7 +129,7 @@ static int l_corner(lua_State *L)
         lua_pop(L, 1);
     }
     memset(&o, 0, sizeof o);
-    o.title = opt_str(L, 3, "title", "plot.corner");
+    o.title = dfle_lua_opt_string(L, 3, "title", "plot.corner");
     o.labels = labels;
     o.logaxis = logs;
     o.truth = truth;
@@ -170,12 +166,7 @@ static int l_predictive(lua_State *L)
     static const char *const fields[] = {"A", "median", "lo68", "hi68", "lo95", "hi95",
                                          "obs_lo95", "obs_hi95"};
 
-    lua_settop(L, 3);
-    ctx = inv_result_ctx(L, 1);
-    path = luaL_checkstring(L, 2);
-    if (!lua_isnil(L, 3) && !lua_istable(L, 3))
-        luaL_argerror(L, 3, "expected a table of options");
-    dfle_lua_read_params(L, 3, "plot.posterior_predictive", nums, 1, keys);
+    ctx = plot_args(L, "plot.posterior_predictive", nums, 1, keys, &path);
     if (lua_istable(L, 3) && lua_getfield(L, 3, "raw") != LUA_TNIL)
         raw = lua_toboolean(L, -1);
     lua_settop(L, 4);
@@ -232,7 +223,7 @@ static int l_predictive(lua_State *L)
                                      .rgb = "#000000"};
     }
     memset(&o, 0, sizeof o);
-    o.title = opt_str(L, 3, "title", "plot.posterior_predictive");
+    o.title = dfle_lua_opt_string(L, 3, "title", "plot.posterior_predictive");
     o.xlabel = "Drainage area, {/:Italic A} (m^2)";
     o.ylabel = "Slope, {/:Italic S}";
     o.logx = o.logy = 1;

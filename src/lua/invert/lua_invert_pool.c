@@ -157,19 +157,10 @@ int inv_pool_eval(lua_State *L, int ctx, inv_run *R, size_t n, const double *x, 
     pl->next = 0;
     pl->n = n;
     pthread_cond_broadcast(&pl->work);
-    while (pl->next < pl->n && !pl->error) {
-        size_t i = pl->next++;
-        pthread_mutex_unlock(&pl->lock);
-        st[i] = (unsigned char)inv_eval(L, ctx, R, x + i * R->d, &lp[i], &ll[i], &R->fwd_seconds,
-                                        msgs + i * INV_MSG, INV_MSG);
-        pthread_mutex_lock(&pl->lock);
-        pl->ndone++;
-    }
-    /* Items taken by workers are always finished: evaluations never raise. */
-    while (pl->ndone < pl->n && !pl->error)
-        pthread_cond_wait(&pl->done_cv, &pl->lock);
-    while (pl->ndone < pl->n && pl->next < pl->n) {
-        /* a worker failed: finish here what nobody took */
+    /* The main thread takes items too, until none is left; items taken
+     * by workers are always finished (evaluations never raise), and a
+     * worker that failed takes none, so waiting for them ends. */
+    while (pl->next < pl->n) {
         size_t i = pl->next++;
         pthread_mutex_unlock(&pl->lock);
         st[i] = (unsigned char)inv_eval(L, ctx, R, x + i * R->d, &lp[i], &ll[i], &R->fwd_seconds,

@@ -360,28 +360,19 @@ static int l_predict(lua_State *L)
     return 1;
 }
 
-/* tostring(res): the summary a user reads first.  Lines go into a table
- * joined at the end: a luaL_Buffer cannot have other values above it. */
-static void add_line(lua_State *L, int parts, const char *s)
-{
-    lua_pushstring(L, s);
-    lua_rawseti(L, parts, (lua_Integer)lua_rawlen(L, parts) + 1);
-}
-
+/* tostring(res): the summary a user reads first. */
 static int l_tostring(lua_State *L)
 {
     char line[800];
     lua_Integer nn;
-    int parts;
-    luaL_Buffer b;
+    dfle_lua_text parts;
     luaL_checktype(L, 1, LUA_TTABLE);
     lua_settop(L, 1);
     lua_getfield(L, 1, "names");    /* 2 */
     lua_getfield(L, 1, "summary");  /* 3 */
     lua_getfield(L, 1, "tau");      /* 4 */
     lua_getfield(L, 1, "lsq");      /* 5 */
-    lua_newtable(L);                /* 6 */
-    parts = 6;
+    dfle_lua_text_init(L, &parts);  /* 6 */
     nn = lua_istable(L, 2) ? (lua_Integer)lua_rawlen(L, 2) : 0;
     lua_getfield(L, 1, "walkers");
     lua_getfield(L, 1, "steps");
@@ -391,11 +382,11 @@ static int l_tostring(lua_State *L)
              "%.3f\n", (int)lua_tointeger(L, -4), (int)lua_tointeger(L, -3),
              (int)lua_tointeger(L, -2), lua_tonumber(L, -1));
     lua_pop(L, 4);
-    add_line(L, parts, line);
+    dfle_lua_text_str(L, &parts, line);
     if (lua_istable(L, 3) && lua_istable(L, 4)) {
         snprintf(line, sizeof line, "  %-10s %12s %27s %27s %8s\n", "parameter", "median",
                  "68 % interval", "95 % interval", "tau");
-        add_line(L, parts, line);
+        dfle_lua_text_str(L, &parts, line);
         for (lua_Integer j = 1; j <= nn; j++) {
             static const char *const keys[5] = {"median", "lo68", "hi68", "lo95", "hi95"};
             double v[5], t;
@@ -414,13 +405,13 @@ static int l_tostring(lua_State *L)
             snprintf(line, sizeof line, "  %-10s %12.4g   [%11.4g, %11.4g]   [%11.4g, %11.4g] "
                      "%8.1f\n", name ? name : "?", v[0], v[1], v[2], v[3], v[4], t);
             lua_pop(L, 2);
-            add_line(L, parts, line);
+            dfle_lua_text_str(L, &parts, line);
         }
     }
     if (lua_istable(L, 5)) {
         lua_getfield(L, 5, "values");
         if (lua_istable(L, -1)) {
-            add_line(L, parts, "  least squares:");
+            dfle_lua_text_str(L, &parts, "  least squares:");
             for (lua_Integer j = 1; j <= nn; j++) {
                 lua_geti(L, 2, j);
                 lua_getfield(L, -2, lua_tostring(L, -1));
@@ -428,25 +419,25 @@ static int l_tostring(lua_State *L)
                     snprintf(line, sizeof line, " %s = %.4g", lua_tostring(L, -2),
                              lua_tonumber(L, -1));
                     lua_pop(L, 2);
-                    add_line(L, parts, line);
+                    dfle_lua_text_str(L, &parts, line);
                 } else {
                     lua_pop(L, 2);
                 }
             }
-            add_line(L, parts, "\n");
+            dfle_lua_text_str(L, &parts, "\n");
         }
         lua_pop(L, 1);
     }
     lua_getfield(L, 1, "failures");
     if (lua_istable(L, -1)) {
-        add_line(L, parts, "  proposals:");
+        dfle_lua_text_str(L, &parts, "  proposals:");
         for (int k = INV_OUTSIDE; k < INV_NSTATUS; k++) {
             lua_getfield(L, -1, inv_status_name[k]);
             snprintf(line, sizeof line, " %s %d", inv_status_name[k], (int)lua_tointeger(L, -1));
             lua_pop(L, 1);
-            add_line(L, parts, line);
+            dfle_lua_text_str(L, &parts, line);
         }
-        add_line(L, parts, "\n");
+        dfle_lua_text_str(L, &parts, "\n");
     }
     lua_pop(L, 1);
     lua_getfield(L, 1, "warnings");
@@ -455,16 +446,10 @@ static int l_tostring(lua_State *L)
         lua_geti(L, -1, k);
         snprintf(line, sizeof line, "  warning: %s\n", lua_tostring(L, -1) ? lua_tostring(L, -1) : "?");
         lua_pop(L, 1);
-        add_line(L, parts, line);
+        dfle_lua_text_str(L, &parts, line);
     }
     lua_pop(L, 1);
-    lua_settop(L, parts);
-    luaL_buffinit(L, &b);
-    for (lua_Integer k = 1, np = (lua_Integer)lua_rawlen(L, parts); k <= np; k++) {
-        lua_rawgeti(L, parts, k);
-        luaL_addvalue(&b);
-    }
-    luaL_pushresult(&b);
+    dfle_lua_text_finish(L, &parts);
     {
         /* no final line break: print() adds one */
         size_t len;

@@ -71,38 +71,7 @@ static void *box_alloc(lua_State *L, size_t n, size_t size)
 }
 
 /* ------------------------------------------------------------------ */
-/* Text pieces joined at the end (a luaL_Buffer cannot have other       */
-/* values pushed above it).                                            */
-
-typedef struct text {
-    int t;
-    lua_Integer k;
-} text;
-
-static void text_init(lua_State *L, text *p)
-{
-    lua_newtable(L);
-    p->t = lua_gettop(L);
-    p->k = 0;
-}
-static void text_add(lua_State *L, text *p) { lua_rawseti(L, p->t, ++p->k); } /* pops */
-static void text_str(lua_State *L, text *p, const char *s)
-{
-    lua_pushstring(L, s);
-    text_add(L, p);
-}
-static void text_finish(lua_State *L, text *p)
-{
-    luaL_Buffer b;
-    lua_settop(L, p->t);
-    luaL_buffinit(L, &b);
-    for (lua_Integer k = 1; k <= p->k; k++) {
-        lua_rawgeti(L, p->t, k);
-        luaL_addvalue(&b);
-    }
-    luaL_pushresult(&b);
-    lua_replace(L, p->t);
-}
+/* The identity line's pieces.                                        */
 
 /* FNV-1a, 64 bits: a fingerprint of data in the identity line. */
 static uint64_t fnv(uint64_t h, const void *p, size_t n)
@@ -116,22 +85,22 @@ static uint64_t fnv(uint64_t h, const void *p, size_t n)
 }
 #define FNV0 0xcbf29ce484222325ULL
 
-static void text_hex(lua_State *L, text *p, uint64_t h)
+static void text_hex(lua_State *L, dfle_lua_text *p, uint64_t h)
 {
     char buf[24];
     snprintf(buf, sizeof buf, "%016llx", (unsigned long long)h);
-    text_str(L, p, buf);
+    dfle_lua_text_str(L, p, buf);
 }
 
 /* A value as text for the identity line: numbers with 17 digits, other
  * text without line breaks. */
-static void text_value(lua_State *L, text *p, int idx)
+static void text_value(lua_State *L, dfle_lua_text *p, int idx)
 {
     char buf[40];
     idx = lua_absindex(L, idx);
     if (lua_type(L, idx) == LUA_TNUMBER && !lua_isinteger(L, idx)) {
         snprintf(buf, sizeof buf, "%.17g", lua_tonumber(L, idx));
-        text_str(L, p, buf);
+        dfle_lua_text_str(L, p, buf);
     } else {
         const char *s = luaL_tolstring(L, idx, NULL);
         luaL_Buffer b;
@@ -140,7 +109,7 @@ static void text_value(lua_State *L, text *p, int idx)
             luaL_addchar(&b, (*s == '\n' || *s == '\r' || *s == ' ') ? '_' : *s);
         luaL_pushresult(&b);
         lua_remove(L, -2);
-        text_add(L, p);
+        dfle_lua_text_add(L, p);
     }
 }
 
@@ -421,7 +390,7 @@ static int cmp_str(const void *a, const void *b)
 
 static void push_meta(lua_State *L, int ctx, inv_run *R)
 {
-    text t;
+    dfle_lua_text t;
     char buf[512];
     uint64_t h = FNV0;
     int names, fixed;
@@ -430,24 +399,24 @@ static void push_meta(lua_State *L, int ctx, inv_run *R)
     names = lua_gettop(L);
     lua_getfield(L, ctx, "fixed");
     fixed = lua_gettop(L);
-    text_init(L, &t);
+    dfle_lua_text_init(L, &t);
     snprintf(buf, sizeof buf, "# dfle.invert v1 seed=%llu walkers=%zu a=%.17g params=",
              (unsigned long long)R->seed, R->walkers, R->a);
-    text_str(L, &t, buf);
+    dfle_lua_text_str(L, &t, buf);
     for (size_t j = 0; j < R->d; j++) {
         if (j > 0)
-            text_str(L, &t, ";");
+            dfle_lua_text_str(L, &t, ";");
         lua_geti(L, names, (lua_Integer)j + 1);
-        text_add(L, &t);
-        text_str(L, &t, ":");
+        dfle_lua_text_add(L, &t);
+        dfle_lua_text_str(L, &t, ":");
         dfle_prior_describe(&R->prior[j], buf, sizeof buf);
-        text_str(L, &t, buf);
+        dfle_lua_text_str(L, &t, buf);
     }
     if (!R->sigma_free) {
         snprintf(buf, sizeof buf, " sigma=%.17g", R->sigma);
-        text_str(L, &t, buf);
+        dfle_lua_text_str(L, &t, buf);
     }
-    text_str(L, &t, " fixed=");
+    dfle_lua_text_str(L, &t, " fixed=");
     {
         /* sorted keys: a table has no order */
         size_t nk = 0, k = 0;
@@ -466,34 +435,34 @@ static void push_meta(lua_State *L, int ctx, inv_run *R)
         qsort(keys, nk, sizeof *keys, cmp_str);
         for (k = 0; k < nk; k++) {
             if (k > 0)
-                text_str(L, &t, ",");
-            text_str(L, &t, keys[k]);
-            text_str(L, &t, ":");
+                dfle_lua_text_str(L, &t, ",");
+            dfle_lua_text_str(L, &t, keys[k]);
+            dfle_lua_text_str(L, &t, ":");
             lua_getfield(L, fixed, keys[k]);
             text_value(L, &t, -1);
             lua_pop(L, 1);
         }
         lua_pop(L, 1);
     }
-    text_str(L, &t, " data=");
+    dfle_lua_text_str(L, &t, " data=");
     snprintf(buf, sizeof buf, "%zu:", R->nobs);
-    text_str(L, &t, buf);
+    dfle_lua_text_str(L, &t, buf);
     h = fnv(h, R->A_obs, R->nobs * sizeof *R->A_obs);
     h = fnv(h, R->lnS_obs, R->nobs * sizeof *R->lnS_obs);
     text_hex(L, &t, h);
-    text_str(L, &t, " channel=");
+    dfle_lua_text_str(L, &t, " channel=");
     if (lua_getfield(L, ctx, "channel") == LUA_TNIL) {
         lua_pop(L, 1);
-        text_str(L, &t, "none");
+        dfle_lua_text_str(L, &t, "none");
     } else {
         const dfle_channel *ch = dfle_lua_check_channel(L, -1);
         lua_pop(L, 1);
         snprintf(buf, sizeof buf, "%zu:", dfle_channel_size(ch));
-        text_str(L, &t, buf);
+        dfle_lua_text_str(L, &t, buf);
         text_hex(L, &t, fnv(fnv(FNV0, dfle_channel_A(ch), dfle_channel_size(ch) * sizeof(double)),
                             dfle_channel_w(ch), dfle_channel_size(ch) * sizeof(double)));
     }
-    text_str(L, &t, " run=");
+    dfle_lua_text_str(L, &t, " run=");
     {
         int run;
         lua_getfield(L, ctx, "run");
@@ -503,16 +472,16 @@ static void push_meta(lua_State *L, int ctx, inv_run *R)
                                          NULL};
         for (int k = 0; ro[k] != NULL; k++) {
             if (lua_getfield(L, run, ro[k]) != LUA_TNIL) {
-                text_str(L, &t, ro[k]);
-                text_str(L, &t, ":");
+                dfle_lua_text_str(L, &t, ro[k]);
+                dfle_lua_text_str(L, &t, ":");
                 text_value(L, &t, -1);
-                text_str(L, &t, ",");
+                dfle_lua_text_str(L, &t, ",");
             }
             lua_pop(L, 1);
         }
         lua_pop(L, 1);
     }
-    text_str(L, &t, " build=");
+    dfle_lua_text_str(L, &t, " build=");
     /* The build function's byte code (stripped: comments and line numbers
      * do not count); its upvalues' values are not seen. */
     lua_getglobal(L, "string");
@@ -527,30 +496,30 @@ static void push_meta(lua_State *L, int ctx, inv_run *R)
             text_hex(L, &t, hb);
         } else {
             lua_pop(L, 2);
-            text_str(L, &t, "C");
+            dfle_lua_text_str(L, &t, "C");
         }
     } else {
         lua_pop(L, 2);
-        text_str(L, &t, "?");
+        dfle_lua_text_str(L, &t, "?");
     }
-    text_finish(L, &t);
+    dfle_lua_text_finish(L, &t);
     lua_setfield(L, ctx, "meta");
     lua_settop(L, names - 1);
 }
 
 static void push_header(lua_State *L, int ctx, inv_run *R)
 {
-    text t;
+    dfle_lua_text t;
     lua_getfield(L, ctx, "names");
-    text_init(L, &t);
-    text_str(L, &t, "index,step,walker");
+    dfle_lua_text_init(L, &t);
+    dfle_lua_text_str(L, &t, "index,step,walker");
     for (size_t j = 0; j < R->d; j++) {
-        text_str(L, &t, ",");
+        dfle_lua_text_str(L, &t, ",");
         lua_geti(L, t.t - 1, (lua_Integer)j + 1);
-        text_add(L, &t);
+        dfle_lua_text_add(L, &t);
     }
-    text_str(L, &t, ",log_post,log_like,proposal");
-    text_finish(L, &t);
+    dfle_lua_text_str(L, &t, ",log_post,log_like,proposal");
+    dfle_lua_text_finish(L, &t);
     lua_setfield(L, ctx, "header");
     lua_pop(L, 1);
 }
