@@ -160,10 +160,10 @@ if not quick then
   local lab_in, lab_out = "95 % interval holds the truth", "95 % interval misses it"
   for _, r in ipairs(ok) do
     local t, inside = d.U[r], d.U_in_2[r] == 1
+    local label -- one legend entry per kind
+    if inside then label, lab_in = lab_in, nil else label, lab_out = lab_out, nil end
     series[#series + 1] = { x = { t, t }, y = { d.U_lo_2[r], d.U_hi_2[r] }, lines = true,
-                            rgb = inside and "#6baed6" or "#d01c1c",
-                            label = inside and lab_in or lab_out }
-    if inside then lab_in = nil else lab_out = nil end
+                            rgb = inside and "#6baed6" or "#d01c1c", label = label }
     mx[#mx + 1], my[#my + 1] = t, d.U_med_2[r]
   end
   series[#series + 1] = { x = mx, y = my, rgb = "#08306b", label = "posterior median" }
