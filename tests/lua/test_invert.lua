@@ -132,6 +132,10 @@ tests["chain file: rows, extension, a cut last line, another inversion refused"]
     -- resume = false starts afresh
     T.eq(invert{ steps = 100, out = cut, lsq = false, resume = false }.ran, 100)
     T.eq(T.read_file(cut), text)
+    -- a file that is no chain is refused
+    T.write_file(dir .. "/junk.csv", "some,thing\n1,2\n")
+    T.errors_with(function() invert{ steps = 100, out = dir .. "/junk.csv", lsq = false } end,
+                  "junk.csv is not a chain of dfle.invert")
     -- another inversion's file is refused, naming it
     T.errors_with(function() invert{ steps = 100, out = cut, lsq = false, seed = 4 } end,
                   "dfle.invert: " .. cut .. " holds another inversion's chain (seed=3 in the " ..

@@ -20,6 +20,7 @@
 #include <stdio.h>
 #include <stdlib.h>
 #include <string.h>
+#include <sys/stat.h>
 
 #include "lua/invert/lua_invert_internal.h"
 
@@ -365,22 +366,24 @@ static void open_chain(lua_State *L, int ctx, inv_run *R, const char *path)
     lua_getfield(L, ctx, "header");
     if (R->resume) {
         dfle_ens_table *t = NULL;
-        FILE *f = fopen(path, "r");
-        if (f != NULL) {
-            fclose(f);
-            if (dfle_ens_table_read(path, &t, &err) == DFLE_OK) {
-                int same = strcmp(t->meta, lua_tostring(L, -2)) == 0 &&
-                           strcmp(t->header, lua_tostring(L, -1)) == 0;
-                if (t->nrows > 0 && t->index[t->nrows - 1] > n)
-                    n = t->index[t->nrows - 1];
-                if (!same) {
-                    push_difference(L, t->meta, lua_tostring(L, -2));
-                    dfle_ens_table_free(t);
-                    luaL_error(L, "dfle.invert: %s holds another inversion's chain (%s); remove "
-                                  "it, pass resume = false, or choose another 'out'", path,
-                               lua_tostring(L, -1));
-                }
-                dfle_ens_table_free(t);
+        struct stat sb;
+        if (stat(path, &sb) == 0 && S_ISREG(sb.st_mode) && sb.st_size > 0) {
+            int same;
+            if (dfle_ens_table_read(path, &t, &err) != DFLE_OK)
+                luaL_error(L, "dfle.invert: %s is not a chain of dfle.invert (%s); remove it, pass "
+                              "resume = false, or choose another 'out'", path, err.msg);
+            same = strcmp(t->meta, lua_tostring(L, -2)) == 0 &&
+                   strcmp(t->header, lua_tostring(L, -1)) == 0;
+            if (t->nrows > 0 && t->index[t->nrows - 1] > n)
+                n = t->index[t->nrows - 1];
+            if (!same)
+                lua_pushstring(L, t->meta);
+            dfle_ens_table_free(t);
+            if (!same) {
+                push_difference(L, lua_tostring(L, -1), lua_tostring(L, -3));
+                luaL_error(L, "dfle.invert: %s holds another inversion's chain (%s); remove it, "
+                              "pass resume = false, or choose another 'out'", path,
+                           lua_tostring(L, -1));
             }
         }
     }
