@@ -23,7 +23,7 @@
 -- fixing it bought.  Writes, per run (black, blue, black_ke),
 -- fig1_invert_<run>_chain.csv (resumable), fig1_invert_<run>_corner.png
 -- and fig1_invert_<run>_pp.png, and fig1_invert.csv (the posterior
--- summaries).  The full run takes 10-15 minutes on two cores.  --quick (the test
+-- summaries).  The full run takes 10-20 minutes on two cores.  --quick (the test
 -- suite) runs a very short chain on a coarse channel and skips the
 -- figures.  The DEM is found relative to this script
 -- (../../shared/data/dem/) or in $DFLE_DATA_DIR/dem; without it the
@@ -86,7 +86,7 @@ for _, run in ipairs(runs) do
     data = net, nbins = 30,
     channel = { dx = quick and 60 or 10 }, -- the main stem's A(x)
     build = build, params = params, fixed = not run.free_ke and { k_e = 5e-14 } or nil,
-    walkers = quick and 10 or 32, steps = quick and 12 or 5000, burn = quick and 4 or 1500,
+    walkers = quick and 10 or 32, steps = quick and 12 or 8000, burn = quick and 4 or 2000,
     seed = 1, lsq = not quick,
     out = ("%s/fig1_invert_%s_chain.csv"):format(outdir, run.tag),
   }

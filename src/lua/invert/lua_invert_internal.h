@@ -78,7 +78,7 @@ typedef struct inv_run {
     inv_pool *pool;
     char *row;               /* one formatted row                       */
     size_t rowcap;
-    double fwd_seconds;      /* forward-model time, all evaluators      */
+    double fwd_seconds;      /* forward-model CPU time, all evaluators  */
     size_t evaluations;      /* forward runs by this call               */
     size_t init_failed;      /* starting draws without a density        */
 } inv_run;
@@ -96,7 +96,7 @@ void inv_push_box(lua_State *L); /* a new, empty run box */
 /* lua_invert_eval.c: the log posterior of x (d values) in L with the
  * context at ctx; never raises.  *lp is -inf for every failure, whose
  * status is returned with a message in msg (may be NULL).  *fwd adds the
- * forward model's wall time [s]. */
+ * forward model's CPU time [s]. */
 int inv_eval(lua_State *L, int ctx, inv_run *R, const double *x, double *lp, double *ll,
              double *fwd, char *msg, size_t msglen);
 /* Residuals at x (the model parameters, natural units) into R->r;
