@@ -188,16 +188,17 @@ static int image_complete(const char *path, int fmt)
 {
     static const unsigned char iend[12] = {0, 0, 0, 0, 'I', 'E', 'N', 'D',
                                            0xAE, 0x42, 0x60, 0x82};
-    unsigned char tail[64];
+    unsigned char tail[65]; /* 64 bytes and a NUL, for strspn */
     struct stat sb;
     size_t want;
     int fd = open(path, O_RDONLY), ok = 0;
     if (fd < 0)
         return 0;
     if (fstat(fd, &sb) == 0 && S_ISREG(sb.st_mode) && sb.st_size > 0) {
-        want = (size_t)sb.st_size < sizeof tail ? (size_t)sb.st_size : sizeof tail;
+        want = (size_t)sb.st_size < sizeof tail - 1 ? (size_t)sb.st_size : sizeof tail - 1;
         if (lseek(fd, sb.st_size - (off_t)want, SEEK_SET) >= 0 &&
             read(fd, tail, want) == (ssize_t)want) {
+            tail[want] = '\0';
             if (fmt == FMT_PNG)
                 ok = want >= 12 && memcmp(tail + want - 12, iend, 12) == 0;
             else /* the tag, then at most white space */
