@@ -2,10 +2,13 @@
  * lua_invert_internal.h - what the files of dfle.invert share (not
  * installed):
  *
- *   lua_invert.c         the entry point: spec, point estimate, sampling
- *                        loop, chain file, result
+ *   lua_invert.c         the entry point: spec, chain file, point
+ *                        estimate, sampling, result
  *   lua_invert_spec.c    the table checked into a problem (priors, data,
  *                        channel) and its identity line
+ *   lua_invert_data.c    the data binned into areas and log slopes
+ *   lua_invert_lsq.c     the least-squares point estimate
+ *   lua_invert_loop.c    the sampling loop
  *   lua_invert_eval.c    one log-posterior evaluation in one Lua state
  *   lua_invert_pool.c    worker threads evaluating batches of proposals
  *   lua_invert_chain.c   chain rows: formatting, and reading back to resume
@@ -26,6 +29,7 @@
 
 #include "lua/core/dfle_lua.h"
 #include "lua/ensemble/lua_ensemble_internal.h"
+#include "dfle/csv.h"
 #include "dfle/ensemble.h"
 #include "dfle/mcmc.h"
 #include "dfle/prior.h"
@@ -76,6 +80,8 @@ typedef struct inv_run {
     size_t done;             /* steps complete in X (0 = only the start) */
     size_t have;             /* steps + 1 held in X (a file may hold more)*/
     inv_pool *pool;
+    dfle_csv *csv;           /* data file being read                    */
+    dfle_ens_table *table;   /* chain file being checked                */
     char *row;               /* one formatted row                       */
     size_t rowcap;
     double fwd_seconds;      /* forward-model CPU time, all evaluators  */
@@ -107,6 +113,23 @@ int inv_residuals(lua_State *L, int ctx, inv_run *R, const double *x, double *fw
  * (for predictions); status as inv_eval. */
 int inv_predict_at(lua_State *L, int ctx, inv_run *R, const double *x, size_t n,
                    const double *Aq, double *Sq, char *msg, size_t msglen);
+
+/* lua_invert_data.c: data = profile | file | {A =, S =} of the table at
+ * arg into R->A_obs, lnS_obs; pushes the data table of the result ({A,
+ * S, count, raw, kind}, A and S set later).  Returns 1 for DEM data. */
+int inv_read_data(lua_State *L, int arg, inv_run *R, size_t nbins, int nbins_given);
+/* Leave out the bins outside the channel's areas; how many. */
+size_t inv_clip_to_channel(inv_run *R, const dfle_channel *ch);
+
+/* lua_invert_lsq.c: push res.lsq (never raises on a failed fit). */
+void inv_push_lsq(lua_State *L, int ctx, inv_run *R);
+
+/* lua_invert_loop.c: run the chain from R->have to R->steps on nw
+ * evaluators (the main thread and nw - 1 workers replaying to the
+ * call-th dfle.invert); sets ctx.failure_messages.  0, or -1 with msg
+ * (the workers are stopped either way). */
+int inv_sample(lua_State *L, int ctx, inv_run *R, int nw, lua_Integer call, char *msg,
+               size_t msglen);
 
 /* lua_invert_pool.c */
 int inv_pool_start(lua_State *L, inv_run *R, int nthreads, lua_Integer call, const char *meta,

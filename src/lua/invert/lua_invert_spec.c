@@ -17,8 +17,6 @@
 
 #include "lua/invert/lua_invert_internal.h"
 
-#include "dfle/analysis.h"
-#include "dfle/csv.h"
 
 #define DEFAULT_NBINS 30
 #define DEFAULT_STEPS 2000
@@ -35,6 +33,8 @@ static int box_gc(lua_State *L)
     inv_run *R = luaL_checkudata(L, 1, INV_BOX);
     inv_pool_stop(R, NULL, 0);
     dfle_ens_file_close(R->file, 0, NULL);
+    dfle_ens_table_free(R->table);
+    dfle_csv_free(R->csv);
     dfle_mcmc_free(R->mc);
     free(R->prior);
     free(R->logs);
@@ -219,165 +219,6 @@ static void read_prior(lua_State *L, int sp, const char *name, int density_tab, 
     }
     if (dfle_prior_check(p, name, &err) != DFLE_OK)
         luaL_error(L, "dfle.invert: parameter %s", err.msg);
-}
-
-/* ------------------------------------------------------------------ */
-/* Data.                                                               */
-
-static void set_obs(lua_State *L, inv_run *R, size_t n)
-{
-    R->nobs = n;
-    R->A_obs = box_alloc(L, n, sizeof *R->A_obs);
-    R->lnS_obs = box_alloc(L, n, sizeof *R->lnS_obs);
-    R->r = box_alloc(L, n, sizeof *R->r);
-}
-
-/* Binned pairs given as they are (a table or a file): every area and
- * slope must be positive and finite.  `where` names a pair in errors. */
-static void take_binned(lua_State *L, inv_run *R, size_t n, const double *A, const double *S,
-                        const char *source, const size_t *line)
-{
-    set_obs(L, R, n);
-    for (size_t i = 0; i < n; i++) {
-        if (!(isfinite(A[i]) && A[i] > 0 && isfinite(S[i]) && S[i] > 0)) {
-            if (line != NULL)
-                luaL_error(L, "dfle.invert: %s:%d: A = %s, S = %s; binned data need finite A > 0 "
-                              "and S > 0 (a log-slope likelihood)", source, (int)line[i],
-                           dfle_lua_number_text(L, A[i]), dfle_lua_number_text(L, S[i]));
-            luaL_error(L, "dfle.invert: data pair %d: A = %s, S = %s; binned data need finite "
-                          "A > 0 and S > 0 (a log-slope likelihood)", (int)i + 1,
-                       dfle_lua_number_text(L, A[i]), dfle_lua_number_text(L, S[i]));
-        }
-        R->A_obs[i] = A[i];
-        R->lnS_obs[i] = log(S[i]);
-    }
-}
-
-/* data = profile | file | {A =, S =}; pushes the data table of the
- * result ({A, S, count, raw, kind}).  Returns 1 for DEM data. */
-static int read_data(lua_State *L, int arg, inv_run *R, size_t nbins, int nbins_given)
-{
-    int data, dem = 0, out;
-    lua_getfield(L, arg, "data");
-    data = lua_gettop(L);
-    lua_newtable(L);
-    out = lua_gettop(L);
-    if (luaL_testudata(L, data, "dfle.profile") != NULL) {
-        const double *A, *S;
-        size_t n, k = 0;
-        dfle_bins b;
-        dfle_error err;
-        dem = 1;
-        lua_getfield(L, data, "kind");
-        lua_setfield(L, out, "kind");
-        n = dfle_lua_slope_area(L, data, "invert", &A, &S);
-        lua_getfield(L, data, "slope_area");
-        lua_pushvalue(L, data);
-        lua_call(L, 1, 1);
-        lua_setfield(L, out, "raw");
-        memset(&b, 0, sizeof b);
-        if (dfle_bins_compute(n, A, S, nbins, &b, &err) != DFLE_OK)
-            luaL_error(L, "dfle.invert: data: %s", err.msg);
-        /* Bins whose mean slope is not positive have no logarithm (flats on
-         * a filled DEM); they are left out, as the Eq. (2) fit leaves them. */
-        for (size_t i = 0; i < b.n; i++)
-            k += b.S_mean[i] > 0;
-        R->nobs = k;
-        R->A_obs = calloc(k ? k : 1, sizeof *R->A_obs);
-        R->lnS_obs = calloc(k ? k : 1, sizeof *R->lnS_obs);
-        R->r = calloc(k ? k : 1, sizeof *R->r);
-        if (R->A_obs == NULL || R->lnS_obs == NULL || R->r == NULL) {
-            dfle_bins_release(&b);
-            luaL_error(L, "dfle.invert: out of memory");
-        }
-        lua_createtable(L, (int)k, 0);
-        for (size_t i = 0, j = 0; i < b.n; i++)
-            if (b.S_mean[i] > 0) {
-                R->A_obs[j] = b.A[i];
-                R->lnS_obs[j] = log(b.S_mean[i]);
-                lua_pushinteger(L, (lua_Integer)b.count[i]);
-                lua_rawseti(L, -2, (lua_Integer)++j);
-            }
-        lua_setfield(L, out, "count");
-        lua_pushinteger(L, (lua_Integer)(b.n - k)), lua_setfield(L, out, "nonpositive");
-        dfle_bins_release(&b);
-    } else if (lua_type(L, data) == LUA_TSTRING) {
-        const char *path = lua_tostring(L, data);
-        const double *A, *S;
-        dfle_csv **csv;
-        dfle_error err;
-        int st;
-        if (nbins_given)
-            luaL_error(L, "dfle.invert: 'nbins' bins DEM data; binned data from a file are used "
-                          "as given");
-        /* the table lives in a userdata so that an error frees it */
-        csv = lua_newuserdatauv(L, sizeof *csv, 0);
-        *csv = NULL;
-        st = dfle_csv_read(path, csv, &err);
-        if (st == DFLE_OK)
-            st = dfle_csv_column(*csv, "A", &A, &err);
-        if (st == DFLE_OK)
-            st = dfle_csv_column(*csv, "S", &S, &err);
-        if (st != DFLE_OK) {
-            dfle_csv_free(*csv);
-            *csv = NULL;
-            luaL_error(L, "dfle.invert: data: %s", err.msg);
-        }
-        lua_pushliteral(L, "file");
-        lua_setfield(L, out, "kind");
-        if ((*csv)->nrows < 1) {
-            dfle_csv_free(*csv);
-            luaL_error(L, "dfle.invert: data: %s has no rows", path);
-        }
-        /* take_binned raises on a bad row: copy what it needs first */
-        {
-            size_t n = (*csv)->nrows;
-            double *a = lua_newuserdatauv(L, 2 * n * sizeof *a, 0), *s = a + n;
-            size_t *line = lua_newuserdatauv(L, n * sizeof *line, 0);
-            memcpy(a, A, n * sizeof *a);
-            memcpy(s, S, n * sizeof *s);
-            memcpy(line, (*csv)->line, n * sizeof *line);
-            dfle_csv_free(*csv);
-            *csv = NULL;
-            take_binned(L, R, n, a, s, path, line);
-        }
-    } else if (lua_istable(L, data)) {
-        const double *A, *S;
-        size_t n;
-        if (nbins_given)
-            luaL_error(L, "dfle.invert: 'nbins' bins DEM data; binned data {A =, S =} are used "
-                          "as given");
-        n = dfle_lua_slope_area(L, data, "invert: data", &A, &S);
-        lua_pushliteral(L, "table");
-        lua_setfield(L, out, "kind");
-        take_binned(L, R, n, A, S, NULL, NULL);
-    } else {
-        luaL_error(L, "dfle.invert: parameter 'data' must be a DEM profile or network "
-                      "(dem:profile, dem:network), a CSV file of binned data (columns A, S) or "
-                      "a table {A = {...}, S = {...}} of binned data, got %s",
-                   dfle_lua_typename(L, data));
-    }
-    lua_settop(L, out);
-    lua_remove(L, data);
-    return dem;
-}
-
-/* Leave out the bins outside the channel's areas: the model says nothing
- * there (within the rounding dfle_slope_at forgives).  Returns how many
- * were dropped. */
-static size_t clip_to_channel(inv_run *R, const dfle_channel *ch)
-{
-    const double *A = dfle_channel_A(ch);
-    size_t n = dfle_channel_size(ch), k = 0;
-    for (size_t i = 0; i < R->nobs; i++)
-        if (R->A_obs[i] >= A[0] * (1 - 1e-9) && R->A_obs[i] <= A[n - 1] * (1 + 1e-9)) {
-            R->A_obs[k] = R->A_obs[i];
-            R->lnS_obs[k] = R->lnS_obs[i];
-            k++;
-        }
-    n = R->nobs - k;
-    R->nobs = k;
-    return n;
 }
 
 /* ------------------------------------------------------------------ */
@@ -678,7 +519,7 @@ void inv_read_spec(lua_State *L, int arg, inv_run **box)
         given = !lua_isnil(L, -1);
         lua_pop(L, 1);
         dfle_lua_check_whole(L, nbins, "invert", "nbins", 2, 1e6);
-        dem = read_data(L, arg, R, (size_t)nbins, given);
+        dem = inv_read_data(L, arg, R, (size_t)nbins, given);
     }
     {
         int data = lua_gettop(L), t = lua_getfield(L, arg, "channel");
@@ -716,7 +557,7 @@ void inv_read_spec(lua_State *L, int arg, inv_run **box)
                        dfle_lua_typename(L, -1));
         }
         if (!lua_isnil(L, -1))
-            dropped = clip_to_channel(R, dfle_lua_check_channel(L, -1));
+            dropped = inv_clip_to_channel(R, dfle_lua_check_channel(L, -1));
         lua_setfield(L, ctx, "channel");
         lua_pushinteger(L, (lua_Integer)dropped);
         lua_setfield(L, data, "outside");
