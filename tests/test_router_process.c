@@ -212,6 +212,7 @@ static void routing_work_is_bounded(void **state)
     assert_int_equal(dfle_router_route(rt, ch, S, &flow, &err), DFLE_ENUMERIC);
     assert_non_null(strstr(err.msg, "max_steps = 2000"));
     assert_non_null(strstr(err.msg, "raise cfl"));
+    dfle_router_free(rt);
     o.max_steps = 0;
     assert_int_equal(dfle_router_new_process(&o, &rt, &err), DFLE_EINVAL);
     assert_non_null(strstr(err.msg, "max_steps"));
