@@ -23,6 +23,7 @@ header_layer() {
     lua.h) echo lua ;; fluvial.h | law*.h) echo laws ;; model.h) echo model ;;
     solver.h) echo solvers ;; dem.h) echo dem ;; landscape.h) echo landscape ;;
     analysis.h | analytical.h | sampling.h | sensitivity.h) echo analysis ;;
+    stream.h | prior.h | mcmc.h | mcmc_diag.h | lsq.h | likelihood.h) echo analysis ;;
     csv.h | ensemble.h | plot.h | raster.h | netcdf.h) echo io ;; *) echo unknown ;;
     esac
 }

@@ -228,6 +228,14 @@ const size_t *dfle_profile_receiver(const dfle_profile *p);
 void dfle_profile_point(const dfle_profile *p, double given[2], double snapped[2]);
 dfle_slope_opts dfle_profile_slope(const dfle_profile *p);
 
+/* The main stem of a network as a profile: from its outlet (the cell
+ * without a receiver of largest area) upstream along the donor of
+ * largest area (ties: the first in the network's order) to a cell without
+ * donors, stored head first with x from the head, d to the outlet and
+ * each cell's z, A and S as in the network.  For a profile, a copy.
+ * This is the channel a model of the network's catchment runs on. */
+int dfle_profile_main_stem(const dfle_profile *p, dfle_profile **out, dfle_error *err);
+
 /* CSV: E, N, x, d, z, A, S, receiver, one row per cell. */
 int dfle_profile_write_csv(const dfle_profile *p, const char *path, dfle_error *err);
 

@@ -537,6 +537,66 @@ void dfle_profile_point(const dfle_profile *p, double given[2], double snapped[2
     snapped[1] = p->snapped[1];
 }
 
+int dfle_profile_main_stem(const dfle_profile *p, dfle_profile **out, dfle_error *err)
+{
+    const double *A = p->f[DFLE_PROFILE_A];
+    size_t *best = NULL, *path = NULL, outlet = 0, n = 0, c;
+    dfle_profile *q = NULL;
+    int have = 0;
+
+    *out = NULL;
+    /* best[c]: the donor of largest area of cell c, plus one (0: none). */
+    best = calloc(p->n, sizeof *best);
+    path = malloc(p->n * sizeof *path);
+    if (best == NULL || path == NULL)
+        goto nomem;
+    for (size_t i = 0; i < p->n; i++) {
+        size_t r = p->receiver[i];
+        if (r == 0) {
+            if (!have || A[i] > A[outlet])
+                outlet = i;
+            have = 1;
+        } else if (best[r - 1] == 0 || A[i] > A[best[r - 1] - 1]) {
+            best[r - 1] = i + 1;
+        }
+    }
+    if (!have)
+        return dfle_error_set(err, DFLE_EINVAL, "profile: no outlet (every cell drains to "
+                              "another)");
+    for (c = outlet;; c = best[c] - 1) {
+        path[n++] = c;
+        if (best[c] == 0 || n == p->n)
+            break;
+    }
+    if (n < 2) {
+        free(best);
+        free(path);
+        return dfle_error_set(err, DFLE_EINVAL, "profile: the main stem is a single cell");
+    }
+    if ((q = profile_alloc(n)) == NULL)
+        goto nomem;
+    for (size_t i = 0; i < n; i++) {
+        size_t k = path[n - 1 - i]; /* head first */
+        for (int f = 0; f < DFLE_PROFILE_NFIELDS; f++)
+            q->f[f][i] = p->f[f][k];
+        q->f[DFLE_PROFILE_D][i] = p->f[DFLE_PROFILE_D][k] - p->f[DFLE_PROFILE_D][outlet];
+        q->receiver[i] = i + 1 < n ? i + 2 : 0;
+    }
+    for (size_t i = 0; i < n; i++)
+        q->f[DFLE_PROFILE_X][i] = q->f[DFLE_PROFILE_D][0] - q->f[DFLE_PROFILE_D][i];
+    memcpy(q->given, p->given, sizeof q->given);
+    memcpy(q->snapped, p->snapped, sizeof q->snapped);
+    q->slope = p->slope;
+    free(best);
+    free(path);
+    *out = q;
+    return DFLE_OK;
+nomem:
+    free(best);
+    free(path);
+    return dfle_error_set(err, DFLE_ENOMEM, "profile: out of memory for a main stem");
+}
+
 int dfle_profile_write_csv(const dfle_profile *p, const char *path, dfle_error *err)
 {
     static const enum dfle_profile_field cols[] = {DFLE_PROFILE_E, DFLE_PROFILE_N, DFLE_PROFILE_X,

@@ -177,6 +177,22 @@ function T.read_file(path)
     return s
 end
 
+-- A scratch directory; the returned function removes it.
+function T.scratch()
+    local h = io.popen("mktemp -d")
+    local dir = h:read("l")
+    h:close()
+    return dir, function() os.execute("rm -rf " .. shquote(dir)) end
+end
+
+-- Run a shell command; returns its combined output, status and code.
+function T.sh(cmd)
+    local h = io.popen(cmd .. " 2>&1")
+    local out = h:read("a")
+    local ok, _, code = h:close()
+    return out, ok, code
+end
+
 -- Run the dfle binary on a script text (written to a temporary file)
 -- with extra command-line words; returns combined output, the exit
 -- status (true/nil as os.execute) and the exit code.

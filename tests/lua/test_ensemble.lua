@@ -8,20 +8,9 @@ local tests = {}
 
 local q = T.shquote
 
--- A scratch directory for one test; removed by the returned function.
-local function scratch()
-    local h = io.popen("mktemp -d")
-    local dir = h:read("l")
-    h:close()
-    return dir, function() os.execute("rm -rf " .. q(dir)) end
-end
-
-local function sh(cmd)
-    local h = io.popen(cmd .. " 2>&1")
-    local out = h:read("a")
-    local ok, _, code = h:close()
-    return out, ok, code
-end
+-- A scratch directory for one test (removed by the returned function),
+-- a shell command's output and status: from the runner.
+local scratch, sh = T.scratch, T.sh
 
 -- The sweep script used by the CLI tests: arg[1] = out file, arg[2] =
 -- extra Lua put into build (e.g. a delay), arg[3] = limit.

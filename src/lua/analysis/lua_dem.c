@@ -517,6 +517,17 @@ static int l_profile_channel(lua_State *L)
     return 1;
 }
 
+/* p:main_stem() -> dfle.profile: a network's main stem (a profile's copy) */
+static int l_profile_main_stem(lua_State *L)
+{
+    dfle_profile *p = check_profile(L, 1);
+    dfle_lua_profile *u = dfle_lua_newobject(L, sizeof *u, DFLE_LUA_PROFILE, 0);
+    dfle_error err;
+    if (dfle_profile_main_stem(p, &u->p, &err) != DFLE_OK)
+        return dfle_lua_raise(L, &err);
+    return 1;
+}
+
 static int l_profile_property(lua_State *L)
 {
     dfle_profile *p = check_profile(L, 1);
@@ -610,7 +621,8 @@ void dfle_lua_open_dem(lua_State *L)
         {"write_geotiff", l_dem_write_geotiff}, {NULL, NULL}};
     static const luaL_Reg profile_methods[] = {
         {"get", l_profile_get}, {"slope_area", l_profile_slope_area},
-        {"write_csv", l_profile_write_csv}, {"channel", l_profile_channel}, {NULL, NULL}};
+        {"write_csv", l_profile_write_csv}, {"channel", l_profile_channel},
+        {"main_stem", l_profile_main_stem}, {NULL, NULL}};
     static const luaL_Reg profile_meta[] = {{"__len", l_profile_len}, {NULL, NULL}};
     static const dfle_lua_type dem_type = {
         .name = DFLE_LUA_DEM, .free = dem_free, .describe = dem_describe,

@@ -197,6 +197,25 @@ double *dfle_lua_check_array(lua_State *L, int idx, const char *what, size_t *n)
 lua_Integer dfle_lua_check_whole(lua_State *L, double v, const char *fn, const char *name,
                                  double lo, double hi);
 
+/* Text built from pieces: a table of strings on the stack joined at the
+ * end (a luaL_Buffer cannot have other values pushed above it, and the
+ * pieces come from calls that push).  init pushes the table; add pops
+ * the string on top into it; finish replaces the table by the joined
+ * string and drops anything above it. */
+typedef struct dfle_lua_text {
+    int t;
+    lua_Integer k;
+} dfle_lua_text;
+void dfle_lua_text_init(lua_State *L, dfle_lua_text *p);
+void dfle_lua_text_add(lua_State *L, dfle_lua_text *p);
+void dfle_lua_text_str(lua_State *L, dfle_lua_text *p, const char *s);
+void dfle_lua_text_finish(lua_State *L, dfle_lua_text *p);
+
+/* Option `key` of the options table at idx as a string (NULL when the
+ * table or the key is absent; the table holds the string); raises
+ * naming dfle.<fn> for another type. */
+const char *dfle_lua_opt_string(lua_State *L, int idx, const char *key, const char *fn);
+
 /* Slope-area pairs of argument `arg`: a dfle.model (its nodes above the
  * outlet) or a table {A = {...}, S = {...}} (copied to scratch userdata
  * left on the stack).  Returns the number of pairs. */
@@ -302,6 +321,7 @@ void dfle_lua_open_args(lua_State *L); /* dfle.args, dfle.mkdir (lua_args.c) */
 void dfle_lua_open_dem(lua_State *L);
 void dfle_lua_open_landscape(lua_State *L);
 void dfle_lua_open_ensemble(lua_State *L); /* after sampling: wraps dfle.pawn */
+void dfle_lua_open_invert(lua_State *L);   /* after plot: adds dfle.plot.corner, ... */
 void dfle_lua_open_trace_hook(lua_State *L); /* a test hook, in the registry */
 
 #endif

@@ -34,19 +34,15 @@
 
 #include "lua/ensemble/lua_ensemble_internal.h"
 
-static const char calls_key = 'c';
-static const char stop_key = 'x'; /* the error value that stops a worker's script */
-
 /* ------------------------------------------------------------------ */
 /* dfle.ensemble                                                       */
 
 static int l_ensemble(lua_State *L)
 {
     const dfle_lua_ensemble_host *host = dfle_lua_ens_host(L);
-    worker_mode *wm;
     lua_Integer call;
     spec s;
-    int ctx, nw;
+    int ctx, nw, role;
     run_box *box;
     dfle_error err;
     size_t total, ran = 0;
@@ -54,29 +50,13 @@ static int l_ensemble(lua_State *L)
     const char *path;
 
     lua_settop(L, 1);
-    lua_rawgetp(L, LUA_REGISTRYINDEX, &calls_key);
-    call = lua_tointeger(L, -1) + 1;
-    lua_pop(L, 1);
-    lua_pushinteger(L, call);
-    lua_rawsetp(L, LUA_REGISTRYINDEX, &calls_key);
-    lua_rawgetp(L, LUA_REGISTRYINDEX, &dfle_lua_ens_worker_key);
-    wm = lua_touserdata(L, -1);
-    lua_pop(L, 1);
-
-    if (wm != NULL && call >= wm->target) {
-        /* A worker replaying the script: hand the table over and stop. */
-        if (call == wm->target) {
-            lua_pushvalue(L, 1);
-            lua_rawsetp(L, LUA_REGISTRYINDEX, &dfle_lua_ens_spec_key);
-        }
-        lua_pushlightuserdata(L, (void *)&stop_key);
-        return lua_error(L);
-    }
+    /* A worker replaying the script stops in here at its own call. */
+    role = dfle_lua_par_enter(L, DFLE_LUA_PAR_ENSEMBLE, 1, &call);
     dfle_lua_ens_read_spec(L, 1, "ensemble", &s, host);
     ctx = lua_gettop(L);
     lua_getfield(L, ctx, "out");
     path = lua_tostring(L, -1);
-    if (wm != NULL) {
+    if (role == DFLE_LUA_PAR_EARLIER) {
         /* An earlier ensemble of the script, finished by the main state. */
         dfle_lua_ens_push_result(L, "ensemble", path, host ? host->shard_i : 0, host ? host->shard_n : 0, 0);
         return 1;
@@ -102,12 +82,12 @@ static int l_ensemble(lua_State *L)
                       path, dfle_ens_file_ndone(box->file));
 
     nw = host != NULL && host->workers > 0 ? host->workers : s.workers > 0 ? s.workers : dfle_lua_ens_cores();
-    if (host == NULL || host->open_state == NULL)
+    if (host == NULL || host->open_state == NULL || role == DFLE_LUA_PAR_NESTED)
         nw = 1;
     if ((size_t)nw > total)
         nw = (int)(total > 0 ? total : 1);
 
-    if (host != NULL && host->remote != NULL && total > 0) {
+    if (host != NULL && host->remote != NULL && total > 0 && role == DFLE_LUA_PAR_RUN) {
         char msg[DFLE_ERROR_MSG_MAX];
         size_t done = 0;
         int r = host->remote(host->ud, (long long)call, lua_tostring(L, -2), lua_tostring(L, -1),
@@ -129,7 +109,10 @@ static int l_ensemble(lua_State *L)
         size_t i, failed = 0;
         double t0 = dfle_lua_ens_now();
         while (!dfle_lua_interrupted(L) && dfle_ens_queue_next(box->queue, &i)) {
+            /* Parallel calls inside a sample run here, in this state. */
+            dfle_lua_par_depth(L, +1);
             failed += (size_t)dfle_lua_ens_sample_row(L, ctx, i);
+            dfle_lua_par_depth(L, -1);
             /* A sample cut short by the interrupt is not a result: its
              * row is dropped, and a resumed run does it again. */
             if (dfle_lua_interrupted(L))

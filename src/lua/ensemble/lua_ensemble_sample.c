@@ -52,39 +52,6 @@ static void check_column_name(lua_State *L, const char *fn, const char *what, co
                        what, name);
 }
 
-/* Strings built from pieces: a table of strings joined at the end
- * (a luaL_Buffer cannot have other values pushed above it). */
-typedef struct pieces {
-    int t;
-    lua_Integer k;
-} pieces;
-
-static void pc_init(lua_State *L, pieces *p)
-{
-    lua_newtable(L);
-    p->t = lua_gettop(L);
-    p->k = 0;
-}
-static void pc_add(lua_State *L, pieces *p) { lua_rawseti(L, p->t, ++p->k); } /* pops */
-static void pc_str(lua_State *L, pieces *p, const char *s)
-{
-    lua_pushstring(L, s);
-    pc_add(L, p);
-}
-/* Replace the pieces table by the joined string; drop what is above. */
-static void pc_finish(lua_State *L, pieces *p)
-{
-    luaL_Buffer b;
-    lua_settop(L, p->t);
-    luaL_buffinit(L, &b);
-    for (lua_Integer k = 1; k <= p->k; k++) {
-        lua_rawgeti(L, p->t, k);
-        luaL_addvalue(&b);
-    }
-    luaL_pushresult(&b);
-    lua_replace(L, p->t);
-}
-
 static void push_number_text(lua_State *L, double v)
 {
     char buf[40];
@@ -134,70 +101,70 @@ static void push_value_text(lua_State *L, int idx, int quote)
 /* Push the names of array `arr` joined by commas. */
 static void push_joined(lua_State *L, int arr)
 {
-    pieces pc;
-    pc_init(L, &pc);
+    dfle_lua_text pc;
+    dfle_lua_text_init(L, &pc);
     for (lua_Integer k = 1, n = (lua_Integer)lua_rawlen(L, arr); k <= n; k++) {
         if (k > 1)
-            pc_str(L, &pc, ",");
+            dfle_lua_text_str(L, &pc, ",");
         lua_geti(L, arr, k);
-        pc_add(L, &pc);
+        dfle_lua_text_add(L, &pc);
     }
-    pc_finish(L, &pc);
+    dfle_lua_text_finish(L, &pc);
 }
 
 /* The meta line: what identifies the ensemble (resume and gather check it). */
 static void push_meta(lua_State *L, const spec *s, int params, int names, int outputs,
                       int centered)
 {
-    pieces pc;
+    dfle_lua_text pc;
     char buf[96];
 
-    pc_init(L, &pc);
+    dfle_lua_text_init(L, &pc);
     snprintf(buf, sizeof buf, "# dfle.ensemble v1 n=%lld seed=%lld centered=%s inputs=",
              (long long)s->n, (long long)s->seed, centered ? "true" : "false");
-    pc_str(L, &pc, buf);
+    dfle_lua_text_str(L, &pc, buf);
     push_joined(L, names);
-    pc_add(L, &pc);
-    pc_str(L, &pc, " outputs=");
+    dfle_lua_text_add(L, &pc);
+    dfle_lua_text_str(L, &pc, " outputs=");
     push_joined(L, outputs);
-    pc_add(L, &pc);
-    pc_str(L, &pc, " design=");
+    dfle_lua_text_add(L, &pc);
+    dfle_lua_text_str(L, &pc, " design=");
     for (size_t k = 1; k <= s->nparams; k++) {
         int p;
         if (k > 1)
-            pc_str(L, &pc, ";");
+            dfle_lua_text_str(L, &pc, ";");
         lua_geti(L, names, (lua_Integer)k);
         lua_pushvalue(L, -1);
-        pc_add(L, &pc);
+        dfle_lua_text_add(L, &pc);
         lua_gettable(L, params);
         p = lua_gettop(L);
         if (lua_getfield(L, p, "values") == LUA_TTABLE) {
             int vals = lua_gettop(L);
-            pc_str(L, &pc, ":{");
+            dfle_lua_text_str(L, &pc, ":{");
             for (lua_Integer j = 1, nv = (lua_Integer)lua_rawlen(L, vals); j <= nv; j++) {
                 if (j > 1)
-                    pc_str(L, &pc, ",");
+                    dfle_lua_text_str(L, &pc, ",");
                 lua_geti(L, vals, j);
                 push_value_text(L, -1, 1);
-                pc_add(L, &pc);
+                dfle_lua_text_add(L, &pc);
                 lua_pop(L, 1);
             }
-            pc_str(L, &pc, "}");
+            dfle_lua_text_str(L, &pc, "}");
         } else {
-            pc_str(L, &pc, ":[");
+            dfle_lua_text_str(L, &pc, ":[");
             lua_geti(L, p, 1);
             push_number_text(L, lua_tonumber(L, -1));
-            pc_add(L, &pc);
-            pc_str(L, &pc, ",");
+            dfle_lua_text_add(L, &pc);
+            dfle_lua_text_str(L, &pc, ",");
             lua_geti(L, p, 2);
             push_number_text(L, lua_tonumber(L, -1));
-            pc_add(L, &pc);
+            dfle_lua_text_add(L, &pc);
             lua_getfield(L, p, "log");
-            pc_str(L, &pc, lua_toboolean(L, -1) ? ",log]" : "]");
+            dfle_lua_text_str(L, &pc, lua_toboolean(L, -1) ? ",log]" : "]");
         }
         lua_settop(L, p - 1);
     }
-    pc_finish(L, &pc);
+    dfle_lua_text_finish(L, &pc);
 }
 
 /* Shard file name: "dir/ens.csv" -> "dir/ens.shard-2-of-4.csv". */
@@ -336,16 +303,16 @@ void dfle_lua_ens_read_spec(lua_State *L, int arg, const char *fn, spec *s,
     lua_setfield(L, ctx, "meta");
     lua_pop(L, 1);
     {
-        pieces pc;
-        pc_init(L, &pc);
-        pc_str(L, &pc, "index,");
+        dfle_lua_text pc;
+        dfle_lua_text_init(L, &pc);
+        dfle_lua_text_str(L, &pc, "index,");
         push_joined(L, names);
-        pc_add(L, &pc);
-        pc_str(L, &pc, ",");
+        dfle_lua_text_add(L, &pc);
+        dfle_lua_text_str(L, &pc, ",");
         push_joined(L, outputs);
-        pc_add(L, &pc);
-        pc_str(L, &pc, ",status,reason");
-        pc_finish(L, &pc);
+        dfle_lua_text_add(L, &pc);
+        dfle_lua_text_str(L, &pc, ",status,reason");
+        dfle_lua_text_finish(L, &pc);
     }
     lua_setfield(L, ctx, "header");
     lua_settop(L, ctx);
@@ -503,7 +470,7 @@ int dfle_lua_ens_sample_row(lua_State *L, int ctx, size_t i)
 {
     int failed, top, p, names, outputs;
     lua_Integer np, nout;
-    pieces pc;
+    dfle_lua_text pc;
     char buf[32];
 
     lua_pushcfunction(L, run_sample);
@@ -531,35 +498,35 @@ int dfle_lua_ens_sample_row(lua_State *L, int ctx, size_t i)
     outputs = lua_gettop(L);
     np = (lua_Integer)lua_rawlen(L, names);
     nout = (lua_Integer)lua_rawlen(L, outputs);
-    pc_init(L, &pc);
+    dfle_lua_text_init(L, &pc);
     snprintf(buf, sizeof buf, "%zu", i);
-    pc_str(L, &pc, buf);
+    dfle_lua_text_str(L, &pc, buf);
     for (lua_Integer k = 1; k <= np; k++) {
-        pc_str(L, &pc, ",");
+        dfle_lua_text_str(L, &pc, ",");
         lua_geti(L, names, k);
         lua_gettable(L, p);
         push_value_text(L, -1, 1);
-        pc_add(L, &pc);
+        dfle_lua_text_add(L, &pc);
         lua_pop(L, 1);
     }
     for (lua_Integer k = 1; k <= nout; k++) {
-        pc_str(L, &pc, ",");
+        dfle_lua_text_str(L, &pc, ",");
         if (lua_istable(L, top)) {
             lua_geti(L, top, k);
             push_number_text(L, lua_tonumber(L, -1));
-            pc_add(L, &pc);
+            dfle_lua_text_add(L, &pc);
             lua_pop(L, 1);
         } else {
-            pc_str(L, &pc, "nan");
+            dfle_lua_text_str(L, &pc, "nan");
         }
     }
-    pc_str(L, &pc, ",");
+    dfle_lua_text_str(L, &pc, ",");
     lua_pushvalue(L, top - 2);
-    pc_add(L, &pc);
-    pc_str(L, &pc, ",");
+    dfle_lua_text_add(L, &pc);
+    dfle_lua_text_str(L, &pc, ",");
     push_value_text(L, top - 1, 1);
-    pc_add(L, &pc);
-    pc_finish(L, &pc);
+    dfle_lua_text_add(L, &pc);
+    dfle_lua_text_finish(L, &pc);
     lua_replace(L, top - 2);
     lua_settop(L, top - 2);
     return failed;
