@@ -419,6 +419,26 @@ static void fields_and_csv(void **state)
     rig_free(&r);
 }
 
+/* The model's own parameters: U as it is now, cfl, dt_max. */
+static void params_are_U_cfl_dt_max(void **state)
+{
+    rig r = {0};
+    dfle_param p[8];
+    dfle_error err;
+    (void)state;
+    rig_build(&r, 5e-4, 0);
+    assert_ok(dfle_model_set_U(r.m, 7e-4, &err), &err);
+    assert_int_equal(dfle_model_params(r.m, p, 8), 3);
+    assert_string_equal(p[0].name, "U");
+    assert_close(p[0].value, 7e-4, 0, 0);
+    assert_string_equal(p[0].unit, "m/yr");
+    assert_string_equal(p[1].name, "cfl");
+    assert_close(p[1].value, dfle_model_cfl(r.m), 0, 0);
+    assert_string_equal(p[2].name, "dt_max");
+    assert_close(p[2].value, dfle_model_dt_max(r.m), 0, 0);
+    rig_free(&r);
+}
+
 int main(void)
 {
     const struct CMUnitTest tests[] = {
@@ -433,6 +453,7 @@ int main(void)
         cmocka_unit_test(limits_and_cancellation),
         cmocka_unit_test(bad_options_are_named),
         cmocka_unit_test(fields_and_csv),
+        cmocka_unit_test(params_are_U_cfl_dt_max),
     };
     return cmocka_run_group_tests(tests, NULL, NULL);
 }

@@ -35,6 +35,7 @@
 #include "dfle/fluvial.h"
 #include "dfle/law.h"
 #include "dfle/network.h"
+#include "dfle/param.h"
 #include "dfle/router.h"
 
 #ifdef __cplusplus
@@ -128,6 +129,12 @@ dfle_law *dfle_model_law(const dfle_model *m);
 
 double dfle_model_cfl(const dfle_model *m);    /* explicit Courant number  */
 double dfle_model_dt_max(const dfle_model *m); /* largest time step [yr]   */
+
+/* The model's own parameters (param.h): U (the current uplift rate,
+ * m/yr), cfl and dt_max [yr], up to cap of them; returns how many there
+ * are.  Its components list theirs (dfle_channel_params,
+ * dfle_fluvial_params, dfle_router_params, dfle_law_params). */
+size_t dfle_model_params(const dfle_model *m, dfle_param *out, size_t cap);
 
 /* --- For solvers (solver.h): topology, state, rates. ---------------- */
 

@@ -21,6 +21,7 @@
 
 #include "dfle/file.h"
 #include "dfle/flow.h"
+#include "dfle/param.h"
 #include "model/model_internal.h"
 
 void dfle_model_opts_default(dfle_model_opts *o)
@@ -214,6 +215,16 @@ double dfle_model_time(const dfle_model *m) { return m->time; }
 double dfle_model_U(const dfle_model *m) { return m->U; }
 double dfle_model_cfl(const dfle_model *m) { return m->cfl; }
 double dfle_model_dt_max(const dfle_model *m) { return m->dt_max; }
+
+size_t dfle_model_params(const dfle_model *m, dfle_param *out, size_t cap)
+{
+    const dfle_param p[] = {
+        {"U", m->U, "m/yr", 0},
+        {"cfl", m->cfl, "", 0},
+        {"dt_max", m->dt_max, "yr", 0},
+    };
+    return dfle_param_copy(p, sizeof p / sizeof p[0], out, cap);
+}
 const dfle_channel *dfle_model_channel(const dfle_model *m) { return m->ch; }
 const dfle_fluvial *dfle_model_fluvial(const dfle_model *m) { return m->fl; }
 dfle_router *dfle_model_router(const dfle_model *m) { return m->rt; }

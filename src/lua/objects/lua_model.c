@@ -432,6 +432,32 @@ static int l_model_write_csv(lua_State *L)
     return 1;
 }
 
+static size_t model_params(const void *m, dfle_param *out, size_t cap)
+{
+    return dfle_model_params(m, out, cap);
+}
+
+/* m:params(): U (now), cfl, dt_max, and each component's params() under
+ * its name (false for a process that is off). */
+static int l_model_params(lua_State *L)
+{
+    static const char *const components[] = {"channel", "fluvial", "router", "law"};
+    dfle_lua_push_params(L, 1, model_params, dfle_lua_check_model(L, 1));
+    for (int k = 0; k < 4; k++) {
+        if (lua_getiuservalue(L, 1, k + 1) == LUA_TNIL) {
+            lua_pop(L, 1);
+            lua_pushboolean(L, 0);
+        } else {
+            /* The component's own method: each kind knows its list. */
+            lua_getfield(L, -1, "params");
+            lua_insert(L, -2);
+            lua_call(L, 1, 1);
+        }
+        lua_setfield(L, -2, components[k]);
+    }
+    return 1;
+}
+
 static int l_model_property(lua_State *L)
 {
     dfle_model *m = dfle_lua_check_model(L, 1);
@@ -492,6 +518,7 @@ void dfle_lua_open_model(lua_State *L)
         {"get", l_model_get},
         {"fields", l_model_fields},
         {"write_csv", l_model_write_csv},
+        {"params", l_model_params},
         {NULL, NULL}};
     static const dfle_lua_type type = {
         .name = DFLE_LUA_MODEL, .free = model_free, .describe = model_describe,
