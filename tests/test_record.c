@@ -61,6 +61,7 @@ static dfle_record *sample_record(void)
     dfle_record_section(r, "router", NULL); /* continued: same section */
     dfle_record_number(r, "n", 403, NULL);
     dfle_record_param_number(r, "gamma", 0.25, ""); /* replaced in place */
+    dfle_record_section(r, "fluvial", "off"); /* a section with no entries */
     assert_ok(dfle_record_status(r, &err), &err);
     return r;
 }
@@ -75,7 +76,8 @@ static void comment_lines(void **state)
                         "# command: dfle 'my run.lua' --quick\n"
                         "# router empirical: M0=3000 m^3, gamma=0.25, scaled=true, n=403\n"
                         "# run: reason=steady, time=2500000 yr, converged=true, "
-                        "note=\"a \"\"quoted\"\", long note\", rate=nan\n");
+                        "note=\"a \"\"quoted\"\", long note\", rate=nan\n"
+                        "# fluvial off\n");
     free(text);
     /* A removed entry is gone; the others keep their order. */
     dfle_record_section(r, NULL, NULL);
@@ -123,6 +125,9 @@ static void json_record(void **state)
                         "    \"units\": {\n"
                         "      \"time\": \"yr\"\n"
                         "    }\n"
+                        "  },\n"
+                        "  \"fluvial\": {\n"
+                        "    \"kind\": \"off\"\n"
                         "  }\n"
                         "}\n");
     free(text);

@@ -417,11 +417,10 @@ void dfle_record_write_comments(const dfle_record *r, FILE *fp)
             fputc(' ', fp);
             put_comment_name(fp, r->s[k].kind);
         }
-        fputc(':', fp);
         for (size_t i = 0; i < r->n; i++) {
             if (r->e[i].section != (int)k)
                 continue;
-            fputs(first ? " " : ", ", fp);
+            fputs(first ? ": " : ", ", fp);
             first = 0;
             put_comment_name(fp, r->e[i].key);
             fputc('=', fp);
@@ -520,7 +519,13 @@ static void json_members(FILE *fp, const dfle_record *r, int k, int param, int u
 {
     for (size_t i = 0; i < r->n; i++) {
         const entry *e = &r->e[i];
+        int seen = 0;
         if (e->section != k || (param >= 0 && e->param != param) || (units && e->unit == NULL))
+            continue;
+        /* A parameter and a value of the same name share one unit entry. */
+        for (size_t j = 0; units && j < i && !seen; j++)
+            seen = r->e[j].section == k && r->e[j].unit != NULL && strcmp(r->e[j].key, e->key) == 0;
+        if (seen)
             continue;
         fprintf(fp, "%s\n%s", *first ? "" : ",", indent);
         *first = 0;
