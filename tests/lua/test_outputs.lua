@@ -115,4 +115,111 @@ tests["records: SOURCE_DATE_EPOCH fixes the date; the command is the one run"] =
     os.execute("rm -rf " .. T.shquote(dir))
 end
 
+-- Eq. (2) sampled at 60 areas from 1e3 to 1e7 m^2 (exactly, or times a
+-- factor per point).
+local function eq2_data(factor)
+    local A, S = {}, {}
+    for i = 1, 60 do
+        A[i] = 10 ^ (3 + (i - 1) / 59 * 4)
+        S[i] = 0.8 / (1 + (A[i] / 3e4) ^ 0.9) * (factor and factor(i) or 1)
+    end
+    return { A = A, S = S }
+end
+
+tests["fit_slope_area: residuals = log recovers Eq. (2); R^2 in both spaces; which was used"] = function()
+    local data = eq2_data()
+    local lin = assert(dfle.fit_slope_area(data))
+    T.eq(lin.residuals, "linear", "the default, the paper's")
+    T.eq(lin.nbins, 100)
+    -- 100 bins over 60 points: one point a bin, so the bins are Eq. (2) itself
+    local lg = assert(dfle.fit_slope_area(data, { residuals = "log" }))
+    T.eq(lg.residuals, "log")
+    T.eq(assert(dfle.fit_slope_area(data, { nbins = 30 })).nbins, 30)
+    for _, f in ipairs{ lin, lg } do
+        T.close(f.S_df, 0.8, 1e-6); T.close(f.A_df, 3e4, 1e-6); T.close(f.a2, 0.9, 1e-6)
+        T.close(f.r2, 1, 0, 1e-10); T.close(f.r2_log, 1, 0, 1e-10)
+    end
+    -- bins carry their edges and the geometric mean the log fit uses
+    local b = lg.bins
+    T.eq(#b.A_lo, #b.A); T.eq(#b.S_geomean, #b.A)
+    T.ok(b.A_lo[2] <= b.A[2] and b.A[2] <= b.A_hi[2], "A within its bin")
+    -- a point every other one 1.5 times too steep: each fit is the best in its own space
+    local noisy = eq2_data(function(i) return i % 2 == 0 and 1.5 or 1 end)
+    local nl = assert(dfle.fit_slope_area(noisy, { nbins = 60 }))
+    local ng = assert(dfle.fit_slope_area(noisy, { nbins = 60, residuals = "log" }))
+    T.ok(nl.r2 >= ng.r2, "linear fit: the best R^2 in S")
+    T.ok(ng.r2_log >= nl.r2_log, "log fit: the best R^2 in log S")
+    T.raises_here(function() return dfle.fit_slope_area(data, { residuals = "Log" }) end,
+                  "parameter 'residuals' must be \"linear\"", "\"log\"", "got Log")
+    T.raises_here(function() return dfle.fit_slope_area(data, { residuals = 1 }) end,
+                  "got number")
+end
+
+tests["write_fit and write_bins: the fit and its bins with units and where the data came from"] = function()
+    local csv, bins_csv = T.tmpname(".csv"), T.tmpname(".csv")
+    local fit = assert(dfle.fit_slope_area(eq2_data(), { residuals = "log", nbins = 20 }))
+    T.eq(dfle.write_fit(fit, csv), fit, "returns the fit")
+    local tab = T.read_csv(csv)
+    T.eq(tab.header, "S_df,A_df,a2,residuals,r2,r2_log,rmse,rmse_log,S_max,S_ch,S_max_minus_S_ch,"
+                     .. "n_points,iterations,nbins")
+    T.eq(tab.units.A_df, "m^2"); T.eq(tab.units.S_df, "-"); T.eq(tab.units.residuals, nil)
+    T.eq(#tab.rows, 1)
+    local row = tab.rows[1]
+    T.eq(tonumber(row[1]), fit.S_df, "read back exactly")
+    T.eq(tonumber(row[2]), fit.A_df)
+    T.eq(row[4], "log")
+    T.eq(tonumber(row[6]), fit.r2_log)
+    local c = comments_text(tab)
+    T.has(c, "# data table: pairs=60\n", "# fit eq2: residuals=log, nbins=20\n",
+          "# record: " .. csv:sub(1, -5) .. ".json\n")
+    local r = json_of(csv:sub(1, -5) .. ".json")
+    T.eq(r.fit.params.residuals, "log"); T.eq(r.data.pairs, 60); T.eq(r.output, csv)
+
+    dfle.write_bins(fit, bins_csv)
+    local bt = T.read_csv(bins_csv)
+    T.eq(bt.header, "A_lo,A_hi,A,count,S,S_median,S_q25,S_q75,S_geomean,S_fit,used")
+    T.eq(bt.units.A, "m^2"); T.eq(bt.units.S_fit, "-"); T.eq(bt.units.count, nil)
+    T.eq(#bt.rows, #fit.bins.A)
+    for i, rw in ipairs(bt.rows) do
+        T.eq(tonumber(rw[3]), fit.bins.A[i])
+        T.eq(tonumber(rw[9]), fit.bins.S_geomean[i])
+        T.close(tonumber(rw[10]), fit.S_df / (1 + (fit.bins.A[i] / fit.A_df) ^ fit.a2), 1e-14)
+        T.eq(rw[11], "1")
+    end
+    -- the record of a JSON written before is not repeated in the next
+    local r2 = json_of(bins_csv:sub(1, -5) .. ".json")
+    T.eq(r2.output, bins_csv)
+    T.ok(not comments_text(bt):find("# output:", 1, true), "no leftover output line")
+end
+
+tests["write_fit: a model's fit records the model as it was fitted"] = function()
+    local csv = T.tmpname(".csv")
+    local m = small_model{ router = dfle.router.empirical{ tau_y = 250 } }
+    m:run_to_steady{}
+    local fit = assert(dfle.fit_slope_area(m))
+    m:run{ years = 10 }
+    dfle.write_fit(fit, csv, { record = false })
+    local c = comments_text(T.read_csv(csv))
+    T.has(c, "tau_y=250 Pa", "# model: U=0.0005 m/yr, cfl=0.5, dt_max=1000 yr, time=0 yr\n",
+          "# run run_to_steady:", "# fit eq2: residuals=linear, nbins=100\n")
+end
+
+tests["write_fit, write_bins: bad input is named"] = function()
+    local csv = T.tmpname(".csv")
+    T.raises_here(function() return dfle.write_fit({}, csv) end, "dfle.write_fit",
+                  "must be a dfle.fit_slope_area result")
+    T.raises_here(function() return dfle.write_fit("fit", csv) end, "table expected")
+    -- a fit made by hand: written, its data unknown; no bins to write
+    dfle.write_fit({ S_df = 0.5, A_df = 1e4, a2 = 1 }, csv, { record = false })
+    local tab = T.read_csv(csv)
+    T.has(comments_text(tab), "# data unknown\n")
+    T.eq(tab.rows[1][1], "0.5"); T.eq(tab.rows[1][4], "")
+    T.raises_here(function() return dfle.write_bins({ S_df = 0.5, A_df = 1e4, a2 = 1 }, csv) end,
+                  "the fit has no bins")
+    local fit = assert(dfle.fit_slope_area(eq2_data()))
+    T.raises_here(function() return dfle.write_fit(fit, "/nonexistent-dir/f.csv") end,
+                  "/nonexistent-dir/f.csv")
+    T.raises_here(function() return dfle.write_bins(fit, csv, { nbins = 3 }) end, "nbins")
+end
+
 return tests

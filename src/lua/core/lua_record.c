@@ -256,4 +256,9 @@ void dfle_lua_write_record(lua_State *L, dfle_record *rec, const char *output,
     if (dfle_record_write_json(rec, jpath, &err) != DFLE_OK)
         dfle_lua_raise(L, &err);
     dfle_lua_note_file(L, jpath);
+    /* The record may describe another output next (a fit's table and
+     * its bins): what named this one goes. */
+    dfle_record_section(rec, NULL, NULL);
+    dfle_record_text(rec, "output", NULL);
+    dfle_record_text(rec, "files", NULL);
 }
