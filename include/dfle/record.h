@@ -53,6 +53,9 @@ void dfle_record_free(dfle_record *r); /* accepts NULL */
  * in the record is continued, its kind replaced if `kind` is given. */
 void dfle_record_section(dfle_record *r, const char *name, const char *kind);
 
+/* 1 if the record has a section of that name. */
+int dfle_record_has_section(const dfle_record *r, const char *name);
+
 /* Add entry `key` to the current section, or replace the entry of that
  * key there.  `unit` may be NULL or "" (none). */
 void dfle_record_number(dfle_record *r, const char *key, double v, const char *unit);

@@ -139,6 +139,14 @@ void dfle_record_section(dfle_record *r, const char *name, const char *kind)
     r->current = (int)i;
 }
 
+int dfle_record_has_section(const dfle_record *r, const char *name)
+{
+    for (size_t i = 0; r != NULL && name != NULL && i < r->ns; i++)
+        if (strcmp(r->s[i].name, name) == 0)
+            return 1;
+    return 0;
+}
+
 /* The entry `key` of the current section, new or emptied for reuse. */
 static entry *slot(dfle_record *r, const char *key, int param)
 {

@@ -222,4 +222,104 @@ tests["write_fit, write_bins: bad input is named"] = function()
     T.raises_here(function() return dfle.write_bins(fit, csv, { nbins = 3 }) end, "nbins")
 end
 
+tests["ensemble file: version, options and units as comments that stay the same; record beside"] = function()
+    local out = T.tmpname(".csv")
+    local json = out:sub(1, -5) .. ".json"
+    local spec = {
+        params = { k_df = { 5e-5, 1e-3, log = true }, U = { 1e-4, 1e-3 } },
+        n = 4, seed = 3, out = out, workers = 1,
+        build = function(p)
+            return dfle.model{ channel = dfle.channel{ dx = 20 }, U = p.U,
+                               law = dfle.law.power{ k_df = p.k_df } }
+        end,
+        outputs = { "S_df", "A_df", "r2_log", "runout_x", "relief" },
+        measure = function(m) return { relief = m:get("z")[1] } end,
+        units = { U = "m/yr", relief = "m" },
+        fit = { residuals = "log" },
+    }
+    local ens = dfle.ensemble(spec)
+    T.eq(ens.ok, 4)
+    local tab = T.read_csv(out)
+    T.match(tab.comments[1], "^# dfle%.ensemble v1 n=4 seed=3 ")
+    T.eq(tab.comments[2], "# dfle: " .. dfle.version)
+    T.eq(tab.comments[3], "# fit: residuals=log")
+    T.eq(tab.comments[4], "# units: U=m/yr, S_df=-, A_df=m^2, r2_log=-, runout_x=m, relief=m")
+    T.eq(#tab.comments, 4, "no date, no command: the file is the same for every run")
+    T.eq(tab.header, "index,U,k_df,S_df,A_df,r2_log,runout_x,relief,status,reason")
+    -- pawn reads it back past the comments
+    local si = dfle.pawn{ file = out, inputs = { "U", "k_df" }, output = "A_df", S = 2 }
+    T.ok(si.U ~= nil, "dfle.pawn read the file")
+    -- the record: what ran it
+    local r = json_of(json)
+    T.eq(r.output, out)
+    T.eq(r.ensemble.n, 4); T.eq(r.ensemble.count, 4); T.eq(r.ensemble.complete, true)
+    T.eq(r.status.ok, 4)
+    T.eq(r.fit.params.residuals, "log")
+    T.match(r.ensemble.meta, "^# dfle%.ensemble")
+    -- run again: read back, the file unchanged
+    local before = T.read_file(out)
+    T.eq(dfle.ensemble(spec).ran, 0)
+    T.eq(T.read_file(out), before)
+    -- a unit for a name that is no column
+    spec.units = { V = "m" }
+    T.raises_here(function() return dfle.ensemble(spec) end,
+                  "units names 'V', which is neither a parameter nor an output")
+    spec.units, spec.record = nil, false
+    os.remove(json)
+    spec.out = T.tmpname(".csv")
+    dfle.ensemble(spec)
+    T.eq(T.read_file(spec.out:sub(1, -5) .. ".json"), nil, "record = false")
+    T.eq(T.read_csv(spec.out).comments[3], "# fit: residuals=log")
+    -- gather: the first file's comment lines; its own record
+    local gathered = T.tmpname(".csv")
+    local g = dfle.gather{ out = gathered, files = { out } }
+    T.eq(g.count, 4)
+    T.eq(T.read_file(gathered), before)
+    local gr = json_of(gathered:sub(1, -5) .. ".json")
+    T.eq(gr.gather.from[1], out); T.eq(gr.gather.ok, 4)
+end
+
+tests["write_csv: a script's own table with units and provenance, rows or columns"] = function()
+    local csv = T.tmpname(".csv")
+    local rows = { { U = 2e-4, S_df = 0.1 / 3, converged = true, label = "a, \"b\"" },
+                   { U = 1e-3, converged = false } }
+    local law = dfle.law.power{ alpha = 4 }
+    local m = dfle.model{ channel = dfle.channel{ A_max = 2e5 } }
+    dfle.write_csv(csv, { columns = { "U", "S_df", "converged", "label" }, rows = rows,
+                          units = { U = "m/yr", S_df = "-" }, about = "a sweep over U",
+                          params = { other_law = law:params(), tol = 1e-3, note = "first try",
+                                     model = m } })
+    local text = assert(T.read_file(csv))
+    T.has(text, "\n# about: \"a sweep over U\"\n", "\n# params: note=\"first try\", tol=0.001\n",
+          "\n# other_law: alpha=4, beta=1, k_df=0.0001\n", "\n# law power: k_df=0.0001, alpha=6,",
+          "\n# router empirical:",
+          "\n# units: U=m/yr, S_df=-\nU,S_df,converged,label\n",
+          "\n0.0002,0.03333333333333333,true,\"a, \"\"b\"\"\"\n0.001,nan,false,\n")
+    local r = json_of(csv:sub(1, -5) .. ".json")
+    T.eq(r.other_law.params.alpha, 4); T.eq(r.law.params.alpha, 6)
+    T.eq(r.params.params.tol, 1e-3); T.eq(r.about, "a sweep over U")
+    local clash = { law = law:params(), model = m }
+    T.raises_here(function() return dfle.write_csv(csv, { columns = { "U" }, rows = rows, params = clash }) end,
+                  "params.law would mix with the model's section")
+    -- columns as arrays, no record
+    local csv2 = T.tmpname(".csv")
+    dfle.write_csv(csv2, { columns = { "x", "y" }, data = { x = { 1, 2 }, y = { 0.5, 0.25 } },
+                           record = false })
+    local tab = T.read_csv(csv2)
+    T.eq(tab.header, "x,y"); T.eq(tab.rows[2][2], "0.25"); T.eq(next(tab.units), nil)
+    T.eq(T.read_file(csv2:sub(1, -5) .. ".json"), nil)
+    -- mistakes are named
+    T.raises_here(function() return dfle.write_csv(csv2, { columns = { "x" } }) end,
+                  "either 'rows'")
+    T.raises_here(function() return dfle.write_csv(csv2, { columns = { "x", "y" }, data = { x = { 1 }, y = { 1, 2 } } }) end,
+                  "data.y has 2 values, data.x 1")
+    T.raises_here(function() return dfle.write_csv(csv2, { columns = { "x" }, data = { x = { 1 } }, units = { X = "m" } }) end,
+                  "units names 'X', which is not a column")
+    T.raises_here(function() return dfle.write_csv(csv2, { columns = { "x", "x" }, data = { x = { 1 } } }) end,
+                  "column 'x' is listed twice")
+    T.raises_here(function() return dfle.write_csv(csv2, { columns = { "a,b" }, data = { ["a,b"] = { 1 } } }) end,
+                  "dfle.write_csv:", "cannot go into a CSV header")
+    T.raises_here(function() return dfle.write_csv(csv2, { colums = {} }) end, "colums")
+end
+
 return tests

@@ -226,6 +226,8 @@ void dfle_lua_set_command(lua_State *L, char **argv, int argc, int script);
  * the date, `about` (may be NULL), the command, the script and the
  * working directory; returns it.  Raises if memory runs out. */
 dfle_record *dfle_lua_push_record(lua_State *L, const char *about);
+/* The same without a stamp: an empty record. */
+dfle_record *dfle_lua_push_empty_record(lua_State *L);
 
 /* Add the entries of the table at t to rec's current section, sorted by
  * key (as parameters if `params`): numbers, booleans and strings as
@@ -317,6 +319,7 @@ void dfle_lua_open_analysis(lua_State *L);
 void dfle_lua_open_plot(lua_State *L);
 void dfle_lua_open_sampling(lua_State *L);
 void dfle_lua_open_args(lua_State *L); /* dfle.args, dfle.mkdir (lua_args.c) */
+void dfle_lua_open_record(lua_State *L); /* dfle.write_csv (lua_record.c) */
 void dfle_lua_open_dem(lua_State *L);
 void dfle_lua_open_ensemble(lua_State *L); /* after sampling: wraps dfle.pawn */
 void dfle_lua_open_trace_hook(lua_State *L); /* a test hook, in the registry */
