@@ -20,6 +20,8 @@ tests["model:write_csv: provenance and units above plain names; the record besid
     local json = csv:sub(1, -5) .. ".json"
     local m = small_model{ router = dfle.router.empirical{ tau_y = 200 }, U = 1e-3 }
     local run = m:run_to_steady{ tol = 1e-4 }
+    local png = T.tmpname(".png")
+    dfle.plot.profile(m, png)
     m:write_csv(csv)
     local tab = T.read_csv(csv)
     local c = comments_text(tab)
@@ -50,6 +52,7 @@ tests["model:write_csv: provenance and units above plain names; the record besid
     T.eq(r.run.params.tol, 1e-4)
     T.eq(r.record, nil, "the record does not name itself")
     T.eq(r.files[#r.files], csv, "the CSV is among the files written")
+    T.eq(r.files[#r.files - 1], png, "and the plot written before it")
     T.ok(type(r.command) == "table" and #r.command >= 2, "command as an array")
     T.ok(r.cwd ~= nil, "working directory")
 end

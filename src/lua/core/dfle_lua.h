@@ -233,6 +233,9 @@ dfle_record *dfle_lua_push_empty_record(lua_State *L);
  * key (as parameters if `params`): numbers, booleans and strings as
  * they are, anything else as its type name. */
 void dfle_lua_record_table(lua_State *L, dfle_record *rec, int t, int params);
+/* The value at v as entry `key` of rec's current section, as
+ * dfle_lua_record_table does it. */
+void dfle_lua_record_value(lua_State *L, dfle_record *rec, const char *key, int v, int params);
 /* The params a component written in Lua keeps (user value 2 of its
  * object at obj), as parameters of rec's current section. */
 void dfle_lua_record_own_params(lua_State *L, dfle_record *rec, int obj);
@@ -254,7 +257,7 @@ const char *dfle_lua_record_path(lua_State *L, dfle_record *rec, int opts, const
 void dfle_lua_record_done(lua_State *L, dfle_record *rec, const char *output, const char *jpath);
 void dfle_lua_write_record(lua_State *L, dfle_record *rec, const char *output, const char *jpath);
 
-/* The model at idx into rec (model.c's dfle_model_describe, the params
+/* (lua_model.c) The model at idx into rec (dfle_model_describe, the params
  * of components written in Lua, a U(t) function, and the last run since
  * the state was last set: section "run"). */
 void dfle_lua_record_model(lua_State *L, dfle_record *rec, int idx);
@@ -319,7 +322,7 @@ void dfle_lua_open_analysis(lua_State *L);
 void dfle_lua_open_plot(lua_State *L);
 void dfle_lua_open_sampling(lua_State *L);
 void dfle_lua_open_args(lua_State *L); /* dfle.args, dfle.mkdir (lua_args.c) */
-void dfle_lua_open_record(lua_State *L); /* dfle.write_csv (lua_record.c) */
+void dfle_lua_open_write_csv(lua_State *L); /* dfle.write_csv (lua_write_csv.c) */
 void dfle_lua_open_dem(lua_State *L);
 void dfle_lua_open_ensemble(lua_State *L); /* after sampling: wraps dfle.pawn */
 void dfle_lua_open_trace_hook(lua_State *L); /* a test hook, in the registry */

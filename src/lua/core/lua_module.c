@@ -35,7 +35,7 @@ int luaopen_dfle(lua_State *L)
     dfle_lua_open_plot(L);
     dfle_lua_open_sampling(L);
     dfle_lua_open_args(L);
-    dfle_lua_open_record(L);
+    dfle_lua_open_write_csv(L);
     dfle_lua_open_dem(L);
     dfle_lua_open_ensemble(L);
     dfle_lua_open_trace_hook(L);
