@@ -71,6 +71,8 @@ tests["record option: false writes none, a name puts it there, a bad value raise
     T.raises_here(function() return m:write_csv(csv, { record = 1 }) end,
                   "parameter 'record' must be true, false or a file name")
     T.raises_here(function() return m:write_csv(csv, { recrod = false }) end, "recrod")
+    T.raises_here(function() return m:write_csv(csv, { record = csv }) end,
+                  "the record would replace the file itself")
     -- a name that does not end in .csv keeps its whole name
     local txt = T.tmpname(".txt")
     m:write_csv(txt)

@@ -208,6 +208,9 @@ const char *dfle_lua_record_path(lua_State *L, dfle_record *rec, int opts, const
     t = lua_istable(L, opts) ? lua_getfield(L, opts, "record") : (lua_pushnil(L), LUA_TNIL);
     if (t == LUA_TSTRING) {
         jpath = dfle_lua_check_string(L, -1, fn, "record");
+        if (strcmp(jpath, path) == 0)
+            luaL_error(L, "dfle.%s: the record would replace the file itself ('%s'); give it "
+                          "another name", fn, path);
     } else if (t != LUA_TNIL && t != LUA_TBOOLEAN) {
         luaL_error(L, "dfle.%s: parameter 'record' must be true, false or a file name for the "
                       "JSON record, got %s", fn, dfle_lua_typename(L, -1));

@@ -312,8 +312,11 @@ static void push_comments(lua_State *L, int arg, int names, int outputs, const c
     }
     nm[np + no + 1] = "status", un[np + no + 1] = NULL;
     nm[np + no + 2] = "reason", un[np + no + 2] = NULL;
-    if (dfle_record_status(rec, NULL) != DFLE_OK || (fp = open_memstream(&text, &len)) == NULL)
+    fp = dfle_record_status(rec, NULL) == DFLE_OK ? open_memstream(&text, &len) : NULL;
+    if (fp == NULL) {
         luaL_error(L, "dfle.%s: out of memory", fn);
+        return;
+    }
     dfle_record_write_comments(rec, fp);
     line = dfle_units_line(nm, un, (size_t)(np + no + 3));
     if (line != NULL)
