@@ -219,7 +219,7 @@ int dfle_bins_compute(size_t n, const double *A, const double *S,
 
 /* ---- Fit of Eq. (2) ---------------------------------------------- */
 
-enum { EQ2_NPAR = 3, EQ2_GUESS_GRID = 60, EQ2_MAX_ITER = 1000 };
+enum { EQ2_NPAR = 3, EQ2_GUESS_COARSE = 13, EQ2_GUESS_REFINE = 12, EQ2_MAX_ITER = 1000 };
 
 typedef struct eq2_data {
     size_t n;
@@ -323,57 +323,103 @@ static int eq2_jacobian(const gsl_vector *x, void *data, gsl_matrix *J)
  * weighted straight-line fit (weights (S (S_df - S) / S_df)^2 carry the
  * misfit back to linear slope, ((S_df - S) / S_df)^2 to log slope;
  * points with S >= S_df have no image and sit out), and the candidate
- * with the least squared misfit in the fit's own space wins.  This needs no sorting or smoothing, copes with noise, and finds
- * transitions beyond either end of the data, where a start in the middle
- * slides into the flat a2 -> 0 valley. */
+ * with the least squared misfit in the fit's own space wins.  This needs
+ * no sorting or smoothing, copes with noise, and finds transitions beyond
+ * either end of the data, where a start in the middle slides into the
+ * flat a2 -> 0 valley.
+ *
+ * The grid is searched coarse to fine: 13 values of ln S_df, then a
+ * golden-section search between the neighbours of the best.  Each value
+ * costs a pass of logarithms and one of the misfit over the data, and
+ * the start only has to lie in the basin Levenberg-Marquardt converges
+ * from, so 25 values do what 60 evenly spaced ones did, in 40 % of the
+ * time (the fit then costs less than the steady state it measures). */
+typedef struct eq2_guess {
+    double S_hi, lnA_lo, lnA_hi;
+    double best, u[EQ2_NPAR]; /* the best candidate so far and its misfit */
+} eq2_guess;
+
+/* The misfit of the candidate whose S_df is exp(lnS_df) (HUGE_VAL when
+ * the line fit has no meaning there); keeps it when it is the best. */
+static double eq2_try(const eq2_data *d, eq2_guess *g, double lnS_df)
+{
+    double S_df = exp(lnS_df), sw = 0.0, sx = 0.0, sy = 0.0, sxx = 0.0, sxy = 0.0;
+    for (size_t i = 0; i < d->n; i++) {
+        double s = d->S[i], x = d->lnA[i];
+        if (!(s < S_df))
+            continue;
+        /* The weight carries a misfit in y back to one in S, or in
+         * ln S for a log fit (d ln S / dy = -(S_df - S) / S_df). */
+        double y = log(S_df / s - 1.0);
+        double w = (d->lnS != NULL ? 1.0 : s) * (S_df - s) / S_df;
+        w *= w;
+        sw += w;
+        sx += w * x;
+        sy += w * y;
+        sxx += w * x * x;
+        sxy += w * x * y;
+    }
+    if (!(sw > 0.0))
+        return HUGE_VAL;
+    double x_mean = sx / sw, y_mean = sy / sw;
+    double var = sxx / sw - x_mean * x_mean;
+    double cov = sxy / sw - x_mean * y_mean;
+    if (!(var > 1e-12 * (g->lnA_hi - g->lnA_lo) * (g->lnA_hi - g->lnA_lo)))
+        return HUGE_VAL;
+    double a2 = cov / var;
+    double cand[EQ2_NPAR] = { lnS_df, x_mean - y_mean / a2, a2 };
+    if (!(a2 > 0.0) || !isfinite(cand[1]))
+        return HUGE_VAL;
+    double sse = eq2_sse(d, cand);
+    if (sse < g->best) {
+        g->best = sse;
+        memcpy(g->u, cand, sizeof cand);
+    }
+    return sse;
+}
+
 static void eq2_initial_guess(const eq2_data *d, double *u)
 {
-    double S_hi = 0.0, lnA_lo = HUGE_VAL, lnA_hi = -HUGE_VAL;
+    eq2_guess g = { 0.0, HUGE_VAL, -HUGE_VAL, 0.0, { 0.0 } };
     for (size_t i = 0; i < d->n; i++) {
-        S_hi = fmax(S_hi, d->S[i]);
-        lnA_lo = fmin(lnA_lo, d->lnA[i]);
-        lnA_hi = fmax(lnA_hi, d->lnA[i]);
+        g.S_hi = fmax(g.S_hi, d->S[i]);
+        g.lnA_lo = fmin(g.lnA_lo, d->lnA[i]);
+        g.lnA_hi = fmax(g.lnA_hi, d->lnA[i]);
     }
-    u[0] = log(S_hi);
-    u[1] = 0.5 * (lnA_lo + lnA_hi);
-    u[2] = 1.0;
-    double best = eq2_sse(d, u);
+    g.u[0] = log(g.S_hi);
+    g.u[1] = 0.5 * (g.lnA_lo + g.lnA_hi);
+    g.u[2] = 1.0;
+    g.best = eq2_sse(d, g.u);
 
-    for (int k = 0; k < EQ2_GUESS_GRID; k++) {
-        double S_df = 0.8 * S_hi * pow(25.0, k / (EQ2_GUESS_GRID - 1.0));
-        double sw = 0.0, sx = 0.0, sy = 0.0, sxx = 0.0, sxy = 0.0;
-        for (size_t i = 0; i < d->n; i++) {
-            double s = d->S[i], x = d->lnA[i];
-            if (!(s < S_df))
-                continue;
-            /* The weight carries a misfit in y back to one in S, or in
-             * ln S for a log fit (d ln S / dy = -(S_df - S) / S_df). */
-            double y = log(S_df / s - 1.0);
-            double w = (d->lnS != NULL ? 1.0 : s) * (S_df - s) / S_df;
-            w *= w;
-            sw += w;
-            sx += w * x;
-            sy += w * y;
-            sxx += w * x * x;
-            sxy += w * x * y;
-        }
-        if (!(sw > 0.0))
-            continue;
-        double x_mean = sx / sw, y_mean = sy / sw;
-        double var = sxx / sw - x_mean * x_mean;
-        double cov = sxy / sw - x_mean * y_mean;
-        if (!(var > 1e-12 * (lnA_hi - lnA_lo) * (lnA_hi - lnA_lo)))
-            continue;
-        double a2 = cov / var;
-        double cand[EQ2_NPAR] = { log(S_df), x_mean - y_mean / a2, a2 };
-        if (!(a2 > 0.0) || !isfinite(cand[1]))
-            continue;
-        double sse = eq2_sse(d, cand);
-        if (sse < best) {
-            best = sse;
-            memcpy(u, cand, sizeof cand);
+    /* S_df from 0.8 to 20 times the largest slope. */
+    const double lo = log(0.8 * g.S_hi), step = log(25.0) / (EQ2_GUESS_COARSE - 1);
+    double sse[EQ2_GUESS_COARSE];
+    int k_best = -1;
+    for (int k = 0; k < EQ2_GUESS_COARSE; k++) {
+        sse[k] = eq2_try(d, &g, lo + k * step);
+        if (sse[k] < HUGE_VAL && (k_best < 0 || sse[k] < sse[k_best]))
+            k_best = k;
+    }
+    if (k_best >= 0) {
+        /* Golden section on [k_best - 1, k_best + 1] (clamped). */
+        const double r = 0.5 * (sqrt(5.0) - 1.0);
+        double a = lo + (k_best > 0 ? k_best - 1 : 0) * step;
+        double b = lo + (k_best < EQ2_GUESS_COARSE - 1 ? k_best + 1 : k_best) * step;
+        double c = b - r * (b - a), e = a + r * (b - a);
+        double fc = eq2_try(d, &g, c), fe = eq2_try(d, &g, e);
+        for (int it = 2; it < EQ2_GUESS_REFINE; it++) {
+            if (fc < fe) {
+                b = e, e = c, fe = fc;
+                c = b - r * (b - a);
+                fc = eq2_try(d, &g, c);
+            } else {
+                a = c, c = e, fc = fe;
+                e = a + r * (b - a);
+                fe = eq2_try(d, &g, e);
+            }
         }
     }
+    memcpy(u, g.u, sizeof g.u);
 }
 
 /* Plain Levenberg-Marquardt (GSL trust region, More scaling): from
