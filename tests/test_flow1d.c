@@ -356,10 +356,13 @@ static void friction_law_and_pore_pressure(void **state)
     assert_close(dfle_flow1d_lambda(f, 0.3, -1), 0.9, 0, 0);
     assert_close(dfle_flow1d_lambda(f, 0.3, 1e4), 0.9 * (1 - erfc(0.6 / sqrt(4 * 5e-6 * 1e4))),
                  1e-14, 0);
-    /* In two parts, bit for bit the same. */
+    /* In two parts, bit for bit the same; no phi beyond phi_max. */
     assert_close(dfle_flow1d_pore_length(f, -1), 0.0, 0, 0);
     assert_close(dfle_flow1d_lambda_at(f, 0.3, dfle_flow1d_pore_length(f, 1e4)),
                  dfle_flow1d_lambda(f, 0.3, 1e4), 0, 0);
+    for (double speed = 1e-3; speed < 1e12; speed *= 7.0)
+        assert_true(dfle_flow1d_phi(f, 0, 0.01, speed) <= dfle_flow1d_phi_max(f));
+    assert_true(dfle_flow1d_phi_max(f) < 0.62 * (1 + 1e-9));
     dfle_flow1d_free(f);
 }
 

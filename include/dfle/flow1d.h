@@ -108,6 +108,8 @@ double dfle_flow1d_pore_length(const dfle_flow1d *f, double t);
 double dfle_flow1d_lambda_at(const dfle_flow1d *f, double h, double L);
 /* Friction coefficient phi(I) at depth h [m], speed |v| [m/s], cell k. */
 double dfle_flow1d_phi(const dfle_flow1d *f, size_t k, double h, double v);
+/* A bound no value of dfle_flow1d_phi exceeds (mu_2, rounded up). */
+double dfle_flow1d_phi_max(const dfle_flow1d *f);
 
 /* The CFL time step of the current state [s] (+Inf when all is dry). */
 double dfle_flow1d_stable_dt(const dfle_flow1d *f);

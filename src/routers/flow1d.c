@@ -240,6 +240,13 @@ double dfle_flow1d_phi(const dfle_flow1d *f, size_t k, double h, double v)
     return h > f->p.h_dry ? phi_wet(&f->p, f->rgz[k], h, v) : f->p.mu_s;
 }
 
+double dfle_flow1d_phi_max(const dfle_flow1d *f)
+{
+    /* phi -> mu_2 as I -> inf; the operations of phi_wet round it up by a
+     * few units in the last place at most, far below this margin. */
+    return f->p.mu_2 * (1.0 + 1e-12);
+}
+
 /* Velocity and wave speed of cell k as the fluxes see it (0 if dry). */
 static inline void cell_speeds(const dfle_flow1d *f, size_t k, double *u, double *c)
 {
@@ -383,6 +390,23 @@ static inline double coulomb(double dt, double one_minus_lambda, double gz, doub
     return dt * one_minus_lambda * gz * h * mu;
 }
 
+/* Whether the Coulomb impulse at lambda = lambda0 erf(h / L) (Eq. 9)
+ * resists `push` [m^2/s].  The erf is the dearest part of a step, and
+ * often the answer does not need it: 0 <= lambda <= lambda0 bounds the
+ * impulse between its values at lambda0 and at 0, computed by the same
+ * operations in the same order, and rounding is monotone, so the bounds
+ * hold in floating point too and give the answer the exact impulse
+ * would. */
+static inline int coulomb_resists(const dfle_flow1d_params *p, double dt, double gz, double h,
+                                  double mu, double L, double push)
+{
+    if (push <= coulomb(dt, 1.0 - p->lambda0, gz, h, mu))
+        return 1;
+    if (push > coulomb(dt, 1.0, gz, h, mu))
+        return 0;
+    return push <= coulomb(dt, 1.0 - lambda_of(p, h, L), gz, h, mu);
+}
+
 /* A cell at rest stays at rest while friction can resist what pushes it
  * (a pile on a slope below its friction angle).  The Riemann fluxes know
  * nothing of friction and would still spill its edges into dry
@@ -406,7 +430,7 @@ static void hold_resting_cells(dfle_flow1d *f, double dt, double L, size_t lo, s
             push = fabs(momentum_after_fluxes(f, k, dt, h[k], q[k],
                                               wf[k + 1] * Fq[k + 1] - wf[k] * Fq[k])) /
                    f->wdx[k];
-            held[k] = push <= coulomb(dt, 1.0 - lambda_of(&p, h[k], L), f->gz[k], h[k], p.mu_s);
+            held[k] = coulomb_resists(&p, dt, f->gz[k], h[k], p.mu_s, L, push);
             any |= held[k] != 0.0;
         }
     }
@@ -495,10 +519,19 @@ static int update(dfle_flow1d *f, double dt, double L, size_t lo, size_t hi, dfl
              * reverse.  phi comes from the speed at the start of the step
              * (u, explicit, as the paper's sources): from the speed after
              * a whole step of free acceleration it would jump towards
-             * mu_2 and stall every flow that starts from rest. */
-            phi = phi_wet(&p, rgz[k], h, u[k]);
-            fc = coulomb(dt, 1.0 - lambda_of(&p, h, L), gz[k], h, phi);
-            qn = fabs(qs) <= fc ? 0.0 : qs - copysign(fc, qs);
+             * mu_2 and stall every flow that starts from rest.  The
+             * impulse is at least its value at phi = mu_s and lambda =
+             * lambda0 (the same operations; rounding is monotone), so a
+             * cell that stops even then needs neither phi nor the erf,
+             * and one that stops at lambda0 needs no erf. */
+            qn = 0.0;
+            if (!(fabs(qs) <= coulomb(dt, 1.0 - p.lambda0, gz[k], h, p.mu_s))) {
+                phi = phi_wet(&p, rgz[k], h, u[k]);
+                if (!(fabs(qs) <= coulomb(dt, 1.0 - p.lambda0, gz[k], h, phi))) {
+                    fc = coulomb(dt, 1.0 - lambda_of(&p, h, L), gz[k], h, phi);
+                    qn = fabs(qs) <= fc ? 0.0 : qs - copysign(fc, qs);
+                }
+            }
             if (!isfinite(qn))
                 return dfle_error_set(err, DFLE_ENUMERIC,
                                       "flow1d: discharge not finite in cell %zu (h = %g m)", k + 1,

@@ -99,6 +99,7 @@ static int process_route(void *state, const dfle_network *net, const double *S, 
     const double *w = dfle_network_w(net), *A = dfle_network_A(net);
     double *cw = NULL, *cS = NULL, *pile, released, out_total = 0.0, t = 0.0, t_entry = -1.0;
     const double *h, *q, *face_vol;
+    double phi_max;
     dfle_flow1d *f = NULL;
     size_t steps = 0, next_snap = 0, cell_steps = 0;
     int st, end, moved = 0;
@@ -137,6 +138,7 @@ static int process_route(void *state, const dfle_network *net, const double *S, 
     h = dfle_flow1d_depth(f);
     q = dfle_flow1d_discharge(f);
     face_vol = dfle_flow1d_face_volumes(f);
+    phi_max = dfle_flow1d_phi_max(f);
 
     dfle_flow_clear(flow);
     flow->time_resolved = 1;
@@ -193,8 +195,13 @@ static int process_route(void *state, const dfle_network *net, const double *S, 
                     pr->arrival[i] = t;
                     pr->cos_theta[i] = cos(atan(S[i]));
                 }
-                tau = (1.0 - lam) * o->flow.rho * o->flow.g * pr->cos_theta[i] * hk *
-                      dfle_flow1d_phi(f, k, hk, v);
+                /* The peak Coulomb stress (1 - lambda) rho g_z h phi: phi
+                 * (four divisions and a root) only when its bound could
+                 * beat the peak so far. */
+                tau = (1.0 - lam) * o->flow.rho * o->flow.g * pr->cos_theta[i] * hk * phi_max;
+                if (tau > flow->tau[i])
+                    tau = (1.0 - lam) * o->flow.rho * o->flow.g * pr->cos_theta[i] * hk *
+                          dfle_flow1d_phi(f, k, hk, v);
                 if ((st = flow->integrand(flow->integrand_state, hk, v, lam, &g, err)) != DFLE_OK)
                     goto done;
                 flow->integral[i] += g * dt;
