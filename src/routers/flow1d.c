@@ -19,6 +19,11 @@
  *    impulse friction can deliver in dt exceeds the momentum, the cell
  *    stops (q = 0) instead of the friction reversing it.  This is what
  *    lets a pile come to rest on a slope below its friction angle.
+ *  - A step works on the wet window only (the cells holding volume and
+ *    one more on each side: a first-order step moves volume no further),
+ *    and computes nothing twice; where a bound decides (friction), the
+ *    exact value is not computed.  Every number stays what the whole-grid
+ *    sweep computes, to the bit (doc/process-router.md, the wet window).
  */
 #include "dfle/flow1d.h"
 
