@@ -196,8 +196,9 @@ static int time_steady_state(int reps, dfle_error *err)
     if (st == DFLE_OK) {
         for (int p = 0; p < 2; p++)
             qsort(t + p * reps, (size_t)reps, sizeof *t, by_value);
-        printf("process router, direct steady state (Fig. 6): %.1f ms CPU (best of %d; median %.1f), "
-               "target <= 20 ms; full-domain path %.1f ms (median %.1f), %.2fx; %zu routings\n",
+        printf("process router, direct steady state (Fig. 6): %.1f ms CPU (best of %d; median "
+               "%.1f), target <= 20 ms; full-domain path %.1f ms (median %.1f), %.2fx; %zu "
+               "routings\n",
                1e3 * t[0], reps, 1e3 * t[reps / 2], 1e3 * t[reps], 1e3 * t[reps + reps / 2],
                t[reps] / t[0], routings);
     }

@@ -258,7 +258,8 @@ static int process_route(void *state, const dfle_network *net, const double *S, 
         flow->reach[i] = i < flow->runout_end;
     pr->report = (dfle_process_report){
         .routed = 1, .end = end, .volume_in = released, .volume_out = out_total,
-        .volume_left = dfle_flow1d_volume(f, 0, N), .duration = t, .steps = steps, .cell_steps = cell_steps, .n = n,
+        .volume_left = dfle_flow1d_volume(f, 0, N), .duration = t, .steps = steps,
+        .cell_steps = cell_steps, .n = n,
         .arrival = pr->arrival, .n_snapshots = pr->n_snap, .snapshot_t = pr->snap_t,
         .snapshot_h = pr->snap_h,
     };
