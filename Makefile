@@ -152,6 +152,23 @@ $(GATE_TEST): $(BUILD)/obj/gate/tests/test_trace_release.o \
 	@mkdir -p $(dir $@)
 	$(CC) $(ALL_LDFLAGS) $^ $(CMOCKA_LIBS) $(LUA_LIBS) $(CORE_LIBS) -o $@
 
+# The library when GDAL and libnetcdf cannot be loaded (tests/test_extlib.c):
+# their loaders and the test compiled again for sonames no system has,
+# the loaders linked ahead of the library's own.
+MISSING_TEST := $(BUILD)/tests/test_extlib_missing
+MISSING_CFLAGS := -DDFLE_TEST_EXTLIB_MISSING \
+    -DDFLE_GDAL_SONAME='"libdfle-test-missing-gdal.so.0"' \
+    -DDFLE_NETCDF_SONAME='"libdfle-test-missing-netcdf.so.0"'
+
+$(BUILD)/obj/missing/%.o: %.c $(EXTLIB_H)
+	@mkdir -p $(dir $@)
+	$(CC) $(ALL_CFLAGS) $(MISSING_CFLAGS) -Isrc -I$(BUILD)/gen $(LUA_CFLAGS) $(GDAL_CFLAGS) $(NETCDF_CFLAGS) $(CMOCKA_CFLAGS) -MMD -MP -c $< -o $@
+
+$(MISSING_TEST): $(BUILD)/obj/missing/tests/test_extlib.o $(BUILD)/obj/missing/src/base/gdal_lib.o \
+                 $(BUILD)/obj/missing/src/base/netcdf_lib.o $(LIB_LUA) $(LIB_CORE)
+	@mkdir -p $(dir $@)
+	$(CC) $(ALL_LDFLAGS) $^ $(CMOCKA_LIBS) $(LUA_LIBS) $(CORE_LIBS) -o $@
+
 $(BUILD)/bench/%: $(BUILD)/obj/bench/%.o $(LIB_CORE)
 	@mkdir -p $(dir $@)
 	$(CC) $(ALL_LDFLAGS) $^ $(CORE_LIBS) -o $@
@@ -162,7 +179,7 @@ $(BUILD)/bench/%: $(BUILD)/obj/bench/%.o $(LIB_CORE)
 HAVE_MPICC := $(if $(SANITIZE),,$(shell command -v $(MPICC) 2>/dev/null))
 
 # The benchmark drivers are built (not run) so they cannot rot.
-test: all $(TEST_BIN) $(GATE_TEST) $(BENCH_BIN)
+test: all $(TEST_BIN) $(GATE_TEST) $(MISSING_TEST) $(BENCH_BIN)
 	@BUILD=$(BUILD) SANITIZE='$(SANITIZE)' sh tests/run-tests.sh
 ifneq ($(HAVE_MPICC),)
 	@$(MAKE) --no-print-directory test-mpi
@@ -172,7 +189,7 @@ check:
 	$(MAKE) BUILD=build/san OPT=-O1 \
 	    SANITIZE="-fsanitize=address,undefined -fno-omit-frame-pointer -fno-sanitize-recover=all" test
 
-memcheck: all $(TEST_BIN) $(GATE_TEST)
+memcheck: all $(TEST_BIN) $(GATE_TEST) $(MISSING_TEST)
 	@BUILD=$(BUILD) MEMCHECK=1 sh tests/run-tests.sh
 
 bench: all $(BENCH_BIN)
