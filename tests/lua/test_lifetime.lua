@@ -96,4 +96,60 @@ tests["a router may not be routed again from inside its own routing"] = function
     T.raises_here(function() return rt:route(m) end, "is running already")
 end
 
+-- Found by the fuzzer (tests/fuzz/): the nested routing pointed the
+-- router at the other model's channel and flow, and the running sweep
+-- then wrote past the end of its own flow arrays.
+tests["a Lua router used by another model from inside its own flow() is refused"] = function()
+    local function empirical(c, p)
+        local M = 3000 * (1e-6 * c.A)^0.5
+        local Q = 0.135 * M^0.78
+        local h = (3 * 500 * Q / (1800 * 9.81 * c.w) / c.S)^(1 / 3)
+        local tau = 1800 * 9.81 * (c.w * h / (c.w + 2 * h)) * c.S / math.sqrt(1 + c.S^2)
+        c.M, c.Q, c.h, c.v, c.t_p = M, Q, h, Q / (c.w * h), M / Q
+        c.tau, c.Theta = tau, 1 - 300 / tau
+        return tau >= 300
+    end
+    local other, nested_ok, nested_err
+    local once = true
+    local rt = dfle.router.define{ flow = function(c, p)
+        if once then
+            once = false
+            nested_ok, nested_err = pcall(function() return other:get("E_df") end)
+        end
+        return empirical(c, p)
+    end }
+    other = dfle.model{ channel = dfle.channel{ dx = 5 }, router = rt }   -- 403 nodes
+    local m = dfle.model{ channel = dfle.channel{ dx = 50, A_max = 2e5 }, router = rt }
+    local ref = dfle.model{ channel = dfle.channel{ dx = 50, A_max = 2e5 },
+                            router = dfle.router.define{ flow = empirical } }
+    local E, E_ref = m:get("E_df"), ref:get("E_df")
+    T.eq(nested_ok, false)
+    T.has(nested_err, "used again from inside its own flow()")
+    T.eq(#E, m.n)
+    for i = 1, m.n do T.eq(E[i], E_ref[i]) end
+end
+
+tests["a Lua law used by another model from inside its own integrand is refused"] = function()
+    for _, compile in ipairs{ false, true } do
+        local other, nested_err
+        local once = true
+        local law = dfle.law.define{ compile = compile,
+            rate = function(c, p) return 1e-4 * c.S^6 * c.F end,
+            integrand = function(h, v, lambda, p)
+                if once then
+                    once = false
+                    local ok, err = pcall(function() return other:get("E_df") end)
+                    nested_err = err
+                end
+                return h
+            end }
+        local ch = dfle.channel{ dx = 50, A_max = 2e5 }
+        other = dfle.model{ channel = ch, router = dfle.router.process{ max_steps = 200 }, law = law }
+        local m = dfle.model{ channel = ch, router = dfle.router.process{ max_steps = 200 },
+                              law = law }
+        T.eq(#m:get("E_df"), m.n)
+        T.has(nested_err, "dfle.law.lua: used again from inside its own functions")
+    end
+end
+
 return tests

@@ -43,8 +43,9 @@ enum { O_H, O_V, O_T_P, O_M, O_Q, O_TAU, O_THETA, N_OUT };
 typedef struct lua_router {
     dfle_lua_shell sh;   /* the thread (user value 1 of the router), name, who */
     dfle_router_ops ops; /* named after the user's router */
-    /* The call in progress. */
-    int busy;
+    /* The call in progress (set only once dfle_lua_shell_enter let it
+     * start: a nested route would otherwise point these at another
+     * model's channel and flow under the running sweep). */
     const dfle_channel *ch;
     const double *S;   /* route: n slopes; node_flow: &s */
     size_t first, n;   /* nodes [first, first + n) */
@@ -148,16 +149,11 @@ static int sweep(lua_State *T)
     return 0;
 }
 
+/* The sweep, for an op that dfle_lua_shell_enter let start. */
 static int run_sweep(lua_router *r, dfle_error *err)
 {
-    int st;
-    if (r->busy)
-        return dfle_error_set(err, DFLE_ECALLBACK,
-                              "router.%s: the router was used again from inside its own flow()",
-                              r->sh.name);
-    r->busy = 1;
-    st = dfle_lua_shell_sweep(&r->sh, SLOT_COUNT, SLOT_SWEEP, "error in flow()", err);
-    r->busy = 0;
+    int st = dfle_lua_shell_sweep(&r->sh, SLOT_COUNT, SLOT_SWEEP, "error in flow()", err);
+    dfle_lua_shell_leave(&r->sh);
     return st;
 }
 
@@ -171,6 +167,8 @@ static int lr_route(void *state, const dfle_channel *ch, const double *S, dfle_f
     if (flow->n != n)
         return dfle_error_set(err, DFLE_EINVAL, "router.%s: flow has %zu nodes, channel %zu",
                               r->sh.name, flow->n, n);
+    if ((st = dfle_lua_shell_enter(&r->sh, "flow()", err)) != DFLE_OK)
+        return st;
     flow->time_resolved = 0;
     r->ch = ch, r->S = S, r->first = 0, r->n = n, r->flow = flow, r->j0 = 0;
     if ((st = run_sweep(r, err)) != DFLE_OK)
@@ -192,6 +190,8 @@ static int lr_node_flow(void *state, const dfle_channel *ch, size_t i, double S,
     zero_node(node, 0);
     if (!(S > 0))
         return DFLE_OK;
+    if ((st = dfle_lua_shell_enter(&r->sh, "flow()", err)) != DFLE_OK)
+        return st;
     r->ch = ch, r->S = &S, r->first = i, r->n = 1, r->flow = node, r->j0 = 0;
     if ((st = run_sweep(r, err)) != DFLE_OK)
         return st;
