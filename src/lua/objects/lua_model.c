@@ -300,8 +300,18 @@ static int model_run(lua_State *L, int steady)
         if (lua_type(L, -1) != LUA_TSTRING)
             luaL_error(L, "dfle.%s: parameter 'method' must be a string, got %s", fn,
                        dfle_lua_typename(L, -1));
-        dfle_lua_check_string(L, -1, fn, "method");
-        o.method = luaL_checkoption(L, -1, NULL, methods);
+        {
+            /* Not luaL_checkoption: the value is a field, not an
+             * argument ("bad argument #-2"), and the choices help. */
+            const char *name = dfle_lua_check_string(L, -1, fn, "method");
+            int k = 0;
+            while (methods[k] != NULL && strcmp(methods[k], name) != 0)
+                k++;
+            if (methods[k] == NULL)
+                luaL_error(L, "dfle.%s: method must be 'explicit', 'implicit', 'direct' or "
+                              "'auto' (got '%s')", fn, dfle_lua_shown(L, name, strlen(name)));
+            o.method = k;
+        }
         if (!steady && o.method == DFLE_METHOD_DIRECT)
             luaL_error(L, "dfle.model:run: method 'direct' finds steady states only; use "
                           "run_to_steady, or 'explicit' or 'implicit' here");
