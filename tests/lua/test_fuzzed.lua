@@ -19,4 +19,18 @@ tests["an unknown method is named as the option it is, not 'bad argument #-2'"] 
                   "dfle.model:run: method must be", "(got 'Explicit')")
 end
 
+tests["a NaN is shown as NaN in messages, not as C's '-nan'"] = function()
+    for _, nan in ipairs{ 0 / 0, -(0 / 0) } do -- one of them has the sign bit set
+        local m = small()
+        local z = m:get("z")
+        z[2] = nan
+        T.raises_here(function() return m:set_z(z) end, "z at node 2 is not finite (NaN)")
+        local mu = small{ U = function(t) return t > 0 and nan or 5e-4 end }
+        T.raises_here(function() return mu:run{ years = 10 } end, "U(t) must be > 0 m/yr (got NaN")
+        T.raises_here(function() return dfle.channel{ dx = 50, length = 200,
+                                                      area = function(x) return nan end } end,
+                      "A at node 1 must be > 0 m^2 (got NaN)")
+    end
+end
+
 return tests
