@@ -33,4 +33,15 @@ tests["a NaN is shown as NaN in messages, not as C's '-nan'"] = function()
     end
 end
 
+tests["rate_ratio stays finite for the smallest U"] = function()
+    -- |dz/dt| / U overflowed to inf for U = 5e-324 m/yr (valid: > 0)
+    local m = small{ U = 5e-324 }
+    local z = {}
+    for i = 1, m.n do z[i] = 100 * (m.n - i) end -- steep: fast erosion
+    m:set_z(z)
+    local r = m:run{ years = 1, max_steps = 1 }
+    T.eq(r.rate_ratio, 1.7976931348623157e308)
+    T.eq(r.converged, false)
+end
+
 return tests
