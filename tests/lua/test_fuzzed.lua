@@ -44,4 +44,16 @@ tests["rate_ratio stays finite for the smallest U"] = function()
     T.eq(r.converged, false)
 end
 
+tests["fl:rate and fl:steady_slope raise rather than return inf"] = function()
+    local fl = dfle.fluvial.stochastic_threshold{}
+    T.raises_here(function() return fl:rate(1e4, 1.7976931348623157e308) end,
+                  "dfle.fluvial:rate: E_f = K A^m_s S^n_s is not finite for A = 10000")
+    T.raises_here(function() return fl:steady_slope(1e300, 1e4) end,
+                  "dfle.fluvial:steady_slope: S = (U/K)^(1/n_s) A^(-m_s/n_s) is not finite")
+    -- K = 0: no fluvial erosion, documented as inf
+    local off = dfle.fluvial.stream_power{ K = 0, m = 0.5, n = 1 }
+    T.eq(off:steady_slope(5e-4, 1e4), math.huge)
+    T.eq(off:rate(1e4, 0.1), 0.0)
+end
+
 return tests
