@@ -56,4 +56,37 @@ tests["fl:rate and fl:steady_slope raise rather than return inf"] = function()
     T.eq(off:rate(1e4, 0.1), 0.0)
 end
 
+tests["dfle.pawn(ens): errors carry the position; a changed result is refused"] = function()
+    local dir = T.tmpname()
+    os.remove(dir)
+    os.execute("mkdir -p " .. T.shquote(dir))
+    local ens = dfle.ensemble{
+        params = { k_df = { 5e-5, 1e-3 } }, n = 3, seed = 1, out = dir .. "/e.csv", workers = 1,
+        build = function(p)
+            return dfle.model{ channel = dfle.channel{ dx = 50, A_max = 5e4 },
+                               law = dfle.law.power{ k_df = p.k_df } }
+        end,
+        outputs = { "S_df", "A_df" },
+    }
+    -- errors of the plain dfle.pawn it calls had no file:line
+    T.raises_here(function() return dfle.pawn(ens, { outputs = { "S_df" }, S = 1.5 }) end,
+                  "dfle.pawn: S (slices) must be a whole number")
+    T.raises_here(function() return dfle.pawn(ens, { outputs = { 1 } }) end,
+                  "dfle.pawn: outputs[1] must be a name, got number")
+    -- a status that is not a string crashed (strcmp on NULL)
+    ens.data.status = { 1, {}, "ok" }
+    T.raises_here(function() return dfle.pawn(ens, { outputs = { "S_df" }, S = 2 }) end,
+                  "dfle.pawn:")
+    ens.data.status = "okokok"
+    T.raises_here(function() return dfle.pawn(ens, { outputs = { "S_df" } }) end,
+                  "dfle.pawn: the ensemble's data.status is not a table (got string)")
+    ens.inputs = 5
+    T.raises_here(function() return dfle.pawn(ens, { outputs = { "S_df" } }) end,
+                  "dfle.pawn: the ensemble's inputs must be an array of names, got number")
+    ens.data = nil
+    T.raises_here(function() return dfle.pawn(ens, { outputs = { "S_df" } }) end,
+                  "dfle.pawn: the ensemble's 'data' is not a table (got nil)")
+    os.execute("rm -rf " .. T.shquote(dir))
+end
+
 return tests
