@@ -96,6 +96,61 @@ tests["a router may not be routed again from inside its own routing"] = function
     T.raises_here(function() return rt:route(m) end, "is running already")
 end
 
+-- Found by the fuzzer (tests/fuzz/): an object collected by hand (its
+-- __gc through the debug library) from inside a call on it was freed
+-- when the call ended its use, and the call then read it: the field
+-- values m:get returns, the report rt:route returns.  It is now closed
+-- at that point and freed by its next __gc.
+tests["a model collected by hand inside its own law is closed after the call, not read freed"] = function()
+    local m, gc
+    local law = dfle.law.define{ compile = false,
+        factor = function(c, p) return c.t_p * c.h * c.Theta end,
+        rate = function(c, p)
+        if gc then
+            local f = gc
+            gc = nil
+            f(m)
+        end
+        return 1e-4 * c.S^6 * c.F
+    end }
+    m = small{ law = law }
+    local ref = small{ law = dfle.law.power{} }
+    local z0 = ref:get("z")
+    m:set_z(z0)
+    gc = debug.getmetatable(m).__gc
+    local z = m:get("z") -- evaluates first: z was set
+    T.eq(gc, nil, "the law ran")
+    for i = 1, ref.n do T.eq(z[i], z0[i]) end
+    T.has(tostring(m), "closed")
+    T.raises_here(function() return m:get("z") end, "dfle.model has been closed")
+    T.raises_here(function() return m:run{ years = 1 } end, "dfle.model has been closed")
+end
+
+tests["a router collected by hand inside its own routing is closed after it, not read freed"] = function()
+    local rt, gc
+    local law = dfle.law.define{ rate = function(c, p) return 1e-4 * c.S^6 * c.F end,
+        integrand = function(h, v, lambda, p)
+            if gc then
+                local f = gc
+                gc = nil
+                f(rt)
+            end
+            return h
+        end }
+    rt = dfle.router.process{ max_steps = 300 }
+    local m = small{ router = rt, law = law }
+    gc = debug.getmetatable(rt).__gc
+    local r = rt:route(m)
+    T.eq(gc, nil, "the integrand ran")
+    T.close(r.volume_in, 200, 1e-12) -- the report, read after the routing
+    T.ok(r.steps > 0)
+    m = nil
+    collectgarbage()
+    collectgarbage()
+    T.has(tostring(rt), "closed")
+    T.raises_here(function() return rt:params() end, "dfle.router has been closed")
+end
+
 -- Found by the fuzzer (tests/fuzz/): the nested routing pointed the
 -- router at the other model's channel and flow, and the running sweep
 -- then wrote past the end of its own flow arrays.

@@ -67,7 +67,7 @@ static int default_law(lua_State *L) { return call_module_ctor(L, "law", "power"
 
 static void *udata_ptr(lua_State *L, int idx)
 {
-    return lua_isnil(L, idx) ? NULL : *(void **)lua_touserdata(L, idx);
+    return lua_isnil(L, idx) ? NULL : dfle_lua_object_ptr(L, idx);
 }
 
 static int l_model_new(lua_State *L)
