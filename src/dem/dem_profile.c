@@ -19,6 +19,8 @@
  */
 #include "dem/dem_internal.h"
 
+#include "dfle/file.h"
+
 #include <math.h>
 #include <stdio.h>
 #include <stdlib.h>
@@ -538,21 +540,23 @@ int dfle_profile_write_csv(const dfle_profile *p, const char *path, dfle_error *
     static const enum dfle_profile_field cols[] = {DFLE_PROFILE_E, DFLE_PROFILE_N, DFLE_PROFILE_X,
                                                    DFLE_PROFILE_D, DFLE_PROFILE_Z, DFLE_PROFILE_A,
                                                    DFLE_PROFILE_S};
-    FILE *f;
-    int bad;
+    dfle_file out;
+    int st;
 
-    if (path == NULL || (f = fopen(path, "w")) == NULL)
-        return dfle_error_set(err, DFLE_EIO, "profile: cannot open '%s' for writing",
-                              path != NULL ? path : "(null)");
-    bad = fprintf(f, "E (m),N (m),x (m),d (m),z (m),A (m^2),S (-),receiver\n") < 0;
-    for (size_t i = 0; i < p->n && !bad; i++) {
+    if (path == NULL)
+        return dfle_error_set(err, DFLE_EINVAL, "profile: the path is NULL");
+    /* Whole or not at all, like every file dfle writes (dfle/file.h): a
+     * plain fopen left half a file on a full disk and waited for ever
+     * on a FIFO nobody read. */
+    if ((st = dfle_file_begin(&out, path, "profile", err)) != DFLE_OK)
+        return st;
+    fprintf(out.fp, "E (m),N (m),x (m),d (m),z (m),A (m^2),S (-),receiver\n");
+    for (size_t i = 0; i < p->n; i++) {
         for (size_t k = 0; k < sizeof cols / sizeof cols[0]; k++)
-            bad |= fprintf(f, "%.10g,", p->f[cols[k]][i]) < 0;
-        bad |= fprintf(f, "%zu\n", p->receiver[i]) < 0;
+            fprintf(out.fp, "%.10g,", p->f[cols[k]][i]);
+        fprintf(out.fp, "%zu\n", p->receiver[i]);
     }
-    if (fclose(f) != 0 || bad)
-        return dfle_error_set(err, DFLE_EIO, "profile: error writing '%s'", path);
-    return DFLE_OK;
+    return dfle_file_commit(&out, err);
 }
 
 int dfle_profile_channel(const dfle_profile *p, double dx, double k_w, double b,
