@@ -89,4 +89,19 @@ tests["dfle.pawn(ens): errors carry the position; a changed result is refused"] 
     os.execute("rm -rf " .. T.shquote(dir))
 end
 
+tests["an area(x) that gives no area stops the search for A_max at once"] = function()
+    -- it was called for a million nodes, then said A_max was not reached
+    local calls = 0
+    for _, bad in ipairs{ 0, -1, 0 / 0 } do
+        calls = 0
+        local function area(x)
+            calls = calls + 1
+            return x < 100 and 1000 + x or bad
+        end
+        T.raises_here(function() return dfle.channel{ dx = 50, A_max = 5e4, area = area } end,
+                      "dfle.channel: A at node 3 must be > 0 m^2 (got", "from area(x) at x = 100")
+        T.eq(calls, 3)
+    end
+end
+
 return tests
