@@ -104,4 +104,16 @@ tests["an area(x) that gives no area stops the search for A_max at once"] = func
     end
 end
 
+tests["analytical_slope raises rather than return inf or NaN"] = function()
+    -- alpha close to beta/3: Eq. (19)'s power overflows (inf, or inf * 0)
+    local rt = dfle.router.empirical{}
+    for _, alpha in ipairs{ 0.34, 0.334 } do
+        local law = dfle.law.power{ alpha = alpha, beta = 1 }
+        T.raises_here(function() return dfle.analytical_slope(rt, law, { A = 1e4, U = 1 }) end,
+                      "dfle.analytical_slope: S of Eq. (19) is not finite", "at A = 10000")
+        T.raises_here(function() return dfle.analytical_slope(rt, law, { A = { 1e4 }, U = 1 }) end,
+                      "dfle.analytical_slope: S of Eq. (19) is not finite")
+    end
+end
+
 return tests
