@@ -116,4 +116,16 @@ tests["analytical_slope raises rather than return inf or NaN"] = function()
     end
 end
 
+tests["a closed profile given to fit_slope_area is named at the script's line"] = function()
+    local dem = dfle.dem.read(T.root .. "/../shared/data/dem/small/testdem1.dem")
+    dem:fill()
+    local p = dem:network{ A_min = dem.dx * dem.dy }
+    do local closing <close> = p end
+    -- 'bad argument #1 to '?'' without a file:line, from a call made in C
+    T.raises_here(function() return dfle.fit_slope_area(p) end,
+                  "bad argument #1 to 'fit_slope_area' (dfle.profile has been closed)")
+    T.raises_here(function() return dfle.plot.slope_area(p, T.tmpname(".png")) end,
+                  "dfle.profile has been closed")
+end
+
 return tests
