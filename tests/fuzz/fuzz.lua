@@ -64,7 +64,20 @@ local S = { r = H.rng(opt.seed), pool = {}, closed = {}, depth = 0, noted = {},
 local r = S.r
 S.inputs = I
 
+-- The progress file: the call about to run, one line each, for run.sh's
+-- watchdog (a hang is a file that stops changing) and for naming the
+-- call that crashed.  Started afresh every 500 calls, so it stays small
+-- under a file-size limit.
 local progress = opt.progress and assert(io.open(opt.progress, "a")) or nil
+local function note_progress(k, what)
+    if not progress then return end
+    if k % 500 == 0 and what ~= "(check of a pooled model)" then
+        progress:close()
+        progress = assert(io.open(opt.progress, "w"))
+    end
+    progress:write(("%d %s\n"):format(k, what))
+    progress:flush()
+end
 
 local POOL_MAX = 4
 
@@ -582,9 +595,11 @@ local function build_call(t)
     local muts = mutate(args, budget)
     -- the wrong object as self, or a closed one
     local how = "method"
-    if t.tname and r.chance(0.1) then
+    if t.tname and (r.chance(0.1) or self == nil) then
+        -- o.method(x) with x not an object of the type: `x:method()`
+        -- would be Lua's own error (indexing x), not the library's
         how = "other"
-        self = r.chance(0.5) and S:any_object() or any_value()
+        if self ~= nil then self = r.chance(0.5) and S:any_object() or any_value() end
     end
     return args, self, how, muts == 0 and how == "method" and expect or nil
 end
@@ -634,10 +649,7 @@ local function do_call(k)
     local c0 = os.clock()
     current = { call = k, target = t.name, args_text = "" }
     S.noted = {}
-    if progress then
-        progress:write(("%d %s\n"):format(k, t.name))
-        progress:flush()
-    end
+    note_progress(k, t.name)
     local ok, res
     if t.special then
         ok, res = special_call(t)
@@ -749,10 +761,7 @@ for k = 1, opt.calls do
     do_call(k)
     if k % 10 == 0 then
         local c0 = os.clock()
-        if progress then
-            progress:write(("%d (check of a pooled model)\n"):format(k))
-            progress:flush()
-        end
+        note_progress(k, "(check of a pooled model)")
         check_models(k)
         local c = cost["(model check)"] or { 0, 0, 0 }
         cost["(model check)"] = c

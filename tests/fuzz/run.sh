@@ -73,16 +73,16 @@ make_scratch() { # dir
 
 now() { date +%s.%N 2>/dev/null || date +%s; }
 
-# Start one child: seed, scratch dir, tag; extra shell setup in $pre.
-# Writes $top/<tag>.{out,err,prog,pid}.
-start_child() { # seed dir tag [pre]
-    seed=$1 dir=$2 tag=$3 pre=${4:-:}
+# Start one child: seed, scratch dir, tag, calls; extra shell setup in
+# $pre.  Writes $top/<tag>.{out,err,prog,pid}.
+start_child() { # seed dir tag calls [pre]
+    seed=$1 dir=$2 tag=$3 n=$4 pre=${5:-:}
     : > "$top/$tag.prog"
     (
         cd "$dir" || exit 2
         eval "$pre"
         [ "$san" = 1 ] || ulimit -v 4194304 2>/dev/null
-        exec setsid "$DFLE" -q -j 1 "$here/fuzz.lua" seed="$seed" calls="$calls" \
+        exec setsid "$DFLE" -q -j 1 "$here/fuzz.lua" seed="$seed" calls="$n" \
             scratch="$dir" progress="$top/$tag.prog" > "$top/$tag.out" 2> "$top/$tag.err"
     ) &
     echo $! > "$top/$tag.pid"
@@ -155,28 +155,29 @@ while [ $# -gt 0 ]; do
         a=$1 b=$2; shift 2
         make_scratch "$top/s$a"
         if [ $((pair % 2)) = 0 ]; then db="$top/s$a"; else db="$top/s$b"; make_scratch "$db"; fi
-        start_child "$a" "$top/s$a" "c$a"
-        start_child "$b" "$db" "c$b"
+        start_child "$a" "$top/s$a" "c$a" "$calls"
+        start_child "$b" "$db" "c$b" "$calls"
         finish_child "c$a" "$a"
         finish_child "c$b" "$b"
     else
         a=$1; shift
         make_scratch "$top/s$a"
-        start_child "$a" "$top/s$a" "c$a"
+        start_child "$a" "$top/s$a" "c$a" "$calls"
         finish_child "c$a" "$a"
     fi
     [ "${FUZZ_KEEP:-0}" = 1 ] || rm -rf "$top/s$a" "$top/s$b"
 done
 
 if [ "$mode" = long ] && [ -z "${FUZZ_SEEDS:-}" ]; then
-    # Interrupted: SIGINT at a moment given by the seed; the fuzzer
-    # stops at the first "interrupted" error, the command exits 130
-    # with one line.  Then twice: the second signal ends it at once.
+    # Interrupted: SIGINT at a moment given by the seed, in a run too
+    # long to end first; the fuzzer stops at the first "interrupted"
+    # error, the command exits 130 with one line.  Then twice: the
+    # second signal ends it at once.
     for s in 101 102; do
         make_scratch "$top/i$s"
-        start_child "$s" "$top/i$s" "i$s"
+        start_child "$s" "$top/i$s" "i$s" 100000
         pid=$(cat "$top/i$s.pid")
-        sleep $((s % 7 + 2))
+        sleep $((s % 3 + 2))
         kill -INT "$pid" 2>/dev/null
         if [ "$s" = 102 ]; then sleep 0.5; kill -INT "$pid" 2>/dev/null; fi
         finish_child "i$s" "$s" 130
@@ -189,7 +190,7 @@ if [ "$mode" = long ] && [ -z "${FUZZ_SEEDS:-}" ]; then
     # A file-size limit: every write past 64 KB fails with EFBIG, which
     # must be an error naming the file, never a dead process.
     make_scratch "$top/f201"
-    start_child 201 "$top/f201" f201 "ulimit -f 128"
+    start_child 201 "$top/f201" f201 "$calls" "ulimit -f 128"
     finish_child f201 201
 fi
 
