@@ -30,6 +30,11 @@ run layers sh tests/check-layers.sh
 # Lua-level tests of the scripting API (ends with "N passed, N failed").
 run lua-tests $vg "$DFLE" -q tests/lua/run.lua "$DFLE"
 
+# The API fuzzer, its short fixed-seed mode (ends with "fuzz: N calls ...";
+# `make fuzz` runs the long one).  Not under valgrind: it is slow there,
+# and `make check` runs it under the sanitizers.
+run fuzz sh tests/fuzz/run.sh short "$DFLE"
+
 # Every example in its quick mode, in a scratch directory.
 tmp=$(mktemp -d)
 for ex in examples/*.lua; do
