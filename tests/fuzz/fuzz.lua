@@ -743,7 +743,7 @@ end
 ---------------------------------------------------------------------------
 I.setup(S, scratch, opt.data)
 S.plain = true
-I.make_ensemble(A.ensemble_spec(S, "in/ens-good.csv"))
+I.make_ensemble(A.ensemble_spec(S), opt.seed)
 S.plain = false
 discover()
 

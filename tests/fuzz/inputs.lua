@@ -270,19 +270,23 @@ function I.setup(S, scratch, data)
     I.pawn_text = table.concat(lines)
     writeall(scratch .. "/in/pawn.csv", I.pawn_text)
     -- Output names that are odd but legal, and links.
-    os.execute("cd '" .. scratch .. "/out' && : > target.csv && ln -sf target.csv link.csv && " ..
-               "ln -sf nowhere/x.csv dangling.csv && rm -f loop1.csv loop2.csv && " ..
-               "ln -s loop1.csv loop2.csv && ln -s loop2.csv loop1.csv && " ..
-               "ln -sf ../dev/null null-link.csv && mkdir -p adir")
+    -- (Two fuzzers may share the directory and make these at once: the
+    -- first one's are as good as the second's.)
+    os.execute("cd '" .. scratch .. "/out' && { : > target.csv; ln -sfn target.csv link.csv; " ..
+               "ln -sfn nowhere/x.csv dangling.csv; ln -sfn loop1.csv loop2.csv; " ..
+               "ln -sfn loop2.csv loop1.csv; ln -sfn ../dev/null null-link.csv; " ..
+               "mkdir -p adir; } 2>/dev/null")
     I.counter = 0
 end
 
 -- The good ensemble file: written once by a plain ensemble (the spec of
--- api.lua with well-behaved callbacks).
-function I.make_ensemble(spec)
+-- api.lua with well-behaved callbacks), to a name of this process's own
+-- (a fuzzer sharing the directory holds its own file's lock).
+function I.make_ensemble(spec, seed)
+    spec.out = ("in/ens-good-%d.csv"):format(seed)
     local ok, res = pcall(dfle.ensemble, spec)
     assert(ok, "the fuzzer's own ensemble failed: " .. tostring(res))
-    I.ens_text = assert(readall(I.scratch .. "/in/ens-good.csv"))
+    I.ens_text = assert(readall(I.scratch .. "/" .. spec.out))
 end
 
 local function next_name(prefix, ext)

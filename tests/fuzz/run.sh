@@ -109,6 +109,7 @@ finish_child() { # tag seed [expect]
     wait "$pid" 2>/dev/null
     rc=$?
     call=$(tail -n 1 "$top/$tag.prog" 2>/dev/null)
+    case "$call" in [0-9]*) ;; *) call="0 (before the first call)" ;; esac
     summary=$(grep -a '^fuzz seed=' "$top/$tag.out" | tail -n 1)
     if [ -n "$summary" ]; then
         for kv in $summary; do
