@@ -128,4 +128,24 @@ tests["a closed profile given to fit_slope_area is named at the script's line"] 
                   "dfle.profile has been closed")
 end
 
+tests["an ensemble row with a million fields is an error that says so"] = function()
+    -- it ran the Lua stack out: 'stack overflow (too many columns)'
+    local dir = T.tmpname()
+    os.remove(dir)
+    os.execute("mkdir -p " .. T.shquote(dir))
+    dfle.ensemble{
+        params = { k_df = { 5e-5, 1e-3 } }, n = 2, seed = 1, out = dir .. "/e.csv", workers = 1,
+        build = function(p)
+            return dfle.model{ channel = dfle.channel{ dx = 50, A_max = 5e4 },
+                               law = dfle.law.power{ k_df = p.k_df } }
+        end,
+        outputs = { "S_df" },
+    }
+    local text = T.read_file(dir .. "/e.csv")
+    T.write_file(dir .. "/bad.csv", (text:gsub("\n2,[^\n]*", "\n2," .. string.rep("1,", 1000000) .. "1")))
+    T.raises_here(function() return dfle.gather{ out = dir .. "/g.csv", files = { dir .. "/bad.csv" } } end,
+                  "dfle.gather: " .. dir .. "/g.csv: sample 2 has 1000002 fields, the header 5")
+    os.execute("rm -rf " .. T.shquote(dir))
+end
+
 return tests
