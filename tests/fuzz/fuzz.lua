@@ -43,11 +43,12 @@ local scratch = opt.scratch or error("scratch=DIR is required (run.sh makes one)
 -- The scratch directory must be where we are: every relative path the
 -- fuzzer makes lands there.
 do
-    local marker = scratch .. "/.fuzz-here"
-    local f = assert(io.open(marker, "w"))
+    -- (one marker a seed: two fuzzers may share the directory)
+    local name = ".fuzz-here." .. opt.seed
+    local f = assert(io.open(scratch .. "/" .. name, "w"))
     f:write(tostring(opt.seed))
     f:close()
-    local g = io.open(".fuzz-here", "r")
+    local g = io.open(name, "r")
     local same = g and g:read("a") == tostring(opt.seed)
     if g then g:close() end
     if not same or scratch:sub(1, 1) ~= "/" or scratch:find("/%.%./") then
@@ -342,10 +343,11 @@ local function add_function(path, fn)
     }
 end
 
-local function add_method(tname, mname)
+local function add_method(tname, mname, fn)
     local name = tname .. ":" .. mname
     targets[#targets + 1] = {
         name = name, weight = WEIGHT[name] or 1, short = mname, tname = tname, method = mname,
+        fn = fn, -- the method itself, for calls with another self
         call = stub("local o, a = ... return o:" .. mname .. "(table.unpack(a, 1, a.n))"),
         -- the method of one type called on another object (o.m(x))
         call_other = stub("local t, a = ... return t." .. mname .. "(table.unpack(a, 1, a.n))"),
@@ -366,7 +368,7 @@ local function discover()
         local names = {}
         for m in pairs(methods) do names[#names + 1] = m end
         table.sort(names)
-        for _, m in ipairs(names) do add_method(tname, m) end
+        for _, m in ipairs(names) do add_method(tname, m, methods[m]) end
     end
     S.plain = false
     -- Metamethods and properties, through the debug library where a
@@ -608,8 +610,7 @@ local function run_call(t, args, self, how)
     local f = t.call
     if t.tname then
         if how == "other" then
-            local tab = { [t.method] = A.methods(S:get(A.SELF[t.tname][1]))[t.method] }
-            return pcall(t.call_other, tab, args)
+            return pcall(t.call_other, { [t.method] = t.fn }, args)
         end
         return pcall(f, self, args)
     end

@@ -10,8 +10,10 @@
 #          every other pair sharing one scratch directory (two processes
 #          writing the same files and locking the same ensembles), then a
 #          seed stopped by SIGINT at a random moment (it must exit 130
-#          with one line), a second SIGINT (it must end at once) and a
-#          seed under a 64 KB file-size limit
+#          with one line), a second SIGINT (it must end at once), a
+#          seed under a 64 KB file-size limit, and a seed killed with
+#          SIGKILL at a random moment (every output it wrote must be
+#          whole) followed by another in its directory
 #
 # DFLE is the binary (default build/dfle; `make fuzz` gives build/san/dfle).
 # FUZZ_SEEDS="4 5" and FUZZ_CALLS=N override the seeds and calls of either
@@ -89,6 +91,28 @@ start_child() { # seed dir tag calls [pre]
 }
 
 total_calls=0 ok=0 errors=0 findings=0 crashes=0 hangs=0 failed_seeds=
+
+# Every output in dir/out must be whole: an image ends as its format
+# says, a CSV with a newline.  (An ensemble's own file is streamed: a
+# kill may cut its last line, which a resume drops.)
+check_outputs() { # dir seed
+    for f in "$1"/out/* "$1"/out/.[!.]*; do
+        [ -f "$f" ] && [ ! -L "$f" ] && [ -s "$f" ] || continue
+        case "$(basename "$f")" in .*.[0-9]*.[0-9]*) continue ;; esac # a killed writer's temporary file
+        head=$(head -c 16 "$f" | od -An -c | tr -d ' \n')
+        whole=1
+        case "$head" in
+        211PNG*) [ "$(tail -c 8 "$f" | head -c 4)" = IEND ] || whole=0 ;;
+        \<\?xml*|\<svg*) tail -c 16 "$f" | grep -q '</svg>' || whole=0 ;;
+        \#dfle.ensemble*) ;;
+        *) [ "$(tail -c 1 "$f" | od -An -c | tr -d ' ')" = '\n' ] || whole=0 ;;
+        esac
+        if [ "$whole" = 0 ]; then
+            crashes=$((crashes + 1)); failed_seeds="$failed_seeds $2"
+            echo "TORN seed=$2: $f is not whole"
+        fi
+    done
+}
 
 # Wait for the child of tag, killing it if its progress file stops
 # growing; then read its outcome.  $expect is the exit status it should
@@ -193,6 +217,18 @@ if [ "$mode" = long ] && [ -z "${FUZZ_SEEDS:-}" ]; then
     make_scratch "$top/f201"
     start_child 201 "$top/f201" f201 "$calls" "ulimit -f 128"
     finish_child f201 201
+    # Killed at a random moment (kill -9): every output is whole, and a
+    # second fuzzer in the same directory (over the leftovers, resuming
+    # the ensemble files) runs clean.
+    make_scratch "$top/k301"
+    start_child 301 "$top/k301" k301 100000
+    sleep $(awk 'BEGIN { srand(); printf "%.1f", 2 + 4 * rand() }')
+    kill -9 -- "-$(cat "$top/k301.pid")" 2>/dev/null
+    finish_child k301 301 137
+    check_outputs "$top/k301" 301
+    start_child 302 "$top/k301" k302 "$calls"
+    finish_child k302 302
+    check_outputs "$top/k301" 302
 fi
 
 t1=$(now)
