@@ -148,4 +148,13 @@ tests["an ensemble row with a million fields is an error that says so"] = functi
     os.execute("rm -rf " .. T.shquote(dir))
 end
 
+tests["pawn names the data's columns whatever their length"] = function()
+    -- a long column name made the listing fail: 'invalid key to 'next''
+    local long = string.rep("a", 3000)
+    local data = { [long] = { 1, 2, 3 }, y = { 1, 2, 3 }, b = { 4, 5, 6 } }
+    local opts = { data = data, inputs = { "x1" }, output = "y" }
+    local msg = T.raises_here(function() return dfle.pawn(opts) end, "no column 'x1'")
+    T.has(msg, long, ", ")
+end
+
 return tests
