@@ -157,4 +157,12 @@ tests["pawn names the data's columns whatever their length"] = function()
     T.has(msg, long, ", ")
 end
 
+tests["a channel whose distances overflow is refused"] = function()
+    -- dx = 1.8e308 with an array of areas gave x = inf from node 3 on
+    T.raises_here(function() return dfle.channel{ dx = 1.7976931348623157e308, area = { 1e3, 2e3, 3e3 } } end,
+                  "dfle.channel: 3 nodes of dx = 1.79769e+308 m reach beyond the largest number")
+    T.raises_here(function() return dfle.channel{ dx = 1e308, length = 1.5e308 } end,
+                  "dfle.channel:")
+end
+
 return tests
