@@ -726,10 +726,11 @@ local function check_models(k)
     if ok and not (type(time) == "number" and time == time and time >= 0 and time < math.huge) then
         finding("model time is " .. tostring(time))
     end
+    -- (get runs the model's laws, which may close it: then m.n raises)
     local ok2, z = pcall(function() return m:get("z") end)
+    local ok3, n = pcall(function() return m.n end)
     if ok2 then
-        local n = m.n
-        if #z ~= n then finding(("get('z') has %d values, m.n = %d"):format(#z, n)) end
+        if ok3 and #z ~= n then finding(("get('z') has %d values, m.n = %d"):format(#z, n)) end
         for i = 1, #z do
             if z[i] ~= z[i] or z[i] == math.huge or z[i] == -math.huge then
                 finding(("z[%d] = %s"):format(i, tostring(z[i])))

@@ -54,7 +54,7 @@ fi
 top=$(mktemp -d "${TMPDIR:-/tmp}/dfle-fuzz.XXXXXX")
 cleanup() {
     for p in "$top"/*.pid; do
-        [ -f "$p" ] && kill -9 -- "-$(cat "$p")" 2>/dev/null
+        [ -f "$p" ] && kill -KILL -"$(cat "$p")" 2>/dev/null
     done
     [ "${FUZZ_KEEP:-0}" = 1 ] || rm -rf "$top"
 }
@@ -126,12 +126,13 @@ finish_child() { # tag seed [expect]
         if [ "$size" = "$last" ]; then idle=$((idle + 1)); else idle=0; last=$size; fi
         if [ "$idle" -ge $((stall * 5)) ]; then
             hung=1
-            kill -9 -- "-$pid" 2>/dev/null || kill -9 "$pid" 2>/dev/null
+            kill -KILL -"$pid" 2>/dev/null || kill -KILL "$pid" 2>/dev/null
         fi
         sleep 0.2
     done
     wait "$pid" 2>/dev/null
     rc=$?
+    rm -f "$top/$tag.pid" # only running children are killed on exit, never a reused pid
     call=$(tail -n 1 "$top/$tag.prog" 2>/dev/null)
     case "$call" in [0-9]*) ;; *) call="0 (before the first call)" ;; esac
     summary=$(grep -a '^fuzz seed=' "$top/$tag.out" | tail -n 1)
@@ -223,7 +224,7 @@ if [ "$mode" = long ] && [ -z "${FUZZ_SEEDS:-}" ]; then
     make_scratch "$top/k301"
     start_child 301 "$top/k301" k301 100000
     sleep $(awk 'BEGIN { srand(); printf "%.1f", 2 + 4 * rand() }')
-    kill -9 -- "-$(cat "$top/k301.pid")" 2>/dev/null
+    kill -KILL -"$(cat "$top/k301.pid")" 2>/dev/null
     finish_child k301 301 137
     check_outputs "$top/k301" 301
     start_child 302 "$top/k301" k302 "$calls"
