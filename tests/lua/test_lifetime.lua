@@ -151,6 +151,44 @@ tests["a router collected by hand inside its own routing is closed after it, not
     T.raises_here(function() return rt:params() end, "dfle.router has been closed")
 end
 
+-- Found by the fuzzer (tests/fuzz/): a process router routing for one
+-- model, whose law's integrand ran another model on the same router,
+-- had its arrival times reallocated for the other channel under it
+-- (heap-buffer-overflow), or its snapshot arrays changed by a nested
+-- rt:route with snapshots.
+tests["a process router used again from inside its routing is refused"] = function()
+    local rt = dfle.router.process{ max_steps = 300 }
+    local other, nested = nil, {}
+    -- a model already evaluated (by another router): routing it with rt
+    -- needs no routing first, so the snapshots are reached
+    local done = dfle.model{ channel = dfle.channel{ dx = 50, A_max = 5e4 } }
+    done:get("S")
+    local once = true
+    local law = dfle.law.define{ compile = false,
+        rate = function(c, p) return 1e-4 * c.S^6 * c.F end,
+        integrand = function(h, v, lambda, p)
+            if once then
+                once = false
+                nested[1] = select(2, pcall(function() return other:get("E_df") end))
+                nested[2] = select(2, pcall(function()
+                    return rt:route(done, { snapshots = { 1, 2, 3, 4, 5, 6, 7, 8 } })
+                end))
+            end
+            return h
+        end }
+    other = dfle.model{ channel = dfle.channel{ dx = 50, A_max = 5e4 }, router = rt,
+                        law = dfle.law.power{} }
+    local m = small{ channel = dfle.channel{ dx = 20 }, router = rt, law = law }
+    local r = m:run{ years = 10, max_steps = 3 }
+    T.eq(r.reason, "steps")
+    T.has(nested[1], "dfle.router.process: used again while it is routing")
+    T.has(nested[2], "snapshots cannot change while it is routing")
+    local E = m:get("E_df")
+    for i = 1, m.n do T.ok(E[i] == E[i] and E[i] < math.huge) end
+    -- and afterwards the router routes both as before
+    T.eq(#rt:route(other, { snapshots = { 1, 2 } }).snapshots, 2)
+end
+
 -- Found by the fuzzer (tests/fuzz/): the nested routing pointed the
 -- router at the other model's channel and flow, and the running sweep
 -- then wrote past the end of its own flow arrays.
@@ -179,7 +217,7 @@ tests["a Lua router used by another model from inside its own flow() is refused"
                             router = dfle.router.define{ flow = empirical } }
     local E, E_ref = m:get("E_df"), ref:get("E_df")
     T.eq(nested_ok, false)
-    T.has(nested_err, "used again from inside its own flow()")
+    T.has(nested_err, "dfle.router.lua: used again while it is routing")
     T.eq(#E, m.n)
     for i = 1, m.n do T.eq(E[i], E_ref[i]) end
 end
