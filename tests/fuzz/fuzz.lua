@@ -116,7 +116,7 @@ table.sort(KINDS)
 function S:any_object()
     if #self.closed > 0 and r.chance(0.25) then return self.closed[r.int(#self.closed)] end
     local kind = r.pick(KINDS)
-    if kind == "ensemble" or kind == "dfle.dem" or kind == "dfle.profile" then
+    if kind == "ensemble" or kind == "dfle.dem" or kind == "dfle.profile" or kind == "inversion" then
         if self:has(kind) then return self.pool[kind][1] end
         kind = "dfle.channel"
     end
@@ -169,6 +169,11 @@ local function kind_of(v)
         return ok and type(n) == "number" and n <= 20000 and t or nil
     elseif t == "dfle.ensemble" then
         return "ensemble"
+    elseif t == "dfle.inversion" then
+        return "inversion"
+    elseif t == "dfle.landscape" then
+        local ok, n = pcall(function() return v.n end)
+        return ok and type(n) == "number" and n <= 1000 and "dfle.landscape" or nil
     elseif t == "dfle.law" then
         local ok, name = pcall(function() return v.name end)
         if ok and name == "power" then return "law.power" end
@@ -270,13 +275,15 @@ local function mutate_table(t, budget, depth)
     if op == 1 or op == 2 then                       -- a hostile value
         if budget and budget[key] then t[key] = H.bad_budget(r) else t[key] = any_value() end
     elseif op == 3 then                              -- a key removed
-        t[key] = nil
+        -- (a budget key removed would take its default, which may be
+        -- large: it gets a value that is refused instead)
+        if budget and budget[key] then t[key] = H.bad_budget(r) else t[key] = nil end
     elseif op == 4 then                              -- a misspelt or unknown key
         if type(key) == "string" and r.chance(0.7) then t[H.misspell(r, key)] = t[key]
         else t[r.pick{ "bogus", "", "\0", 1, 2.5, true }] = any_value() end
     elseif op == 5 and plain_table(t[key]) and depth < 3 then
         mutate_table(t[key], nil, depth + 1)         -- inside a nested table
-    elseif op == 6 then                              -- a metatable on the options
+    elseif op == 6 and getmetatable(t) == nil then   -- a metatable on the options
         setmetatable(t, { __index = function(_, k)
             if r.chance(0.5) then error(H.MARK .. ": __index of an options table", 0) end
             return nil
@@ -440,6 +447,8 @@ local NONFINITE_OK = {
     ["dfle.pawn"] = { ["*"] = "nan" },                       -- degenerate data
     ["dfle.ensemble"] = { ["*"] = "nan" },                   -- outputs of failed rows
     ["dfle.gather"] = { ["*"] = "nan" },
+    ["dfle.ensemble:write_netcdf"] = { ["*"] = "nan" },      -- returns the ensemble
+    ["dfle.landscape:get"] = { ["*"] = "nan" },              -- NoData cells
 }
 
 local function has_nonfinite(v, seen, depth)
@@ -526,6 +535,9 @@ local function check_error(t, err)
     end
     -- dfle's own messages, and Lua's argument checks that name a dfle type
     if body:find("dfle", 1, true) then return end
+    -- dfle.args speaks to the script's user about the command line
+    -- ("unknown option \"--x\" (options: ...)")
+    if t.name == "dfle.args" then return end
     local fname = body:match("^bad argument #%d+ to '([^']*)'") or
                   body:match("^calling '([^']*)' on bad self")
     if fname ~= nil and t.short and (fname == t.short or fname:match("[.:]" .. t.short .. "$")) then return end
@@ -561,7 +573,7 @@ local function special_call(t)
         S:drop_some()
         return pcall(function() collectgarbage("collect"); return table.pack() end)
     end
-    if mm == nil then return true, table.pack() end
+    if type(mm) ~= "function" then return true, table.pack() end -- (an __index table)
     -- a metamethod called with anything as its object
     local target = r.chance(0.7) and obj or any_value()
     local extra = r.chance(0.5) and any_value() or r.pick{ "n", "get", "time" }

@@ -117,7 +117,7 @@ tests["analytical_slope raises rather than return inf or NaN"] = function()
 end
 
 tests["a closed profile given to fit_slope_area is named at the script's line"] = function()
-    local dem = dfle.dem.read(T.root .. "/../shared/data/dem/small/testdem1.dem")
+    local dem = dfle.dem.read(T.data .. "/dem/small/testdem1.dem")
     dem:fill()
     local p = dem:network{ A_min = dem.dx * dem.dy }
     do local closing <close> = p end
@@ -163,6 +163,54 @@ tests["a channel whose distances overflow is refused"] = function()
                   "dfle.channel: 3 nodes of dx = 1.79769e+308 m reach beyond the largest number")
     T.raises_here(function() return dfle.channel{ dx = 1e308, length = 1.5e308 } end,
                   "dfle.channel:")
+end
+
+tests["landscape options name themselves, not 'bad argument #-2'"] = function()
+    local ls = dfle.landscape{ nx = 4, ny = 3, dx = 30 }
+    local function no_argno(msg) T.ok(not msg:find("bad argument", 1, true), msg) end
+    no_argno(T.raises_here(function() return ls:run{ years = 10, method = "inf" } end,
+             "dfle.landscape:run: method must be 'explicit', 'implicit', 'direct' or 'auto' (got 'inf')"))
+    no_argno(T.raises_here(function() return ls:run{ years = 10, method = {} } end,
+             "dfle.landscape:run: method must be a string, got table"))
+    no_argno(T.raises_here(function() return ls:plot(T.tmpname(".png"), { title = coroutine.create(print) }) end,
+             "dfle.landscape:plot: title must be a string, got thread"))
+    no_argno(T.raises_here(function() return ls:write_geotiff(T.tmpname(".tif"), { print }) end,
+             "dfle.landscape:write_geotiff:", "must be a string, got function"))
+    no_argno(T.raises_here(function() return dfle.landscape{ nx = 4, ny = 3, dx = 30, hillslope = "steep" } end,
+             "dfle.landscape: hillslope must be 'threshold', 'diffusion' or 'uplift' (got 'steep')"))
+    no_argno(T.raises_here(function() return dfle.landscape{ nx = 4, ny = 3, dx = 30, combine = "all" } end,
+             "dfle.landscape: combine must be 'any' or 'count' (got 'all')"))
+end
+
+tests["dfle.args checks its own table, at the script's line"] = function()
+    -- a number for flags was 'dfle.args:11: bad argument #1 to 'for iterator''
+    T.raises_here(function() return dfle.args{ flags = 3 } end, "dfle.args: flags must be a table, got number")
+    T.raises_here(function() return dfle.args{ options = "x" } end, "dfle.args: options must be a table")
+    T.raises_here(function() return dfle.args{ flags = { quick = 1 } } end, "dfle.args: flags are name = \"help text\"")
+    T.raises_here(function() return dfle.args{ options = { [2] = { "A", "b" } } } end, "dfle.args: option names")
+    T.raises_here(function() return dfle.args{ usage = {} } end, "dfle.args: usage must be a string")
+    T.raises_here(function() return dfle.args{ arg = { "--quick", 5 }, flags = { quick = "q" } } end,
+                  "dfle.args: arg[2] must be a string, got number")
+    T.eq(dfle.args{ arg = { "--quick" }, flags = { quick = "q" } }.quick, true)
+end
+
+tests["errors of calls an inversion makes for the script carry the script's line"] = function()
+    -- p:channel and res:predict raised from C, with no position at all
+    local dem = dfle.dem.read(T.data .. "/dem/small/testdem1.dem")
+    dem:fill()
+    local p = dem:network{ A_min = dem.dx * dem.dy }
+    local spec = { data = p, channel = { dx = 1000 }, nbins = 3,
+                   build = function(q, ch) return dfle.model{ channel = ch, U = q.U } end,
+                   params = { U = { 1e-4, 1e-3 } }, walkers = 4, steps = 0, workers = 1 }
+    T.raises_here(function() return dfle.invert(spec) end,
+                  "dfle.invert: the data's channel: dfle.profile: the profile is", "less than 2 dx")
+    local A_, S_ = {}, {}
+    for i = 1, 6 do A_[i] = 2e3 * 1.6^i; S_[i] = 0.8 / (1 + (A_[i] / 3e4)^0.9) end
+    local res = dfle.invert{ data = { A = A_, S = S_ }, channel = dfle.channel{ dx = 50, A_max = 5e4 },
+                             build = function(q, ch) return dfle.model{ channel = ch, U = q.U } end,
+                             params = { U = { 1e-4, 1e-3 } }, walkers = 4, steps = 0, workers = 1 }
+    T.raises_here(function() return dfle.plot.posterior_predictive(res, T.tmpname(".png")) end,
+                  "dfle.inversion:predict: there are no posterior samples")
 end
 
 return tests

@@ -561,7 +561,7 @@ static int l_landscape_new(lua_State *L)
     /* Hillslopes. */
     if (lua_getfield(L, 1, "hillslope") != LUA_TNIL) {
         static const char *const rules[] = {"threshold", "diffusion", "uplift", NULL};
-        o.hillslope = luaL_checkoption(L, -1, NULL, rules);
+        o.hillslope = dfle_lua_check_option(L, -1, "landscape", "hillslope", rules);
     }
     lua_pop(L, 1);
 
@@ -627,7 +627,7 @@ static int l_landscape_new(lua_State *L)
         /* How joined debris flows combine. */
         if (lua_getfield(L, 1, "combine") == LUA_TSTRING) {
             static const char *const rules[] = {"any", "count", NULL};
-            o.df_combine = luaL_checkoption(L, -1, NULL, rules);
+            o.df_combine = dfle_lua_check_option(L, -1, "landscape", "combine", rules);
         } else if (lua_isfunction(L, -1)) {
             lua_pushvalue(L, -1);
             u->ref_combine = luaL_ref(L, LUA_REGISTRYINDEX);
@@ -868,8 +868,7 @@ static int landscape_run(lua_State *L, int steady)
     o.stable_steps = (size_t)dfle_lua_check_whole(L, stable, fn, "stable_steps", 0, 1e9);
     o.method = steady ? DFLE_METHOD_AUTO : DFLE_METHOD_IMPLICIT;
     if (lua_istable(L, 2) && lua_getfield(L, 2, "method") != LUA_TNIL) {
-        dfle_lua_check_string(L, -1, fn, "method");
-        o.method = luaL_checkoption(L, -1, NULL, methods);
+        o.method = dfle_lua_check_option(L, -1, fn, "method", methods);
         if (!steady && o.method == DFLE_METHOD_DIRECT)
             luaL_error(L, "dfle.landscape:run: method 'direct' finds steady states only; use "
                           "run_to_steady, or 'implicit' or 'explicit' here");
@@ -893,7 +892,9 @@ static int landscape_run(lua_State *L, int steady)
             ctx.fields[0] = DFLE_LS_Z;
             ctx.nf = 1;
         } else {
-            luaL_checktype(L, -1, LUA_TTABLE);
+            if (!lua_istable(L, -1))
+                luaL_error(L, "dfle.%s: 'fields' must list 1 to %d field names, got %s", fn,
+                           DFLE_LS_NFIELDS, luaL_typename(L, -1));
             ctx.nf = lua_rawlen(L, -1);
             if (ctx.nf == 0 || ctx.nf > DFLE_LS_NFIELDS)
                 luaL_error(L, "dfle.%s: 'fields' must list 1 to %d field names", fn,
