@@ -181,6 +181,7 @@ local function run_opts(S, steady)
         o.method = r.pick{ "explicit", "implicit" }
         if r.chance(0.3) then o.rtol = 1e-2 end
         if r.chance(0.3) then o.record = { 0, o.years / 2, o.years } end
+        if o.record and r.chance(0.3) then o.netcdf = S.path("nc") end
     end
     return o
 end

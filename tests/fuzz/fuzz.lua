@@ -450,6 +450,8 @@ local NONFINITE_OK = {
     ["dfle.gather"] = { ["*"] = "nan" },
     ["dfle.ensemble:write_netcdf"] = { ["*"] = "nan" },      -- returns the ensemble
     ["dfle.landscape:get"] = { ["*"] = "nan" },              -- NoData cells
+    -- a parameter no walker moved in: tau NaN, tau_max inf (warned)
+    ["dfle.invert"] = { ["tau.*"] = "nan", tau_max = "inf" },
 }
 
 local function has_nonfinite(v, seen, depth)
@@ -468,8 +470,10 @@ end
 local function check_finite(target, v, path, seen, allow, depth)
     if type(v) == "number" then
         if v == v and v ~= math.huge and v ~= -math.huge then return end
-        local last = path:gsub("%[%]", ""):match("([^.]+)$") or ""
-        local a = allow and (allow[last] or allow["*"])
+        local plain = path:gsub("%[%]", "")
+        local last = plain:match("([^.]+)$") or ""
+        local parent = plain:match("([^.]+)%.[^.]+$")
+        local a = allow and (allow[last] or allow["*"] or (parent and allow[parent .. ".*"]))
         if a == "nan" and v ~= v then return end
         if a == "inf" and v ~= v then a = nil end
         if a then return end

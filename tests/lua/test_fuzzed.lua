@@ -213,4 +213,21 @@ tests["errors of calls an inversion makes for the script carry the script's line
                   "dfle.inversion:predict: there are no posterior samples")
 end
 
+tests["an inversion of a few steps is never 'converged', nor has more effective samples than samples"] = function()
+    -- 2 steps after burn-in: the lag-1 correlation of two values is
+    -- -1/2, so tau = 0; that made converged = true, no warning and
+    -- ess = 7e16 (nsamples / 1e-16)
+    local A_, S_ = {}, {}
+    for i = 1, 6 do A_[i] = 2e3 * 1.6^i; S_[i] = 0.8 / (1 + (A_[i] / 3e4)^0.9) end
+    for seed = 0, 3 do
+        local res = dfle.invert{ data = { A = A_, S = S_ }, channel = dfle.channel{ dx = 50, A_max = 5e4 },
+            build = function(q, ch) return dfle.model{ channel = ch, U = q.U, law = dfle.law.power{} } end,
+            params = { U = { 1e-4, 1e-3 } }, walkers = 4, steps = 3, burn = 1, seed = seed,
+            workers = 1, lsq = false }
+        T.eq(res.converged, false)
+        T.ok(res.ess <= res.nsamples, "ess " .. res.ess .. " > nsamples " .. res.nsamples)
+        T.ok(#res.warnings >= 1 and res.warnings[1]:find("too short", 1, true), "warned")
+    end
+end
+
 return tests
