@@ -580,7 +580,13 @@ MAKE["dfle.profile"] = function(S)
     return dem:profile{ outlet = { E[best], N[best] }, radius = 0 }
 end
 MAKE["dfle.landscape"] = function(S) return dfle.landscape(landscape_opts(S)) end
-MAKE["inversion"] = function(S) return dfle.invert(invert_opts(S)) end
+-- (no chain file: the pool's inversions must not depend on a file that
+-- a fuzzer sharing the directory may hold locked)
+MAKE["inversion"] = function(S)
+    local o = invert_opts(S)
+    o.out = nil
+    return dfle.invert(o)
+end
 MAKE["ensemble"] = function(S)
     return dfle.ensemble(A.ensemble_spec(S, S.inputs.good_ensemble_csv(S)))
 end

@@ -399,6 +399,15 @@ static int l_landscape_new(lua_State *L)
         dy = dx;
     if (!(dx > 0 && dy > 0))
         luaL_error(L, "dfle.landscape: dx and dy must be > 0 m (got %f, %f)", dx, dy);
+    /* Cells of 1e300 m made areas and volumes inf and NaN: sizes no
+     * grid has (the DEM reader draws the same line at 1000 km), and a
+     * grid whose far edge is no number, are refused. */
+    if (!(dx >= 1e-6 && dx <= 1e6 && dy >= 1e-6 && dy <= 1e6))
+        luaL_error(L, "dfle.landscape: dx and dy are cell sizes from 1e-06 to 1e+06 m (got %f, "
+                      "%f)", dx, dy);
+    if (!(isfinite(x0) && isfinite(nx * dx + x0) && (isnan(y0) || isfinite(y0 - ny * dy))))
+        luaL_error(L, "dfle.landscape: x0 and y0 must be finite, and the grid's far corner too "
+                      "(got x0 = %f, y0 = %f)", x0, y0);
     if (nx * ny > 2e9)
         luaL_error(L, "dfle.landscape: %f x %f cells is too many", nx, ny);
     o.nx = (size_t)nx;
