@@ -230,4 +230,30 @@ tests["an inversion of a few steps is never 'converged', nor has more effective 
     end
 end
 
+tests["a landscape of cells no grid has is refused"] = function()
+    -- 1e300 m cells: areas inf, debris-flow volumes NaN, dem:at inf
+    T.raises_here(function() return dfle.landscape{ nx = 6, ny = 5, dx = 1e300 } end,
+                  "dfle.landscape: dx and dy are cell sizes from 1e-06 to 1e+06 m")
+    T.raises_here(function() return dfle.landscape{ nx = 6, ny = 5, dx = 30, dy = 5e-324 } end,
+                  "dfle.landscape: dx and dy are cell sizes")
+    T.eq(dfle.landscape{ nx = 6, ny = 5, dx = 1e6 }.dx, 1e6)
+end
+
+tests["an output whose record's name would be too long is refused before it is written"] = function()
+    -- a 255-byte name.csv is legal, name.json is 256 bytes: the CSV was
+    -- written, then the record failed, leaving a file naming a record
+    -- that is not there
+    local dir = T.tmpname()
+    os.remove(dir)
+    os.execute("mkdir -p " .. T.shquote(dir))
+    local m = dfle.model{ channel = dfle.channel{ dx = 50, A_max = 5e4 } }
+    local name = dir .. "/" .. string.rep("n", 251) .. ".csv"
+    T.raises_here(function() return m:write_csv(name) end,
+                  "dfle.model:write_csv: the JSON record beside", "would have a name of 256 bytes")
+    T.eq(io.open(name), nil)
+    m:write_csv(name, { record = false })
+    T.ok(io.open(name) ~= nil, "written without a record")
+    os.execute("rm -rf " .. T.shquote(dir))
+end
+
 return tests
