@@ -1,6 +1,6 @@
 -- landscape_bigtujunga.lua - the Big Tujunga catchment evolved to steady
 -- state by debris flows and rivers, and its slope-area against the real
--- network's (issue 12: the paper's Sect. 4.4 step to 2D landscapes).
+-- network's (the paper's Sect. 4.4 step to 2D landscapes).
 --
 -- The catchment above the black outlet of the paper's Fig. 1 (396887 E,
 -- 3799338 N, 10.2 km^2) is cut from the SRTM DEM (30 m, UTM 11N): cells
