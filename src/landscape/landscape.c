@@ -48,12 +48,15 @@ static int check_field(const dfle_landscape *ls, const ls_field *f, dfle_error *
         if (isnan(ls->z[c]))
             continue;
         v = ls_value(f, c);
-        if (!(isfinite(v) && (f->strict ? v > f->lo : v >= f->lo)))
+        if (!(isfinite(v) && (f->strict ? v > f->lo : v >= f->lo))) {
+            char when[64] = "";
+            if (f->fn != NULL) /* a function of time: when it gave it */
+                snprintf(when, sizeof when, " at t = %g yr", ls->time);
             return dfle_error_set(err, DFLE_EINVAL,
                                   "landscape: %s is %g at cell %zu (row %zu, column %zu)%s; it "
                                   "must be finite and %s %g", f->name, v, c, c / ls->nx,
-                                  c % ls->nx, f->fn != NULL ? " at t = " : "",
-                                  f->strict ? ">" : ">=", f->lo);
+                                  c % ls->nx, when, f->strict ? ">" : ">=", f->lo);
+        }
         if (f->grid == NULL)
             break; /* uniform: one check does */
     }

@@ -77,14 +77,16 @@ void ls_ratios(const dfle_landscape *ls, double tol, double quantile, dfle_lands
     size_t hist[Q_BINS], count = 0, above = 0;
     double sum = 0.0, mx = 0.0;
     const int uniform = ls->U.grid == NULL;
-    const double inv_U = 1.0 / ls->U.value;
 
     memset(hist, 0, sizeof hist);
     for (size_t c = 0; c < ls->n; c++) {
         double r;
         if (rcv[c] == c) /* base levels and NoData */
             continue;
-        r = fabs((double)ls->dzdt[c]) * (uniform ? inv_U : 1.0 / ls->U.grid[c]);
+        /* Divided, not multiplied by 1/U: a subnormal U (valid, > 0)
+         * has 1/U = inf, and 0 * inf made the mean NaN where nothing
+         * changed. */
+        r = fabs((double)ls->dzdt[c]) / (uniform ? ls->U.value : ls->U.grid[c]);
         count++;
         sum += r;
         mx = r > mx ? r : mx;

@@ -256,4 +256,16 @@ tests["an output whose record's name would be too long is refused before it is w
     os.execute("rm -rf " .. T.shquote(dir))
 end
 
+tests["a landscape's steady-state ratios stay numbers for the smallest uplift"] = function()
+    -- |dz/dt| * (1/U) with U = 5e-324: 1/U = inf, 0 * inf = NaN
+    local ls = dfle.landscape{ nx = 3, ny = 3, dx = 30, U = 5e-324 }
+    local r = ls:step(1e7)
+    T.ok(r.mean_ratio == r.mean_ratio, "mean_ratio " .. tostring(r.mean_ratio))
+    T.ok(r.q_ratio == r.q_ratio and r.max_ratio == r.max_ratio, "q_ratio, max_ratio")
+    -- and a U(x, y) that gives an invalid value says when
+    T.raises_here(function() return dfle.landscape{ nx = 3, ny = 3, dx = 30,
+                                                    U = function(x, y) return 0 end } end,
+                  "U (uplift, m/yr) is 0 at cell 0 (row 0, column 0) at t = 0 yr; it must be")
+end
+
 return tests
