@@ -24,6 +24,7 @@
  */
 #include "landscape/landscape_internal.h"
 
+#include <float.h>
 #include <math.h>
 #include <stdlib.h>
 #include <string.h>
@@ -85,8 +86,10 @@ void ls_ratios(const dfle_landscape *ls, double tol, double quantile, dfle_lands
             continue;
         /* Divided, not multiplied by 1/U: a subnormal U (valid, > 0)
          * has 1/U = inf, and 0 * inf made the mean NaN where nothing
-         * changed. */
+         * changed.  A ratio that overflows stops at DBL_MAX, as the
+         * model's rate_ratio does (a result scripts print and compare). */
         r = fabs((double)ls->dzdt[c]) / (uniform ? ls->U.value : ls->U.grid[c]);
+        r = r <= DBL_MAX ? r : DBL_MAX;
         count++;
         sum += r;
         mx = r > mx ? r : mx;
@@ -94,7 +97,7 @@ void ls_ratios(const dfle_landscape *ls, double tol, double quantile, dfle_lands
         hist[q_bin((float)r)]++;
     }
     st->max_ratio = mx;
-    st->mean_ratio = count > 0 ? sum / (double)count : 0.0;
+    st->mean_ratio = count > 0 ? fmin(sum, DBL_MAX) / (double)count : 0.0; /* (sum may overflow) */
     st->frac_above = count > 0 ? (double)above / (double)count : 0.0;
     st->q_ratio = 0.0;
     if (count > 0) {

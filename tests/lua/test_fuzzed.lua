@@ -262,6 +262,12 @@ tests["a landscape's steady-state ratios stay numbers for the smallest uplift"] 
     local r = ls:step(1e7)
     T.ok(r.mean_ratio == r.mean_ratio, "mean_ratio " .. tostring(r.mean_ratio))
     T.ok(r.q_ratio == r.q_ratio and r.max_ratio == r.max_ratio, "q_ratio, max_ratio")
+    -- where the surface does change, the ratio overflowed to inf
+    ls = dfle.landscape{ nx = 4, ny = 4, dx = 30, U = 5e-324, noise = { amplitude = 50, seed = 3 } }
+    r = ls:step(10)
+    for _, k in ipairs{ "q_ratio", "mean_ratio", "max_ratio" } do
+        T.ok(r[k] > 0 and r[k] < math.huge, k .. " = " .. tostring(r[k]))
+    end
     -- and a U(x, y) that gives an invalid value says when
     T.raises_here(function() return dfle.landscape{ nx = 3, ny = 3, dx = 30,
                                                     U = function(x, y) return 0 end } end,
