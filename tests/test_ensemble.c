@@ -1,7 +1,8 @@
 /*
  * test_ensemble.c - the ensemble file layer (dfle/ensemble.h): streamed
  * rows, resume over a truncated last line, the sorted rewrite, gather of
- * shards, and the index queue (shards, done samples, limit, threads).
+ * shards, and the index queue (shards, done samples, limit, threads,
+ * indices given back).
  */
 #include "dfle_test.h"
 
@@ -208,6 +209,21 @@ static void test_queue_threads_limit(void **state)
     while (dfle_ens_queue_next(q, &i))
         got++;
     assert_int_equal(got, 5);
+    dfle_ens_queue_free(q);
+
+    /* An index given back (its worker lost) comes out again, first, and
+     * counts once within the limit. */
+    assert_ok(dfle_ens_queue_new(10, 0, 0, NULL, 4, &q, &err), &err);
+    assert_true(dfle_ens_queue_next(q, &i) && i == 1);
+    assert_true(dfle_ens_queue_next(q, &i) && i == 2);
+    assert_ok(dfle_ens_queue_give_back(q, 1, &err), &err);
+    assert_true(dfle_ens_queue_next(q, &i) && i == 1);
+    assert_true(dfle_ens_queue_next(q, &i) && i == 3);
+    assert_true(dfle_ens_queue_next(q, &i) && i == 4);
+    assert_false(dfle_ens_queue_next(q, &i));
+    assert_ok(dfle_ens_queue_give_back(q, 4, &err), &err);
+    assert_true(dfle_ens_queue_next(q, &i) && i == 4);
+    assert_false(dfle_ens_queue_next(q, &i));
     dfle_ens_queue_free(q);
     assert_int_equal(dfle_ens_queue_new(10, 5, 4, NULL, 0, &q, &err), DFLE_EINVAL);
 }
