@@ -148,10 +148,16 @@ static int l_ensemble(lua_State *L)
     {
         dfle_ens_file *f = box->file;
         size_t kept = dfle_ens_file_ndone(f);
+        int cut_short = dfle_lua_interrupted(L) && ran < total;
         box->file = NULL;
-        if (dfle_ens_file_close(f, 1, &err) != DFLE_OK)
+        /* Cut short, the rows stay as written (whole lines, in the order
+         * they finished; the resumed run sorts them): the sorted rewrite
+         * syncs the disk, which on a busy machine takes longer than the
+         * moment between the SIGTERM and the SIGKILL with which mpirun
+         * ends a job, and the message below must get out first. */
+        if (dfle_ens_file_close(f, !cut_short, &err) != DFLE_OK)
             return luaL_error(L, "dfle.ensemble: %s", err.msg);
-        if (dfle_lua_interrupted(L) && ran < total) {
+        if (cut_short) {
             dfle_lua_set_interrupt_note(L, "dfle.ensemble stopped taking samples; %d finished "
                                            "rows are in %s, and running the script again "
                                            "resumes it", (int)kept, path);
