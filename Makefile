@@ -154,13 +154,13 @@ check:
 memcheck: all $(TEST_BIN) $(GATE_TEST)
 	@BUILD=$(BUILD) MEMCHECK=1 sh tests/run-tests.sh
 
-bench: all $(BENCH_BIN)
+bench: all $(BENCH_BIN) $(if $(HAVE_MPICC),$(BUILD)/dfle-mpi)
 	@sh bench/run.sh $(CLI) $(BUILD)/bench
 
 # --- MPI build (doc/ensembles.md): only these rules need mpicc ---
 
 MPI_CLI   := $(BUILD)/dfle-mpi
-MPI_OBJ   := $(BUILD)/obj-mpi/src/cli/main.o $(BUILD)/obj-mpi/src/mpi/dfle_mpi.o
+MPI_OBJ   := $(BUILD)/obj-mpi/src/cli/main.o $(patsubst %.c,$(BUILD)/obj-mpi/%.o,$(wildcard src/mpi/*.c))
 
 $(BUILD)/obj-mpi/%.o: %.c
 	@mkdir -p $(dir $@)
