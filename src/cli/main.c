@@ -306,18 +306,6 @@ static void ens_progress_end(void *ud)
     c->ens_drawn = 0;
 }
 
-#ifdef DFLE_MPI
-/* dfle-mpi's warnings (a rank lost): always shown, like Lua's, and
- * never on top of the progress line. */
-static void mpi_warning(void *ud, const char *line)
-{
-    cli *c = ud;
-    if (c->bar.drawn || c->ens_drawn)
-        fputs("\r\033[K", stderr);
-    fprintf(stderr, "%s: warning: %s\n", progname, line);
-    fflush(stderr);
-}
-#endif
 
 /* "i/n" with 1 <= i <= n, or "slurm": SLURM_ARRAY_TASK_ID (from
  * SLURM_ARRAY_TASK_MIN) of SLURM_ARRAY_TASK_COUNT. */
@@ -371,6 +359,23 @@ static void cli_note(void *ud, int level, const char *line)
     fprintf(stderr, "%s: %s\n", progname, line);
     fflush(stderr);
 }
+
+#ifdef DFLE_MPI
+/* dfle-mpi's lines: warnings (a rank lost) always shown, like Lua's;
+ * notes (what each rank ran) with --verbose. */
+static void mpi_tell(void *ud, int warning, const char *line)
+{
+    cli *c = ud;
+    if (!warning) {
+        cli_note(c, DFLE_LUA_DETAIL, line);
+        return;
+    }
+    if (c->bar.drawn || c->ens_drawn)
+        fputs("\r\033[K", stderr);
+    fprintf(stderr, "%s: warning: %s\n", progname, line);
+    fflush(stderr);
+}
+#endif
 
 /* Runs protected: everything that can raise happens here. */
 static int pmain(lua_State *L)
@@ -512,7 +517,7 @@ int main(int argc, char **argv)
             dfle_mpi_finish(0);
             return status;
         }
-        if (size > 1 && dfle_mpi_serve(&c.ens, mpi_warning, &c, msg, sizeof msg) != 0) {
+        if (size > 1 && dfle_mpi_serve(&c.ens, mpi_tell, &c, msg, sizeof msg) != 0) {
             fprintf(stderr, "%s: %s\n", progname, msg);
             dfle_mpi_finish(0);
             return EXIT_FAILURE;

@@ -18,7 +18,8 @@
  *   r -> 0  "R <seq> <want>\n<f><row>\n..."   rows (f = 1: a failed
  *                   sample), and a request for <want> more indices
  *           "X <seq> <message>"   the rank failed (its replay, say)
- *           "D <seq>"  its threads have ended and every row is sent
+ *           "D <seq> <rows> <threads> <cpu>"  its threads have ended and
+ *                   every row is sent (<cpu>: seconds the rank used on it)
  *           "H"        heartbeat
  *
  * A rank asks for about two indices per thread ahead, so its threads
@@ -89,11 +90,13 @@ static struct service {
     int exhausted; /* the queue had nothing for a rank that asked       */
     size_t done, failed;
     char msg[DFLE_ERROR_MSG_MAX];
-    char notes[2 * DFLE_ERROR_MSG_MAX]; /* warnings for the main thread */
+    char *notes;     /* lines for the main thread to print: each starts
+                      * with 'W' (a warning) or 'N' (a note)             */
+    size_t nnotes;
     peer *peers;
     char (*nodes)[MPI_MAX_PROCESSOR_NAME]; /* each rank's node          */
-    void (*warn)(void *ud, const char *line);
-    void *warn_ud;
+    void (*tell)(void *ud, int warning, const char *line);
+    void *tell_ud;
 } S = {.lock = PTHREAD_MUTEX_INITIALIZER};
 
 /* ------------------------------------------------------------------ */
@@ -170,18 +173,28 @@ int dfle_mpi_init(double timeout, int *rank, int *size, int *cores, char *msg, s
 /* ------------------------------------------------------------------ */
 /* The service thread (rank 0); everything here runs under S.lock.     */
 
-static void note(const char *fmt, ...) __attribute__((format(printf, 1, 2)));
+static void note(int warning, const char *fmt, ...) __attribute__((format(printf, 2, 3)));
 
-static void note(const char *fmt, ...)
+/* A line for the main thread (flush_notes); dropped if out of memory. */
+static void note(int warning, const char *fmt, ...)
 {
-    size_t used = strlen(S.notes);
+    char line[DFLE_ERROR_MSG_MAX];
+    size_t len;
+    char *p;
     va_list ap;
-    if (used + 2 >= sizeof S.notes)
-        return; /* the main thread is far behind: drop it */
     va_start(ap, fmt);
-    vsnprintf(S.notes + used, sizeof S.notes - used - 1, fmt, ap);
+    vsnprintf(line + 1, sizeof line - 1, fmt, ap);
     va_end(ap);
-    strcat(S.notes, "\n");
+    line[0] = warning ? 'W' : 'N';
+    len = strlen(line);
+    p = realloc(S.notes, S.nnotes + len + 2);
+    if (p == NULL)
+        return;
+    S.notes = p;
+    memcpy(S.notes + S.nnotes, line, len);
+    S.nnotes += len;
+    S.notes[S.nnotes++] = '\n';
+    S.notes[S.nnotes] = '\0';
 }
 
 static void say(int r, const char *text)
@@ -286,10 +299,10 @@ static void lose(int r, const char *why)
     for (int k = 1; k < dfle_link_size; k++)
         others += in_ensemble(&S.peers[k]);
     if (back > 0 && others > 0)
-        note("rank %d (%s) %s: taken as lost; its %zu sample%s go%s to the other ranks", r,
+        note(1, "rank %d (%s) %s: taken as lost; its %zu sample%s go%s to the other ranks", r,
              S.nodes[r], why, back, back == 1 ? "" : "s", back == 1 ? "es" : "");
     else
-        note("rank %d (%s) %s: taken as lost", r, S.nodes[r], why);
+        note(1, "rank %d (%s) %s: taken as lost", r, S.nodes[r], why);
     if (back > 0 && others == 0)
         set_error("rank %d (%s) was lost holding %zu sample%s, and no other rank is left to "
                   "run them",
@@ -345,13 +358,20 @@ static void handle(int r, char *m)
             set_error("rank %d (%s): %s", r, S.nodes[r], text != NULL ? text + 1 : "failed");
         }
         break;
-    case 'D':
-        if (sscanf(m, "D %u", &seq) == 1 && p->state == P_BUSY && p->seq == seq) {
+    case 'D': {
+        size_t ran = 0;
+        double cpu = 0;
+        int threads = 0;
+        if (sscanf(m, "D %u %zu %d %lf", &seq, &ran, &threads, &cpu) == 4 &&
+            p->state == P_BUSY && p->seq == seq) {
             /* Before the end (its threads failed): what it held goes back. */
             release(p);
             p->state = P_IDLE;
+            note(0, "rank %d (%s): %zu sample%s on %d thread%s, %.2f s of CPU", r, S.nodes[r],
+                 ran, ran == 1 ? "" : "s", threads, threads == 1 ? "" : "s", cpu);
         }
         break;
+    }
     default: /* "H" */
         break;
     }
@@ -485,13 +505,16 @@ static void *service_main(void *arg)
 
 static void flush_notes(void)
 {
-    char notes[sizeof S.notes], *line, *save = NULL;
+    char *notes, *line, *save = NULL;
     pthread_mutex_lock(&S.lock);
-    memcpy(notes, S.notes, sizeof notes);
-    S.notes[0] = '\0';
+    notes = S.notes;
+    S.notes = NULL;
+    S.nnotes = 0;
     pthread_mutex_unlock(&S.lock);
-    for (line = strtok_r(notes, "\n", &save); line != NULL; line = strtok_r(NULL, "\n", &save))
-        S.warn(S.warn_ud, line);
+    for (line = notes != NULL ? strtok_r(notes, "\n", &save) : NULL; line != NULL;
+         line = strtok_r(NULL, "\n", &save))
+        S.tell(S.tell_ud, line[0] == 'W', line + 1);
+    free(notes);
 }
 
 static int remote_begin(void *ud, long long call, int workers, size_t total, const char *meta,
@@ -552,14 +575,15 @@ static int remote_poll(void *ud, int stop, size_t *done, size_t *failed, char *m
     return r;
 }
 
-int dfle_mpi_serve(dfle_lua_ensemble_host *host, void (*warn)(void *ud, const char *line),
-                   void *ud, char *msg, size_t msglen)
+int dfle_mpi_serve(dfle_lua_ensemble_host *host,
+                   void (*tell)(void *ud, int warning, const char *line), void *ud, char *msg,
+                   size_t msglen)
 {
     pthread_condattr_t ca;
     double now = dfle_link_now();
 
-    S.warn = warn;
-    S.warn_ud = ud;
+    S.tell = tell;
+    S.tell_ud = ud;
     for (int r = 1; r < dfle_link_size; r++)
         S.peers[r].heard = S.peers[r].said = now;
     pthread_condattr_init(&ca);

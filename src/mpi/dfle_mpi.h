@@ -23,10 +23,12 @@ int dfle_mpi_init(double timeout, int *rank, int *size, int *cores, char *msg, s
 
 /* Rank 0 with other ranks: serve them from a thread of its own, and let
  * `host` share its ensembles with them (host->remote_begin and
- * remote_poll).  warn(ud, line) prints a warning (a rank lost); it is
- * called from the main thread only.  0, or -1 with a message. */
-int dfle_mpi_serve(dfle_lua_ensemble_host *host, void (*warn)(void *ud, const char *line),
-                   void *ud, char *msg, size_t msglen);
+ * remote_poll).  tell(ud, warning, line) prints a warning (a rank lost)
+ * or a note for --verbose (what each rank ran); it is called from the
+ * main thread only.  0, or -1 with a message. */
+int dfle_mpi_serve(dfle_lua_ensemble_host *host,
+                   void (*tell)(void *ud, int warning, const char *line), void *ud, char *msg,
+                   size_t msglen);
 
 /* Ranks > 0: run rank 0's ensembles until it says quit; 0. */
 int dfle_mpi_worker_loop(const dfle_lua_ensemble_host *host);

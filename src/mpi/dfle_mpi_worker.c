@@ -45,9 +45,11 @@ typedef struct job {
     int alive;           /* threads running                               */
     int error;
     char msg[DFLE_ERROR_MSG_MAX];
+    size_t ran;          /* rows put                                      */
     /* main thread only */
     size_t asked; /* indices asked for, not yet received */
     int told;     /* the error has been sent             */
+    struct timespec cpu0; /* the process's CPU time at the start */
 } job;
 
 static double last_said; /* when this rank last sent rank 0 anything [s] */
@@ -121,6 +123,7 @@ static int job_put(void *ud, size_t index, const char *row, int failed, char *ms
     jb->nrows += len;
     jb->rows[jb->nrows++] = '\n';
     jb->inflight--;
+    jb->ran++;
     /* Wake the main thread only when the stock runs low: the rows go
      * with its next round anyway, and fewer wake-ups cost less CPU. */
     if (2 * (jb->nstock - jb->head) <= jb->ahead)
@@ -187,6 +190,7 @@ static job *job_start(const dfle_lua_ensemble_host *host, char *cmd)
     }
     jb->host = host;
     jb->cmd = cmd;
+    clock_gettime(CLOCK_PROCESS_CPUTIME_ID, &jb->cpu0);
     pthread_mutex_init(&jb->lock, NULL);
     pthread_cond_init(&jb->work, NULL);
     pthread_condattr_init(&ca);
@@ -291,8 +295,9 @@ static void job_stop(job *jb)
  * indices, an error, the end.  Returns 1 when the job has ended. */
 static int job_step(job *jb)
 {
-    char *rows, head[64], msg[DFLE_ERROR_MSG_MAX + 32];
+    char *rows, head[96], msg[DFLE_ERROR_MSG_MAX + 32];
     size_t nrows, want = 0, target;
+    struct timespec now;
     int alive, fail;
 
     pthread_mutex_lock(&jb->lock);
@@ -330,7 +335,9 @@ static int job_step(job *jb)
     }
     if (alive > 0)
         return 0;
-    snprintf(head, sizeof head, "D %u", jb->seq);
+    clock_gettime(CLOCK_PROCESS_CPUTIME_ID, &now);
+    snprintf(head, sizeof head, "D %u %zu %d %.3f", jb->seq, jb->ran, jb->started,
+             (double)(now.tv_sec - jb->cpu0.tv_sec) + 1e-9 * (double)(now.tv_nsec - jb->cpu0.tv_nsec));
     say_str(head);
     return 1;
 }
