@@ -18,5 +18,9 @@ echo "dfle benchmarks on $(uname -m), $(nproc) cores, $(date -u +%Y-%m-%d)"
 "$DFLE" -q "$here/landscape.lua"
 "$DFLE" -q "$here/methods.lua"
 "$DFLE" -q "$here/ensemble.lua"
+# dfle-mpi against threads, where `make mpi` built it and mpirun is there.
+if [ -x "$(dirname "$DFLE")/dfle-mpi" ] && command -v mpirun > /dev/null; then
+    sh "$here/mpi.sh" "$(dirname "$DFLE")/dfle-mpi"
+fi
 "$DFLE" -q "$here/laws.lua"
 "$DFLE" -q "$here/invert.lua"
