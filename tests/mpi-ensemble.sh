@@ -48,7 +48,7 @@ cd "$tmp" || exit 1
 "$DFLE" -q -j 1 sweep.lua plain.csv > /dev/null
 
 # Ranks x threads per rank (-j): the same rows, byte for byte.
-for rj in 2:1 3:1 2:2 3:2; do
+for rj in 1:1 1:2 2:1 3:1 2:2 3:2; do
     r=${rj%:*} j=${rj#*:}
     $MPIRUN -n "$r" "$DFLE_MPI" -q -j "$j" sweep.lua "mpi$r-$j.csv" > "out$r-$j.txt" 2>&1
     s=$?
@@ -99,12 +99,20 @@ $MPIRUN -n 2 "$DFLE_MPI" -q -j 2 inv.lua chain-mpi.csv > inv-mpi.txt 2>&1 &&
     cmp -s inv-plain.txt inv-mpi.txt && cmp -s chain-plain.csv chain-mpi.csv
 check "dfle.invert under dfle-mpi gives the chain of the plain build" $?
 
-# A rank lost mid-job.  Rank 2 writes its process id at its third sample
-# and spins (a bounded minute) until this script kills it, as the kernel
-# or a crash would: no child process of it is alive then.  Samples take
-# 30 ms of CPU each, so the others are still at work.
+# A rank lost mid-job.  At its third sample the victim waits (a bounded
+# minute) until the file holds a finished row, so that there is always
+# one to keep whatever the timing, then writes its process id and spins
+# (a bounded minute) until this script kills it, as the kernel or a
+# crash would: no child process of it is alive then.  It holds at least
+# that third sample, and samples take 30 ms of CPU each, so the others
+# are still at work.
 VICTIM='n = (n or 0) + 1
 if os.getenv("OMPI_COMM_WORLD_RANK") == os.getenv("VICTIM_RANK") and n == 3 then
+  local rows, t = 0, os.time() + 60
+  while rows < 1 and os.time() < t do
+    local f = io.open(arg[1])
+    if f then rows = select(2, f:read("a"):gsub("\n", "")) - 2; f:close() end
+  end
   local f = io.open("/proc/self/stat"); local pid = f:read("n"); f:close()
   f = io.open("victim.tmp", "w"); f:write(pid); f:close(); os.rename("victim.tmp", "victim.pid")
   local t = os.time() + 60; while os.time() < t do end
@@ -153,7 +161,7 @@ if $MPIRUN --help all 2>/dev/null | grep -q -- --enable-recovery; then
     # (mpirun's own status is 0 then: it lets ranks fail.)
     lose_rank 0 orphan.csv orphan.txt --enable-recovery "--rank-timeout 3"
     grep -q "rank [12] (.*): no word from rank 0 for [0-9]* s; stopping the job" orphan.txt &&
-        rows_of_plain orphan.csv
+        rows_of_plain orphan.csv && [ "$(wc -l < orphan.csv)" -ge 3 ]
     check "mpirun --enable-recovery, rank 0 killed mid-job: the others stop with a message, rows kept" $?
 else
     echo "ok - # skip mpirun has no --enable-recovery"
