@@ -138,7 +138,7 @@ static void make_slope_area(dfle_bins *bins, dfle_eq2_fit *fit)
     }
     b_q25[3] = NAN; /* a bin without quartiles must not break the plot */
     *bins = (dfle_bins){NBINS, NBINS, 0, b_A, b_lo, b_hi, b_S, b_S,
-                        b_q25, b_q75, b_cnt};
+                        b_q25, b_q75, b_S, b_cnt};
     *fit = (dfle_eq2_fit){0};
     fit->S_df = 0.7;
     fit->A_df = 2e4;

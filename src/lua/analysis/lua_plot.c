@@ -94,6 +94,7 @@ static int l_plot_slope_area(lua_State *L)
     dfle_bins_release(&bins);
     if (st != DFLE_OK)
         return dfle_lua_raise(L, &err);
+    dfle_lua_note_file(L, path); /* for run records */
     return 0;
 }
 
@@ -112,6 +113,7 @@ static int l_plot_profile(lua_State *L)
     S = dfle_lua_model_field(L, 1, DFLE_FIELD_S, "dfle.plot.profile");
     if (dfle_plot_profile(path, title, dfle_model_size(m), x, z, S, &err) != DFLE_OK)
         return dfle_lua_raise(L, &err);
+    dfle_lua_note_file(L, path); /* for run records */
     return 0;
 }
 
@@ -177,6 +179,7 @@ static int l_plot_flow(lua_State *L)
     }
     if (dfle_plot_xy(path, &o, series, k, &err) != DFLE_OK)
         return dfle_lua_raise(L, &err);
+    dfle_lua_note_file(L, path); /* for run records */
     return 0;
 }
 
@@ -265,6 +268,7 @@ static int l_plot_xy(lua_State *L)
     }
     if (dfle_plot_xy(path, &o, series, ns, &err) != DFLE_OK)
         return dfle_lua_raise(L, &err);
+    dfle_lua_note_file(L, path); /* for run records */
     return 0;
 }
 
