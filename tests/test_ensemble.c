@@ -38,21 +38,6 @@ static void path(char *buf, size_t len, const char *name)
     snprintf(buf, len, "%s/%s", dir, name);
 }
 
-static char *slurp(const char *p)
-{
-    FILE *fp = fopen(p, "rb");
-    char *s;
-    long n;
-    assert_non_null(fp);
-    fseek(fp, 0, SEEK_END);
-    n = ftell(fp);
-    rewind(fp);
-    s = calloc((size_t)n + 1, 1);
-    assert_int_equal(fread(s, 1, (size_t)n, fp), (size_t)n);
-    fclose(fp);
-    return s;
-}
-
 static void row(char *buf, size_t len, size_t i)
 {
     snprintf(buf, len, "%zu,%g,ok,\"\"", i, 0.5 * (double)i);
@@ -84,7 +69,7 @@ static void test_stream_sort_resume(void **state)
     row(r, sizeof r, 7);
     assert_int_equal(dfle_ens_file_append(f, 7, r, &err), DFLE_EINVAL);
     /* rows are on disk, in finishing order, before closing */
-    text = slurp(p);
+    text = dfle_test_slurp(p);
     assert_string_equal(text, META "\n" HEADER "\n4,2,ok,\"\"\n2,1,ok,\"\"\n6,3,ok,\"\"\n");
     free(text);
     assert_ok(dfle_ens_file_close(f, 0, &err), &err);
@@ -103,7 +88,7 @@ static void test_stream_sort_resume(void **state)
             assert_ok(dfle_ens_file_append(f, i, r, &err), &err);
         }
     assert_ok(dfle_ens_file_close(f, 1, &err), &err);
-    text = slurp(p);
+    text = dfle_test_slurp(p);
     assert_string_equal(text, expected);
     free(text);
 
@@ -113,7 +98,7 @@ static void test_stream_sort_resume(void **state)
     assert_ok(dfle_ens_file_open(p, "# other", NULL, HEADER, 6, 0, &f, &err), &err);
     assert_int_equal(dfle_ens_file_ndone(f), 0);
     assert_ok(dfle_ens_file_close(f, 1, &err), &err);
-    text = slurp(p);
+    text = dfle_test_slurp(p);
     assert_string_equal(text, "# other\n" HEADER "\n");
     free(text);
 }
@@ -147,7 +132,7 @@ static void test_comment_lines(void **state)
     row(r, sizeof r, 1);
     assert_ok(dfle_ens_file_append(f, 1, r, &err), &err);
     assert_ok(dfle_ens_file_close(f, 1, &err), &err);
-    text = slurp(p);
+    text = dfle_test_slurp(p);
     assert_string_equal(text, META "\n# dfle: 9\n# units: x=m\n" HEADER
                               "\n1,0.5,ok,\"\"\n3,1.5,ok,\"\"\n");
     free(text);
@@ -164,7 +149,7 @@ static void test_comment_lines(void **state)
     files[0] = p;
     files[1] = q;
     assert_ok(dfle_ens_gather(files, 2, out, NULL, &err), &err);
-    text = slurp(out);
+    text = dfle_test_slurp(out);
     assert_string_equal(text, META "\n# dfle: 9\n# units: x=m\n" HEADER
                               "\n1,0.5,ok,\"\"\n2,1,ok,\"\"\n3,1.5,ok,\"\"\n");
     free(text);
@@ -203,7 +188,7 @@ static void test_gather_shards(void **state)
     path(out, sizeof out, "all.csv");
     assert_ok(dfle_ens_gather(files, 3, out, &nrows, &err), &err);
     assert_int_equal(nrows, 6);
-    text = slurp(out);
+    text = dfle_test_slurp(out);
     assert_string_equal(text, expected);
     free(text);
     /* the same file twice: identical rows are merged */

@@ -218,19 +218,8 @@ static int run(const char *name, int remote, char **text)
 static char *slurp(const char *name)
 {
     char p[160];
-    FILE *fp;
-    char *s;
-    long n;
     snprintf(p, sizeof p, "%s/%s", dir, name);
-    fp = fopen(p, "rb");
-    assert_non_null(fp);
-    fseek(fp, 0, SEEK_END);
-    n = ftell(fp);
-    rewind(fp);
-    s = calloc((size_t)n + 1, 1);
-    assert_int_equal(fread(s, 1, (size_t)n, fp), (size_t)n);
-    fclose(fp);
-    return s;
+    return dfle_test_slurp(p);
 }
 
 static int has_line(const char *whole, const char *line, size_t len)
