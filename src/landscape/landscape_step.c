@@ -156,6 +156,18 @@ static void status_network(const dfle_landscape *ls, dfle_landscape_status *st)
     st->heads = ls->model != NULL ? ls->heads : 0;
 }
 
+/* A step that failed part-way: the surface as it was, nothing
+ * evaluated. */
+static int step_undone(dfle_landscape *ls, double *z_before, int status)
+{
+    memcpy(ls->z, z_before, ls->n * sizeof *ls->z);
+    free(z_before);
+    ls->routed = 0;
+    ls->model_z_current = 0;
+    ls->have_rates = 0;
+    return status;
+}
+
 int ls_implicit_step(dfle_landscape *ls, double dt, double tol, double quantile,
                      dfle_landscape_status *st, dfle_error *err)
 {
@@ -172,10 +184,17 @@ int ls_implicit_step(dfle_landscape *ls, double dt, double tol, double quantile,
     double t0 = cpu_seconds(), t1;
 
     double Ln[8]; /* L^n by direction */
+    double *z_before;
     for (int d = 0; d < 8; d++)
         Ln[d] = n_one ? ls->len[d] : pow(ls->len[d], nexp);
     if ((st_ = ls_route(ls, err)) != DFLE_OK)
         return st_;
+    /* The surface before the step, to put back if the step leaves no
+     * surface (below). */
+    if ((z_before = malloc(ls->n * sizeof *z_before)) == NULL)
+        return dfle_error_set(err, DFLE_ENOMEM, "landscape: out of memory for a step of %zu cells",
+                              ls->n);
+    memcpy(z_before, z, ls->n * sizeof *z);
     t1 = cpu_seconds();
     if (ls->model != NULL) {
         if ((st_ = ls_model_evaluate(ls, err)) != DFLE_OK)
@@ -217,7 +236,7 @@ int ls_implicit_step(dfle_landscape *ls, double dt, double tol, double quantile,
                 st_ = dfle_solver_node_slope(ls->model, node, U + (z0 - z[r]) / dt, L / dt, flows,
                                              Sm[node], &S, NULL, err);
                 if (st_ != DFLE_OK)
-                    return st_;
+                    return step_undone(ls, z_before, st_);
                 zn = z[r] + S * L;
                 Ef = ls_fluvial_rate(ls, c, A[c], S) * dt;
                 Vf += Ef;
@@ -253,7 +272,7 @@ int ls_implicit_step(dfle_landscape *ls, double dt, double tol, double quantile,
         for (size_t c = 0; c < ls->n; c++)
             before += isnan(z[c]) ? 0.0 : z[c];
         if ((st_ = ls_diffuse(ls, dt, err)) != DFLE_OK)
-            return st_;
+            return step_undone(ls, z_before, st_);
         for (size_t c = 0; c < ls->n; c++)
             after += isnan(z[c]) ? 0.0 : z[c];
         /* What diffusion moved into channel and base cells left the
@@ -261,6 +280,23 @@ int ls_implicit_step(dfle_landscape *ls, double dt, double tol, double quantile,
         Vh += before - after;
         dV += after - before;
     }
+    /* Everything the step produced is checked: a step of 1e300 yr, or a
+     * U of 1e300 m/yr, overflowed the volumes and made the diffusion
+     * solve NaN, and the step "succeeded" with a surface that was none. */
+    {
+        size_t finite = 0;
+        for (size_t c = 0; c < ls->n; c++)
+            finite += isfinite(z[c]) != 0;
+        if (finite != ls->n_data || !isfinite((VU + Vf + Vdf + Vh + dV) * ca)) {
+            dfle_error_set(err, DFLE_EINVAL, "landscape: a step of dt = %g yr gave %s (uplift "
+                           "volume %g m^3, hillslope %g m^3); it was undone: take shorter steps, "
+                           "or check U", dt, finite != ls->n_data ? "elevations that are not finite"
+                                                                  : "volumes that are not finite",
+                           VU * ca, Vh * ca);
+            return step_undone(ls, z_before, DFLE_EINVAL);
+        }
+    }
+    free(z_before);
     if (st != NULL) {
         st->route_seconds = t1 - t0;
         st->solve_seconds = cpu_seconds() - t1;

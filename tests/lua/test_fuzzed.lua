@@ -274,4 +274,36 @@ tests["a landscape's steady-state ratios stay numbers for the smallest uplift"] 
                   "U (uplift, m/yr) is 0 at cell 0 (row 0, column 0) at t = 0 yr; it must be")
 end
 
+tests["a landscape step that leaves no surface is an error, and undone"] = function()
+    -- dt = 1e300 yr with diffusion made every elevation NaN and the step
+    -- returned as if nothing happened; U = 1e300 m/yr overflowed the volumes
+    local ls = dfle.landscape{ nx = 8, ny = 3, dx = 30, hillslope = "diffusion" }
+    local z0 = ls:get("z")
+    T.raises_here(function() return ls:step(1e300) end,
+                  "dfle.landscape: a step of dt = 1e+300 yr gave elevations that are not finite",
+                  "it was undone")
+    local z1 = ls:get("z")
+    for i = 1, #z0 do T.eq(z1[i], z0[i]) end
+    T.eq(ls.time, 0)
+    ls = dfle.landscape{ nx = 8, ny = 3, dx = 30, U = 1e300 }
+    T.raises_here(function() return ls:step(1e10) end, "gave volumes that are not finite")
+    T.ok(ls:step(10).dt == 10, "a sane step afterwards")
+end
+
+tests["ens:write_netcdf checks the count against the rows"] = function()
+    -- a changed count sized the buffers: Lua's bare 'block too big'
+    local dir = T.tmpname()
+    os.remove(dir)
+    os.execute("mkdir -p " .. T.shquote(dir))
+    local ens = dfle.ensemble{ params = { k_df = { 5e-5, 1e-3 } }, n = 2, seed = 1, workers = 1,
+        out = dir .. "/e.csv", outputs = { "S_df" },
+        build = function(p) return dfle.model{ channel = dfle.channel{ dx = 50, A_max = 5e4 },
+                                               law = dfle.law.power{ k_df = p.k_df } } end }
+    ens.count = -2459827872551929411
+    T.raises_here(function() return ens:write_netcdf(dir .. "/e.nc") end,
+                  "dfle.ensemble:write_netcdf: the result's count (-2459827872551929411) is not "
+                  .. "the number of rows in data.index (2)")
+    os.execute("rm -rf " .. T.shquote(dir))
+end
+
 return tests
