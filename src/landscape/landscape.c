@@ -138,6 +138,7 @@ void dfle_landscape_free(dfle_landscape *ls)
     dfle_network_free(ls->net);
     dfle_drainage_free(ls->dr);
     free(ls->z);
+    free(ls->z_undo);
     free(ls->rcv_prev);
     free(ls->dzdt);
     free(ls->U.grid);
@@ -330,6 +331,7 @@ size_t dfle_landscape_memory(const dfle_landscape *ls)
 {
     size_t b = sizeof *ls + dfle_drainage_memory(ls->dr);
     b += ls->n * (sizeof *ls->z + sizeof *ls->rcv_prev + sizeof *ls->dzdt);
+    b += (ls->z_undo != NULL) * ls->n * sizeof *ls->z_undo;
     b += (ls->U.grid != NULL) * ls->n * sizeof(double);
     b += (ls->K_scale.grid != NULL) * ls->n * sizeof(double);
     b += (ls->df_scale.grid != NULL) * ls->n * sizeof(double);

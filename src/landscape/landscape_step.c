@@ -158,10 +158,9 @@ static void status_network(const dfle_landscape *ls, dfle_landscape_status *st)
 
 /* A step that failed part-way: the surface as it was, nothing
  * evaluated. */
-static int step_undone(dfle_landscape *ls, double *z_before, int status)
+static int step_undone(dfle_landscape *ls, const double *z_before, int status)
 {
     memcpy(ls->z, z_before, ls->n * sizeof *ls->z);
-    free(z_before);
     ls->routed = 0;
     ls->model_z_current = 0;
     ls->have_rates = 0;
@@ -190,10 +189,12 @@ int ls_implicit_step(dfle_landscape *ls, double dt, double tol, double quantile,
     if ((st_ = ls_route(ls, err)) != DFLE_OK)
         return st_;
     /* The surface before the step, to put back if the step leaves no
-     * surface (below). */
-    if ((z_before = malloc(ls->n * sizeof *z_before)) == NULL)
+     * surface (below); kept in the landscape, so that nothing leaks if
+     * a callback raises through the step. */
+    if (ls->z_undo == NULL && (ls->z_undo = malloc(ls->n * sizeof *ls->z_undo)) == NULL)
         return dfle_error_set(err, DFLE_ENOMEM, "landscape: out of memory for a step of %zu cells",
                               ls->n);
+    z_before = ls->z_undo;
     memcpy(z_before, z, ls->n * sizeof *z);
     t1 = cpu_seconds();
     if (ls->model != NULL) {
@@ -296,7 +297,6 @@ int ls_implicit_step(dfle_landscape *ls, double dt, double tol, double quantile,
             return step_undone(ls, z_before, DFLE_EINVAL);
         }
     }
-    free(z_before);
     if (st != NULL) {
         st->route_seconds = t1 - t0;
         st->solve_seconds = cpu_seconds() - t1;
