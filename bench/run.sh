@@ -11,6 +11,7 @@ fi
 export DFLE_DATA_DIR
 echo "dfle benchmarks on $(uname -m), $(nproc) cores, $(date -u +%Y-%m-%d)"
 "$DFLE" -q "$here/steady_state.lua"
+"$BIN/direct"
 "$BIN/process"
 "$DFLE" -q "$here/process.lua"
 "$DFLE" -q "$here/dem.lua"
