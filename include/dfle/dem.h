@@ -71,7 +71,9 @@ typedef struct dfle_dem_read_opts {
  * does not read, read error) or DFLE_EINVAL (no georeferencing, a
  * rotated or south-up grid, a band that does not exist, no data at
  * all), the message naming the path.  A geographic (degree) grid is
- * read; routing and profiles then refuse it (dfle_dem_check_metric). */
+ * read; routing and profiles then refuse it (dfle_dem_check_metric).
+ * GDAL is loaded by the first call (it is not linked); DFLE_EEXTERNAL,
+ * saying what to install, where it cannot be. */
 int dfle_dem_read(const char *path, const dfle_dem_read_opts *opts, dfle_dem **out,
                   dfle_error *err);
 
