@@ -14,6 +14,7 @@
 #include <stddef.h>
 #include <stdint.h>
 #include <stdio.h>
+#include <stdlib.h>
 #include <cmocka.h>
 
 #include "dfle/law.h"
@@ -68,6 +69,23 @@ static inline dfle_law *dfle_test_without_rate_dlnS(dfle_law *law, dfle_law_ops 
     ops->destroy = NULL;
     assert_int_equal(dfle_law_new(ops, dfle_law_state(law), &out, NULL), 0);
     return out;
+}
+
+/* The whole of file `path` as a string (free it); the file must exist. */
+static inline char *dfle_test_slurp(const char *path)
+{
+    FILE *fp = fopen(path, "rb");
+    char *s;
+    long n;
+    assert_non_null(fp);
+    fseek(fp, 0, SEEK_END);
+    n = ftell(fp);
+    rewind(fp);
+    s = calloc((size_t)n + 1, 1);
+    assert_non_null(s);
+    assert_int_equal(fread(s, 1, (size_t)n, fp), (size_t)n);
+    fclose(fp);
+    return s;
 }
 
 #endif
