@@ -302,6 +302,6 @@ void dfle_lua_open_args(lua_State *L); /* dfle.args, dfle.mkdir (lua_args.c) */
 void dfle_lua_open_dem(lua_State *L);
 void dfle_lua_open_landscape(lua_State *L);
 void dfle_lua_open_ensemble(lua_State *L); /* after sampling: wraps dfle.pawn */
-void dfle_lua_open_trace_hook(lua_State *L); /* a test hook, in the registry */
+void dfle_lua_open_trace_hook(lua_State *L); /* the cache of compiled laws; test hooks */
 
 #endif
