@@ -33,8 +33,9 @@
  * in tests/lua/test_compile.lua).
  *
  * Layout: registry[&cache_key] is a userdata holding the counters, whose
- * user value is the map key -> bucket (an array of templates, newest
- * last).  A template is a userdata owning a program (freed by __gc) whose
+ * user values are the map chunk -> spec -> bucket (an array of templates,
+ * newest last) and a memo function -> chunk with weak keys (dumping a
+ * function costs more than the rest of a lookup).  A template is a userdata owning a program (freed by __gc) whose
  * user value is its guard table, marks in place of the law's function
  * and params.  At most PER_KEY templates per key and HELD in all: past
  * that the oldest of a key goes, or the whole map (an ensemble that keeps
@@ -87,7 +88,7 @@ dfle_trace_stats *dfle_trace_stats_of(lua_State *L)
     return c != NULL ? &c->stats : NULL;
 }
 
-/* Push a new, empty map as the cache's user value. */
+/* A new, empty map as the cache's user value 1. */
 static void new_map(lua_State *L, int cidx)
 {
     lua_newtable(L);
@@ -103,49 +104,71 @@ void dfle_trace_cache_open(lua_State *L)
     lua_pushcfunction(L, template_gc);
     lua_setfield(L, -2, "__gc");
     lua_rawsetp(L, LUA_REGISTRYINDEX, &template_mt_key);
-    memset(lua_newuserdatauv(L, sizeof(cache_state), 1), 0, sizeof(cache_state));
+    memset(lua_newuserdatauv(L, sizeof(cache_state), 2), 0, sizeof(cache_state));
     new_map(L, lua_gettop(L));
+    lua_newtable(L); /* the memo of chunks, weak keys */
+    lua_createtable(L, 0, 1);
+    lua_pushliteral(L, "k");
+    lua_setfield(L, -2, "__mode");
+    lua_setmetatable(L, -2);
+    lua_setiuservalue(L, -2, 2);
     lua_rawsetp(L, LUA_REGISTRYINDEX, &cache_key);
 }
 
-/* Push the key of the function at fidx traced for spec: the spec, then
- * the function's chunk; nil when lua_dump gives none. */
+/* Push the chunk of the function at fidx (nil if lua_dump gives none),
+ * from the memo if it is there, and the spec as a short string. */
 static void push_key(lua_State *L, int fidx, const dfle_trace_spec *spec)
 {
     luaL_Buffer b;
     char head[96];
-    dfle_trace_push_dump(L, fidx);
-    if (lua_isnil(L, -1))
-        return;
+    fidx = lua_absindex(L, fidx);
+    lua_rawgetp(L, LUA_REGISTRYINDEX, &cache_key);
+    lua_getiuservalue(L, -1, 2);
+    lua_pushvalue(L, fidx);
+    if (lua_rawget(L, -2) == LUA_TNIL) {
+        lua_pop(L, 1);
+        dfle_trace_push_dump(L, fidx);
+        lua_pushvalue(L, fidx);
+        lua_pushvalue(L, -2);
+        lua_rawset(L, -4); /* a nil chunk stores nothing */
+    }
+    lua_replace(L, -3);
+    lua_pop(L, 1);
     luaL_buffinit(L, &b);
-    snprintf(head, sizeof head, "%d %d %x %d ", spec->n_inputs, spec->positional,
+    snprintf(head, sizeof head, "%d %d %x %d", spec->n_inputs, spec->positional,
              spec->available, spec->params_inputs);
     luaL_addstring(&b, head);
     for (int f = 0; f < spec->n_inputs; f++) {
-        luaL_addstring(&b, spec->names[f]);
         luaL_addchar(&b, ' ');
+        luaL_addstring(&b, spec->names[f]);
     }
     luaL_pushresult(&b);
-    lua_insert(L, -2);
-    lua_concat(L, 2);
 }
 
-/* Push the bucket of the key at kidx (creating it if `create`), or nil. */
+/* Push the bucket of the key at kidx, kidx + 1 (chunk, spec), creating it
+ * if `create`; else nil if there is none. */
 static void push_bucket(lua_State *L, int kidx, int create)
 {
     kidx = lua_absindex(L, kidx);
     lua_rawgetp(L, LUA_REGISTRYINDEX, &cache_key);
     lua_getiuservalue(L, -1, 1);
-    lua_pushvalue(L, kidx);
-    if (lua_rawget(L, -2) == LUA_TNIL && create) {
-        lua_pop(L, 1);
-        lua_newtable(L);
-        lua_pushvalue(L, kidx);
-        lua_pushvalue(L, -2);
-        lua_rawset(L, -4);
+    for (int level = 0; level < 2; level++) {
+        lua_pushvalue(L, kidx + level);
+        if (lua_rawget(L, -2) == LUA_TNIL) {
+            lua_pop(L, 1);
+            if (!create) {
+                lua_pop(L, 2);
+                lua_pushnil(L);
+                return;
+            }
+            lua_newtable(L);
+            lua_pushvalue(L, kidx + level);
+            lua_pushvalue(L, -2);
+            lua_rawset(L, -4);
+        }
+        lua_replace(L, -2);
     }
-    lua_replace(L, -3);
-    lua_pop(L, 1);
+    lua_replace(L, -2);
 }
 
 /* Copy the guard table at gidx, putting `to_a` in place of `from_a` and
@@ -173,21 +196,21 @@ static int find_main(lua_State *L)
 {
     const dfle_trace_spec *spec = lua_touserdata(L, 3);
     lua_Integer n;
-    push_key(L, 1, spec); /* 4 */
+    push_key(L, 1, spec); /* 4, 5 */
     if (lua_isnil(L, 4))
         return 0;
-    push_bucket(L, 4, 0); /* 5 */
-    if (!lua_istable(L, 5))
+    push_bucket(L, 4, 0); /* 6 */
+    if (!lua_istable(L, 6))
         return 0;
-    lua_pushlightuserdata(L, (void *)&dfle_trace_root);   /* 6 */
-    lua_pushlightuserdata(L, (void *)&dfle_trace_params); /* 7 */
-    n = (lua_Integer)lua_rawlen(L, 5);
+    lua_pushlightuserdata(L, (void *)&dfle_trace_root);   /* 7 */
+    lua_pushlightuserdata(L, (void *)&dfle_trace_params); /* 8 */
+    n = (lua_Integer)lua_rawlen(L, 6);
     for (lua_Integer i = n; i >= 1; i--) { /* newest first */
-        lua_rawgeti(L, 5, i);      /* 8: template */
-        lua_getiuservalue(L, 8, 1); /* 9: its guards */
-        if (dfle_trace_guards_check(L, 9, NULL, 1, 2)) {
-            copy_guards(L, 9, 6, 1, 7, 2);
-            lua_remove(L, 9);
+        lua_rawgeti(L, 6, i);        /* 9: template */
+        lua_getiuservalue(L, 9, 1); /* 10: its guards */
+        if (dfle_trace_guards_check(L, 10, NULL, 1, 2)) {
+            copy_guards(L, 10, 7, 1, 8, 2);
+            lua_remove(L, 10);
             return 2;
         }
         lua_pop(L, 2);
@@ -264,38 +287,38 @@ static int put_main(lua_State *L)
     template_ud *u;
     lua_Integer n;
 
-    push_key(L, 1, spec); /* 6 */
+    push_key(L, 1, spec); /* 6, 7 */
     if (lua_isnil(L, 6) || c == NULL)
         return 0;
-    u = lua_newuserdatauv(L, sizeof *u, 1); /* 7 */
+    u = lua_newuserdatauv(L, sizeof *u, 1); /* 8 */
     u->prog = NULL;
     lua_rawgetp(L, LUA_REGISTRYINDEX, &template_mt_key);
     lua_setmetatable(L, -2);
     if ((u->prog = dfle_trace_clone(prog)) == NULL)
         return luaL_error(L, "out of memory");
-    lua_pushlightuserdata(L, (void *)&dfle_trace_root);   /* 8 */
-    lua_pushlightuserdata(L, (void *)&dfle_trace_params); /* 9 */
-    copy_guards(L, 5, 1, 8, 2, 9);
-    lua_setiuservalue(L, 7, 1);
+    lua_pushlightuserdata(L, (void *)&dfle_trace_root);   /* 9 */
+    lua_pushlightuserdata(L, (void *)&dfle_trace_params); /* 10 */
+    copy_guards(L, 5, 1, 9, 2, 10);
+    lua_setiuservalue(L, 8, 1);
     if (c->stats.held >= HELD) { /* start afresh rather than grow */
         lua_rawgetp(L, LUA_REGISTRYINDEX, &cache_key);
         new_map(L, lua_gettop(L));
         lua_pop(L, 1);
     }
-    push_bucket(L, 6, 1); /* 10 */
-    n = (lua_Integer)lua_rawlen(L, 10);
+    push_bucket(L, 6, 1); /* 11 */
+    n = (lua_Integer)lua_rawlen(L, 11);
     if (n >= PER_KEY) { /* the oldest goes */
         for (lua_Integer i = 1; i < n; i++) {
-            lua_rawgeti(L, 10, i + 1);
-            lua_rawseti(L, 10, i);
+            lua_rawgeti(L, 11, i + 1);
+            lua_rawseti(L, 11, i);
         }
         lua_pushnil(L);
-        lua_rawseti(L, 10, n);
+        lua_rawseti(L, 11, n);
         n--;
         c->stats.held--;
     }
-    lua_pushvalue(L, 7);
-    lua_rawseti(L, 10, n + 1);
+    lua_pushvalue(L, 8);
+    lua_rawseti(L, 11, n + 1);
     c->stats.held++;
     c->stats.kept++;
     return 0;
