@@ -283,6 +283,10 @@ void dfle_lua_push_module(lua_State *L);
 unsigned long *dfle_lua_epoch(lua_State *L);
 void dfle_lua_touch(lua_State *L);
 
+/* Processors online (at least 1): the default number of ensemble workers
+ * and PAWN bootstrap threads. */
+int dfle_lua_cores(void);
+
 /* Each binding file adds its functions to the module table on the stack. */
 void dfle_lua_open_channel(lua_State *L);
 void dfle_lua_open_fluvial(lua_State *L);

@@ -71,7 +71,6 @@ void dfle_lua_ens_read_spec(lua_State *L, int arg, const char *fn, spec *s,
 int dfle_lua_ens_sample_row(lua_State *L, int ctx, size_t i);
 void dfle_lua_ens_push_result(lua_State *L, const char *fn, const char *path, size_t shard_i,
                               size_t shard_n, lua_Integer ran);
-int dfle_lua_ens_cores(void);
 /* Set __index of the result metatable (at the top): ens:write_netcdf. */
 void dfle_lua_ens_result_methods(lua_State *L);
 void dfle_lua_ens_run_threads(lua_State *L, pool *pl, int nw, size_t total);

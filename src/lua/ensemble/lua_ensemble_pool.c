@@ -9,7 +9,6 @@
 #include <stdlib.h>
 #include <string.h>
 #include <time.h>
-#include <unistd.h>
 
 #include "lua/ensemble/lua_ensemble_internal.h"
 
@@ -177,12 +176,6 @@ static void *worker_thread(void *arg)
     pthread_cond_signal(&pl->cond);
     pthread_mutex_unlock(&pl->lock);
     return NULL;
-}
-
-int dfle_lua_ens_cores(void)
-{
-    long c = sysconf(_SC_NPROCESSORS_ONLN);
-    return c > 0 ? (int)c : 1;
 }
 
 /* Run the queue on `nw` threads; returns 0 or raises the first error. */
