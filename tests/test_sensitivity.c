@@ -498,6 +498,10 @@ static void test_pawn_errors(void **state)
     assert_int_equal(dfle_pawn(5, 2, xs, y, &o, &r, &err), DFLE_EINVAL);
     assert_msg_contains(err.msg, "conf");
     o.conf = 0.9;
+    o.threads = DFLE_PAWN_MAX_THREADS + 1;
+    assert_int_equal(dfle_pawn(5, 2, xs, y, &o, &r, &err), DFLE_EINVAL);
+    assert_msg_contains(err.msg, "threads");
+    o.threads = 2;
     assert_int_equal(dfle_pawn(5, 2, xs, y, &o, NULL, &err), DFLE_EINVAL);
     assert_ok(dfle_pawn(5, 2, xs, y, &o, &r, &err), &err);
     dfle_pawn_release(&r);

@@ -60,6 +60,9 @@ enum dfle_pawn_stat {
  * fraction h / lcm. */
 #define DFLE_PAWN_EXACT_MAX_N 10000
 
+/* The most bootstrap threads dfle_pawn starts (each has O(N + S) scratch). */
+#define DFLE_PAWN_MAX_THREADS 4096
+
 /* "minimum", "mean", "median", "maximum", "CV", "stdev" (NULL otherwise). */
 const char *dfle_pawn_stat_name(int stat);
 
@@ -71,7 +74,8 @@ typedef struct dfle_pawn_opts {
     const char *const *names; /* D input names for messages (may be NULL)   */
     const char *output;       /* output name for messages (may be NULL)     */
     size_t threads;           /* threads for the bootstrap replicates, the
-                               * calling one included; 0 or 1: the calling
+                               * calling one included, at most
+                               * DFLE_PAWN_MAX_THREADS; 0 or 1: the calling
                                * thread alone (default 1).  The library
                                * starts threads - 1 pthreads for the call and
                                * joins them before it returns; the results

@@ -924,6 +924,9 @@ static int check_args(size_t N, size_t D, const double *const *x, const dfle_paw
                               DFLE_SEED_MAX, o->seed);
     if (o->bootstrap > 0 && (uint64_t)N > UINT32_MAX)
         return dfle_error_set(err, DFLE_EINVAL, "pawn: bootstrap needs fewer than 2^32 rows");
+    if (o->threads > DFLE_PAWN_MAX_THREADS)
+        return dfle_error_set(err, DFLE_EINVAL, "pawn: threads must be at most %d (got %zu)",
+                              DFLE_PAWN_MAX_THREADS, o->threads);
     if (o->bootstrap > SIZE_MAX / 8 / DFLE_PAWN_NSTATS / D)
         return dfle_error_set(err, DFLE_EINVAL, "pawn: bootstrap = %zu is too large",
                               o->bootstrap);

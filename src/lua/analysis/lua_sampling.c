@@ -496,7 +496,8 @@ static int l_pawn(lua_State *L)
     o.S = (size_t)dfle_lua_check_whole(L, S, "pawn", "S (slices)", 1, 1e6);
     o.bootstrap = (size_t)dfle_lua_check_whole(L, nboot, "pawn", "bootstrap", 0, 1e7);
     o.seed = (unsigned long)dfle_lua_check_whole(L, seed, "pawn", "seed", 0, 4294967295.0);
-    o.threads = (size_t)dfle_lua_check_whole(L, threads, "pawn", "threads", 1, 4096);
+    o.threads = (size_t)dfle_lua_check_whole(L, threads, "pawn", "threads", 1,
+                                             DFLE_PAWN_MAX_THREADS);
     if (!(conf > 0.0 && conf < 1.0))
         luaL_error(L, "dfle.pawn: conf (confidence level) must be in (0, 1) (got %s)",
                    dfle_lua_number_text(L, conf));
