@@ -690,9 +690,10 @@ static int string_method(lua_State *L)
  * string.len, which a script may replace), or whatever debug.setmetatable
  * gave numbers, booleans, nil or functions.  A metatable on those refuses
  * the function; strings' __index is swapped for one that refuses (the
- * original is kept in the cache table under string_index_key, and put
- * back by dfle_trace_compile whatever happens). */
-static const char string_index_key = 0;
+ * metatable and the original are kept in the cache table under
+ * string_mt_key and string_index_key, and put back by trace_once
+ * whatever happens). */
+static const char string_mt_key = 0, string_index_key = 0;
 
 static void close_shared_metatables(lua_State *L, tracer *t, int tidx)
 {
@@ -722,6 +723,8 @@ static void close_shared_metatables(lua_State *L, tracer *t, int tidx)
     lua_getiuservalue(L, tidx, UV_CACHE);
     lua_insert(L, -2);
     lua_rawsetp(L, -2, &string_index_key);
+    lua_pushvalue(L, -2);
+    lua_rawsetp(L, -2, &string_mt_key);
     lua_pop(L, 1);
     lua_pushliteral(L, "__index");
     lua_pushvalue(L, tidx);
@@ -730,23 +733,20 @@ static void close_shared_metatables(lua_State *L, tracer *t, int tidx)
     lua_pop(L, 2);
 }
 
-/* Put strings' __index back (no allocation: the key exists). */
+/* Put strings' __index back.  No allocation (it runs outside the
+ * protected call): the metatable comes from the cache table, and
+ * "__index" is one of Lua's fixed strings, already a key there. */
 static void reopen_shared_metatables(lua_State *L, int tidx)
 {
-    lua_pushliteral(L, "");
-    if (!lua_getmetatable(L, -1)) {
-        lua_pop(L, 1);
-        return;
-    }
-    lua_getiuservalue(L, tidx, UV_CACHE);
-    if (lua_rawgetp(L, -1, &string_index_key) != LUA_TNIL) {
+    const int top = lua_gettop(L);
+    lua_getiuservalue(L, tidx, UV_CACHE);                       /* top+1 */
+    if (lua_rawgetp(L, top + 1, &string_mt_key) == LUA_TTABLE &&  /* top+2 */
+        lua_rawgetp(L, top + 1, &string_index_key) != LUA_TNIL) { /* top+3 */
         lua_pushliteral(L, "__index");
-        lua_insert(L, -2);
-        lua_rawset(L, -4);
-    } else {
-        lua_pop(L, 1);
+        lua_insert(L, top + 3);
+        lua_rawset(L, top + 2);
     }
-    lua_pop(L, 3);
+    lua_settop(L, top);
 }
 
 /* fn(c, p) or fn(x_1, ..., x_n, p) with nodes: args 1 tracer, 2 fn, 3 p. */
