@@ -9,7 +9,9 @@ if [ -z "${DFLE_DATA_DIR:-}" ]; then
     DFLE_DATA_DIR="$(cd "$here/../.." && pwd)/shared/data"
 fi
 export DFLE_DATA_DIR
-echo "dfle benchmarks on $(uname -m), $(nproc) cores, $(date -u +%Y-%m-%d)"
+# The load average: on a shared machine, wall-clock ratios (threads, ranks)
+# mean little when it exceeds the cores.
+echo "dfle benchmarks on $(uname -m), $(nproc) cores, $(date -u +%Y-%m-%d), load average $(cut -d' ' -f1 /proc/loadavg 2>/dev/null || echo '?')"
 "$DFLE" -q "$here/steady_state.lua"
 "$DFLE" -q "$here/process.lua"
 "$DFLE" -q "$here/dem.lua"
