@@ -23,7 +23,13 @@
  *  - side effects: writes to proxies raise, and SETUPVAL in the
  *    bytecode refuses the function (a counter in an upvalue);
  *  - values read from outside (params, globals, upvalues, math.pi) are
- *    recorded as guards the caller re-checks (lua_trace.h);
+ *    recorded as guards the caller re-checks (lua_trace.h); a float param
+ *    may instead be an input (T_PARAM) whose value each law binds, and is
+ *    then opaque to the function: anything but arithmetic on it refuses;
+ *  - what no guard could watch is refused: the length of a proxy (#p),
+ *    string methods (strings' __index refuses during the trace), and any
+ *    metatable debug.setmetatable gave nil, booleans, numbers or
+ *    functions;
  *  - calls: only Lua functions (vetted the same way) and the pure math
  *    functions listed below, recognised by their C address as found in
  *    a fresh luaopen_math table, so a replaced math.sqrt is not trusted;
