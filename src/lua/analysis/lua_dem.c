@@ -480,13 +480,31 @@ static int l_profile_slope_area(lua_State *L)
     return 1;
 }
 
+/* p:write_csv(path [, { record = true | false | "p.json" }]) */
 static int l_profile_write_csv(lua_State *L)
 {
+    static const char *const keys[] = {"record", NULL};
     dfle_profile *p = check_profile(L, 1);
     const char *path = dfle_lua_check_string(L, 2, "profile:write_csv", "the path");
+    dfle_record *rec;
+    const char *jpath;
     dfle_error err;
-    if (dfle_profile_write_csv(p, path, &err) != DFLE_OK)
+
+    lua_settop(L, 3);
+    if (!lua_isnil(L, 3)) {
+        luaL_checktype(L, 3, LUA_TTABLE);
+        dfle_lua_read_params(L, 3, "profile:write_csv", NULL, 0, keys);
+    }
+    rec = dfle_lua_push_record(L, dfle_profile_is_network(p)
+                                      ? "DEM channel network: one row per cell, each before "
+                                        "its receiver"
+                                      : "DEM channel profile: one row per cell, from the head "
+                                        "to the outlet");
+    dfle_profile_describe(p, rec);
+    jpath = dfle_lua_record_path(L, rec, 3, path, "profile:write_csv");
+    if (dfle_profile_write_csv(p, path, rec, &err) != DFLE_OK)
         return dfle_lua_raise(L, &err);
+    dfle_lua_record_done(L, rec, path, jpath);
     dfle_lua_note(L, DFLE_LUA_DETAIL, "wrote %s (%zu cells)", path, dfle_profile_size(p));
     lua_settop(L, 1);
     return 1;
@@ -513,6 +531,17 @@ static int l_profile_channel(lua_State *L)
     }
     u = dfle_lua_newobject(L, sizeof *u, DFLE_LUA_CHANNEL, 0);
     if (dfle_profile_channel(p, dx, k_w, b, &u->ch, &err) != DFLE_OK)
+        return dfle_lua_raise(L, &err);
+    return 1;
+}
+
+/* p:main_stem() -> dfle.profile: a network's main stem (a profile's copy) */
+static int l_profile_main_stem(lua_State *L)
+{
+    dfle_profile *p = check_profile(L, 1);
+    dfle_lua_profile *u = dfle_lua_newobject(L, sizeof *u, DFLE_LUA_PROFILE, 0);
+    dfle_error err;
+    if (dfle_profile_main_stem(p, &u->p, &err) != DFLE_OK)
         return dfle_lua_raise(L, &err);
     return 1;
 }
@@ -610,7 +639,8 @@ void dfle_lua_open_dem(lua_State *L)
         {"write_geotiff", l_dem_write_geotiff}, {NULL, NULL}};
     static const luaL_Reg profile_methods[] = {
         {"get", l_profile_get}, {"slope_area", l_profile_slope_area},
-        {"write_csv", l_profile_write_csv}, {"channel", l_profile_channel}, {NULL, NULL}};
+        {"write_csv", l_profile_write_csv}, {"channel", l_profile_channel},
+        {"main_stem", l_profile_main_stem}, {NULL, NULL}};
     static const luaL_Reg profile_meta[] = {{"__len", l_profile_len}, {NULL, NULL}};
     static const dfle_lua_type dem_type = {
         .name = DFLE_LUA_DEM, .free = dem_free, .describe = dem_describe,

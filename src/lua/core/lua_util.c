@@ -1,7 +1,7 @@
 /*
  * lua_util.c - the pieces every binding file uses: checked option
- * tables, error raising, numbers as text, tables and arrays, slope-area
- * data.
+ * tables, error raising, numbers as text, tables and arrays, text built
+ * from pieces, slope-area data.
  */
 #include "lua/core/dfle_lua.h"
 
@@ -367,4 +367,49 @@ const char *dfle_lua_push_history(lua_State *L)
     luaL_pushresult(&b);
     lua_remove(L, -2);
     return lua_tostring(L, -1);
+}
+
+void dfle_lua_text_init(lua_State *L, dfle_lua_text *p)
+{
+    lua_newtable(L);
+    p->t = lua_gettop(L);
+    p->k = 0;
+}
+
+void dfle_lua_text_add(lua_State *L, dfle_lua_text *p)
+{
+    lua_rawseti(L, p->t, ++p->k);
+}
+
+void dfle_lua_text_str(lua_State *L, dfle_lua_text *p, const char *s)
+{
+    lua_pushstring(L, s);
+    dfle_lua_text_add(L, p);
+}
+
+void dfle_lua_text_finish(lua_State *L, dfle_lua_text *p)
+{
+    luaL_Buffer b;
+    lua_settop(L, p->t);
+    luaL_buffinit(L, &b);
+    for (lua_Integer k = 1; k <= p->k; k++) {
+        lua_rawgeti(L, p->t, k);
+        luaL_addvalue(&b);
+    }
+    luaL_pushresult(&b);
+    lua_replace(L, p->t);
+}
+
+const char *dfle_lua_opt_string(lua_State *L, int idx, const char *key, const char *fn)
+{
+    const char *s = NULL;
+    if (lua_istable(L, idx)) {
+        int t = lua_getfield(L, idx, key);
+        if (t != LUA_TNIL && t != LUA_TSTRING)
+            luaL_error(L, "dfle.%s: parameter '%s' must be a string, got %s", fn, key,
+                       luaL_typename(L, -1));
+        s = t == LUA_TNIL ? NULL : dfle_lua_check_string(L, -1, fn, key); /* the table holds it */
+        lua_pop(L, 1);
+    }
+    return s;
 }

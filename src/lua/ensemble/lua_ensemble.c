@@ -34,8 +34,58 @@
 
 #include "lua/ensemble/lua_ensemble_internal.h"
 
-static const char calls_key = 'c';
-static const char stop_key = 'x'; /* the error value that stops a worker's script */
+/* The counts of the result table at res into rec's current section, and
+ * its rows per status as section "status". */
+static void record_counts(lua_State *L, dfle_record *rec, int res)
+{
+    static const char *const keys[] = {"n", "count", "ok", "failed", "ran"};
+    for (int k = 0; k < 5; k++) {
+        lua_getfield(L, res, keys[k]);
+        dfle_record_number(rec, keys[k], lua_tonumber(L, -1), NULL);
+        lua_pop(L, 1);
+    }
+    lua_getfield(L, res, "complete");
+    dfle_record_bool(rec, "complete", lua_toboolean(L, -1));
+    lua_getfield(L, res, "status");
+    dfle_record_section(rec, "status", NULL);
+    dfle_lua_record_table(L, rec, -1, 0);
+    lua_pop(L, 2);
+}
+
+/* The JSON record of a finished dfle.ensemble (the table at 1, its
+ * context at ctx, its result at res): what ran it, the design, the
+ * options and the counts.  The CSV file's own comment lines carry only
+ * what is the same for every run (the date and command are here). */
+static void ensemble_record(lua_State *L, int ctx, int res, const char *path, int workers)
+{
+    const dfle_lua_ensemble_host *host = dfle_lua_ens_host(L);
+    dfle_record *rec = dfle_lua_push_record(L, "dfle.ensemble: one row per sample, in index "
+                                               "order");
+    const char *jpath;
+    int top = lua_gettop(L);
+
+    dfle_record_section(rec, "ensemble", NULL);
+    lua_getfield(L, ctx, "meta");
+    dfle_record_text(rec, "meta", lua_tostring(L, -1));
+    dfle_record_number(rec, "workers", workers, NULL);
+    if (host != NULL && host->shard_n > 1) {
+        char shard[64];
+        snprintf(shard, sizeof shard, "%zu/%zu", host->shard_i, host->shard_n);
+        dfle_record_text(rec, "shard", shard);
+    }
+    record_counts(L, rec, res);
+    for (int k = 0; k < 2; k++) {
+        const char *key = k == 0 ? "run" : "fit";
+        if (lua_getfield(L, 1, key) == LUA_TTABLE) {
+            dfle_record_section(rec, key, NULL);
+            dfle_lua_record_table(L, rec, -1, 1);
+        }
+        lua_pop(L, 1);
+    }
+    jpath = dfle_lua_record_path(L, rec, 1, path, "ensemble");
+    dfle_lua_record_done(L, rec, path, jpath);
+    lua_settop(L, top - 1);
+}
 
 /* ------------------------------------------------------------------ */
 /* dfle.ensemble                                                       */
@@ -43,10 +93,9 @@ static const char stop_key = 'x'; /* the error value that stops a worker's scrip
 static int l_ensemble(lua_State *L)
 {
     const dfle_lua_ensemble_host *host = dfle_lua_ens_host(L);
-    worker_mode *wm;
     lua_Integer call;
     spec s;
-    int ctx, nw, workers;
+    int ctx, nw, role, workers;
     run_box *box;
     dfle_error err;
     size_t total, ran = 0;
@@ -54,29 +103,13 @@ static int l_ensemble(lua_State *L)
     const char *path;
 
     lua_settop(L, 1);
-    lua_rawgetp(L, LUA_REGISTRYINDEX, &calls_key);
-    call = lua_tointeger(L, -1) + 1;
-    lua_pop(L, 1);
-    lua_pushinteger(L, call);
-    lua_rawsetp(L, LUA_REGISTRYINDEX, &calls_key);
-    lua_rawgetp(L, LUA_REGISTRYINDEX, &dfle_lua_ens_worker_key);
-    wm = lua_touserdata(L, -1);
-    lua_pop(L, 1);
-
-    if (wm != NULL && call >= wm->target) {
-        /* A worker replaying the script: hand the table over and stop. */
-        if (call == wm->target) {
-            lua_pushvalue(L, 1);
-            lua_rawsetp(L, LUA_REGISTRYINDEX, &dfle_lua_ens_spec_key);
-        }
-        lua_pushlightuserdata(L, (void *)&stop_key);
-        return lua_error(L);
-    }
+    /* A worker replaying the script stops in here at its own call. */
+    role = dfle_lua_par_enter(L, DFLE_LUA_PAR_ENSEMBLE, 1, &call);
     dfle_lua_ens_read_spec(L, 1, "ensemble", &s, host);
     ctx = lua_gettop(L);
     lua_getfield(L, ctx, "out");
     path = lua_tostring(L, -1);
-    if (wm != NULL) {
+    if (role == DFLE_LUA_PAR_EARLIER) {
         /* An earlier ensemble of the script, finished by the main state. */
         dfle_lua_ens_push_result(L, "ensemble", path, host ? host->shard_i : 0, host ? host->shard_n : 0, 0);
         return 1;
@@ -85,10 +118,11 @@ static int l_ensemble(lua_State *L)
     dfle_lua_check_interrupt(L, "ensemble");
     started = dfle_lua_ens_now();
     box = dfle_lua_ens_new_box(L);
+    lua_getfield(L, ctx, "comments");
     lua_getfield(L, ctx, "meta");
     lua_getfield(L, ctx, "header");
-    if (dfle_ens_file_open(path, lua_tostring(L, -2), lua_tostring(L, -1), (size_t)s.n, s.resume,
-                           &box->file, &err) != DFLE_OK ||
+    if (dfle_ens_file_open(path, lua_tostring(L, -2), lua_tostring(L, -3), lua_tostring(L, -1),
+                           (size_t)s.n, s.resume, &box->file, &err) != DFLE_OK ||
         dfle_ens_queue_new((size_t)s.n, host ? host->shard_i : 0, host ? host->shard_n : 0,
                            box->file, s.limit, &box->queue, &err) != DFLE_OK)
         return luaL_error(L, "dfle.ensemble: %s", err.msg);
@@ -102,13 +136,13 @@ static int l_ensemble(lua_State *L)
                       path, dfle_ens_file_ndone(box->file));
 
     nw = host != NULL && host->workers > 0 ? host->workers : s.workers > 0 ? s.workers : dfle_lua_cores();
-    if (host == NULL || host->open_state == NULL)
+    if (host == NULL || host->open_state == NULL || role == DFLE_LUA_PAR_NESTED)
         nw = 1;
     workers = nw;
     if ((size_t)nw > total)
         nw = (int)(total > 0 ? total : 1);
 
-    if (host != NULL && host->remote != NULL && total > 0) {
+    if (host != NULL && host->remote != NULL && total > 0 && role == DFLE_LUA_PAR_RUN) {
         char msg[DFLE_ERROR_MSG_MAX];
         size_t done = 0;
         int r = host->remote(host->ud, (long long)call, lua_tostring(L, -2), lua_tostring(L, -1),
@@ -130,7 +164,10 @@ static int l_ensemble(lua_State *L)
         size_t i, failed = 0;
         double t0 = dfle_lua_ens_now();
         while (!dfle_lua_interrupted(L) && dfle_ens_queue_next(box->queue, &i)) {
+            /* Parallel calls inside a sample run here, in this state. */
+            dfle_lua_par_depth(L, +1);
             failed += (size_t)dfle_lua_ens_sample_row(L, ctx, i);
+            dfle_lua_par_depth(L, -1);
             /* A sample cut short by the interrupt is not a result: its
              * row is dropped, and a resumed run does it again. */
             if (dfle_lua_interrupted(L))
@@ -182,6 +219,7 @@ static int l_ensemble(lua_State *L)
                 (lua_Integer)ran);
     lua_pushinteger(L, workers); /* dfle.pawn(ens) runs its bootstrap on as many */
     lua_setfield(L, -2, "workers");
+    ensemble_record(L, ctx, lua_gettop(L), path, nw);
     return 1;
 }
 
@@ -190,7 +228,7 @@ static int l_gather(lua_State *L)
 {
     double shards = 0;
     const dfle_lua_param nums[] = {{"shards", &shards}};
-    static const char *const other[] = {"files", "out", NULL};
+    static const char *const other[] = {"files", "out", "record", NULL};
     const char **files;
     size_t nf;
     dfle_error err;
@@ -230,6 +268,18 @@ static int l_gather(lua_State *L)
     if (dfle_ens_gather(files, nf, out, NULL, &err) != DFLE_OK)
         return luaL_error(L, "dfle.gather: %s", err.msg);
     dfle_lua_ens_push_result(L, "gather", out, 0, 0, 0);
+    {
+        int res = lua_gettop(L);
+        dfle_record *rec = dfle_lua_push_record(L, "dfle.gather: the rows of the shards, in "
+                                                   "index order");
+        const char *jpath;
+        dfle_record_section(rec, "gather", NULL);
+        dfle_record_list(rec, "from", files, nf);
+        record_counts(L, rec, res);
+        jpath = dfle_lua_record_path(L, rec, 1, out, "gather");
+        dfle_lua_record_done(L, rec, out, jpath);
+        lua_settop(L, res);
+    }
     return 1;
 }
 
