@@ -241,6 +241,11 @@ tests["every replayed operation equals Lua bit for bit, operands of every sign a
          string.pack("<d", -1.5))
     T.eq(string.pack("<d", replay(function(x) return math.floor(x) end, { -0.0 }, { 0.0 })[1]),
          string.pack("<d", 0.0))
+    -- A param read as an input is no key: p[p.k] is another field for
+    -- each k (here p[3], set), so the function is traced with k as a
+    -- constant, and p[3] guarded.
+    check_replay("p[p.k]", function(x, y, q) return (q[q.k] or 1) * x end, { 2, -1 }, { 2, 0 },
+                 { k = 3.0, [3] = 5.0 })
 end
 
 -- The way the bug showed: a law compiled (and checked against Lua on its
@@ -337,6 +342,9 @@ local refused = {
     -- (string.len may be replaced after the trace)
     { "takes the length of p", function(c, p) return #p * c.S end },
     { "calls a string method", function(c, p) return ("ab"):len() * c.S end },
+    -- a computed key names another field for each value (p[c.S] is p[1]
+    -- where S = 1, nil elsewhere)
+    { "indexes p with a computed value", function(c, p) return (p[c.S] or 1) * c.S end },
 }
 
 tests["what cannot be recorded runs as Lua, says why, and gives the same values"] = function()

@@ -26,7 +26,8 @@
  *    recorded as guards the caller re-checks (lua_trace.h); a float param
  *    may instead be an input (T_PARAM) whose value each law binds, and is
  *    then opaque to the function: anything but arithmetic on it refuses;
- *  - what no guard could watch is refused: the length of a proxy (#p),
+ *  - what no guard could watch is refused: the length of a proxy (#p), a
+ *    computed key (p[c.h]: another field for each value),
  *    string methods (strings' __index refuses during the trace), and any
  *    metatable debug.setmetatable gave nil, booleans, numbers or
  *    functions;
@@ -451,6 +452,7 @@ static void stand_in(lua_State *L, tracer *t, int tidx, int idx, const char *wha
 /* What a proxy stands for, and how names read from it are reported. */
 enum { PROXY_ENV, PROXY_MATH, PROXY_PARAMS };
 static const char *const proxy_prefix[] = {"the global '", "math.", "p."};
+static const char *const proxy_table[] = {"the global table", "math", "p"};
 static const char *const proxy_suffix[] = {"'", "", ""};
 
 /* A float param read as an input (the value at 3, its key at 2, in a
@@ -490,6 +492,10 @@ static int proxy_index(lua_State *L)
     if (!t->active)
         return luaL_error(L, "dfle: a compiled law's environment was used after its trace");
     lua_settop(L, 2);
+    /* A key computed from a flow field or a param input (p[c.h]) names a
+     * different field for each value, and no guard could watch which. */
+    if (luaL_testudata(L, 2, NODE_MT) != NULL)
+        return refuse(L, t, "it indexes %s with a computed value", proxy_table[kind]);
     lua_pushvalue(L, 2);
     lua_rawget(L, lua_upvalueindex(2)); /* 3: the real value */
     snprintf(what, sizeof what, "%s%s%s", proxy_prefix[kind],
@@ -522,10 +528,9 @@ static int proxy_newindex(lua_State *L)
  * watch. */
 static int proxy_len(lua_State *L)
 {
-    static const char *const table_name[] = {"the global table", "math", "p"};
     tracer *t = tracer_at(L, lua_upvalueindex(1));
     return refuse(L, t, "it takes the length of %s",
-                  table_name[lua_tointeger(L, lua_upvalueindex(2))]);
+                  proxy_table[lua_tointeger(L, lua_upvalueindex(2))]);
 }
 
 /* Push a new proxy of the table at `real`. */
