@@ -516,7 +516,7 @@ static void test_fit_errors(void **state)
     assert_msg_contains(err.msg, "point 3 has slope -0.05");
     assert_msg_contains(err.msg, "positive");
     assert_int_equal(dfle_fit_eq2(5, A_bad, S, &fit, &err), DFLE_EINVAL);
-    assert_msg_contains(err.msg, "point 2 has area nan");
+    assert_msg_contains(err.msg, "point 2 has area NaN");
     assert_int_equal(dfle_fit_eq2(5, A_two, S, &fit, &err), DFLE_EINVAL);
     assert_msg_contains(err.msg, "fewer than 3 distinct areas");
     assert_int_equal(dfle_fit_eq2(5, A, NULL, &fit, &err), DFLE_EINVAL);
