@@ -528,7 +528,7 @@ static void test_write_csv(void **state)
         snprintf(fifo, sizeof fifo, "%s/pipe", dir);
         assert_int_equal(mkfifo(fifo, 0600), 0);
         alarm(20);
-        assert_int_equal(dfle_profile_write_csv(p, fifo, &err), DFLE_EIO);
+        assert_int_equal(dfle_profile_write_csv(p, fifo, NULL, &err), DFLE_EIO);
         alarm(0);
         assert_msg_contains(err.msg, "no process is reading");
         remove(fifo);

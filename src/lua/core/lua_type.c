@@ -183,9 +183,14 @@ static int object_index(lua_State *L)
     } else if (lua_getfield(L, lua_upvalueindex(1), "params") == LUA_TFUNCTION) {
         /* The object's parameters are its fields (the method itself, read
          * from the methods table: indexing the object would come back here). */
+        /* Protected: called by hand with no live object (debug.getmetatable
+         * hands scripts this function), params would raise from here, a C
+         * frame, without the script's position that the error below gives. */
         lua_pushvalue(L, 1);
-        lua_call(L, 1, 1);
-        fields = lua_pushfstring(L, "name, %s", dfle_lua_push_sorted_keys(L, -1));
+        if (lua_pcall(L, 1, 1, 0) == LUA_OK && lua_istable(L, -1))
+            fields = lua_pushfstring(L, "name, %s", dfle_lua_push_sorted_keys(L, -1));
+        else
+            fields = lua_pushfstring(L, "none readable (not a live %s)", t->name);
     } else {
         fields = "none";
     }
