@@ -31,7 +31,8 @@ local I = require("inputs")
 ---------------------------------------------------------------------------
 -- Arguments.
 ---------------------------------------------------------------------------
-local opt = { seed = 1, calls = 1000, data = "/work/shared/data" }
+-- data: the shared data directory (dem/, salib/), DFLE_DATA_DIR by default
+local opt = { seed = 1, calls = 1000, data = os.getenv("DFLE_DATA_DIR") }
 for i = 1, #arg do
     local k, v = arg[i]:match("^([%w_]+)=(.*)$")
     if k then opt[k] = v else opt[arg[i]] = true end
@@ -39,6 +40,7 @@ end
 opt.seed = math.tointeger(tonumber(opt.seed)) or error("seed must be an integer")
 opt.calls = math.tointeger(tonumber(opt.calls)) or error("calls must be an integer")
 local scratch = opt.scratch or error("scratch=DIR is required (run.sh makes one)")
+if not opt.data or opt.data == "" then error("the shared data directory: set DFLE_DATA_DIR or pass data=DIR") end
 
 -- The scratch directory must be where we are: every relative path the
 -- fuzzer makes lands there.

@@ -13,7 +13,7 @@
 --           so writes to "null", "full" and "zero" devices and to a FIFO
 --           are tried without going near /dev.
 --
--- The shared data (/work/shared/data or `data=`) are only ever read.
+-- The shared data ($DFLE_DATA_DIR or `data=`) are only ever read.
 local I = {}
 
 local function readall(path)

@@ -31,6 +31,11 @@ DFLE=${2:-build/dfle}
 here=$(cd "$(dirname "$0")" && pwd)
 case "$DFLE" in /*) ;; *) DFLE="$PWD/$DFLE" ;; esac
 [ -x "$DFLE" ] || { echo "fuzz: no binary $DFLE (make first)"; exit 2; }
+# The shared data (DEMs, SALib cases), as tests/run-tests.sh finds them.
+if [ -z "${DFLE_DATA_DIR:-}" ]; then
+    DFLE_DATA_DIR="$(cd "$here/../../.." && pwd)/shared/data"
+fi
+export DFLE_DATA_DIR
 
 case "$mode" in
 short) seeds=${FUZZ_SEEDS:-"1 2 3"}; calls=${FUZZ_CALLS:-1000}; jobs=1 ;;

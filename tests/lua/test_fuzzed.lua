@@ -117,7 +117,7 @@ tests["analytical_slope raises rather than return inf or NaN"] = function()
 end
 
 tests["a closed profile given to fit_slope_area is named at the script's line"] = function()
-    local dem = dfle.dem.read(T.root .. "/../shared/data/dem/small/testdem1.dem")
+    local dem = dfle.dem.read(T.data .. "/dem/small/testdem1.dem")
     dem:fill()
     local p = dem:network{ A_min = dem.dx * dem.dy }
     do local closing <close> = p end
