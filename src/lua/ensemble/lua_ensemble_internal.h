@@ -59,6 +59,12 @@ typedef struct pool {
     /* The main state's interrupt flag (dfle_lua_set_interrupt), or NULL:
      * once it is up, no worker takes another sample. */
     const volatile sig_atomic_t *interrupt;
+    /* Other processes may share the queue (host->remote_begin): set,
+     * the pool asks, and if they take part its main thread polls them
+     * while the threads run, and after. */
+    int remote;
+    int table_workers;     /* the table's `workers` (0: not given)  */
+    size_t rdone, rfailed; /* their rows so far (main thread only) */
 } pool;
 
 /* The kinds of parallel call; each counts its calls separately. */
