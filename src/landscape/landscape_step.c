@@ -167,6 +167,38 @@ static int step_undone(dfle_landscape *ls, const double *z_before, int status)
     return status;
 }
 
+/* The surface before a step, kept in the landscape (so that nothing
+ * leaks if a callback raises through the step), to undo a step that
+ * leaves no surface. */
+static int keep_surface(dfle_landscape *ls, dfle_error *err)
+{
+    if (ls->z_undo == NULL && (ls->z_undo = malloc(ls->n * sizeof *ls->z_undo)) == NULL)
+        return dfle_error_set(err, DFLE_ENOMEM, "landscape: out of memory for a step of %zu cells",
+                              ls->n);
+    memcpy(ls->z_undo, ls->z, ls->n * sizeof *ls->z);
+    return DFLE_OK;
+}
+
+/* Everything a step produced is checked: a step of 1e300 yr, or a U of
+ * 1e300 m/yr, overflowed the volumes and made the diffusion solve NaN,
+ * and the step "succeeded" with a surface that was none.  `vol` is the
+ * sum of the step's volumes [m]. */
+static int check_surface(dfle_landscape *ls, double dt, double vol, double VU, double Vh,
+                         dfle_error *err)
+{
+    size_t finite = 0;
+    for (size_t c = 0; c < ls->n; c++)
+        finite += isfinite(ls->z[c]) != 0;
+    if (finite == ls->n_data && isfinite(vol * ls->cell_area))
+        return DFLE_OK;
+    dfle_error_set(err, DFLE_EINVAL, "landscape: a step of dt = %g yr gave %s (uplift volume %g "
+                   "m^3, hillslope %g m^3); it was undone: take shorter steps, or check U", dt,
+                   finite != ls->n_data ? "elevations that are not finite"
+                                        : "volumes that are not finite",
+                   VU * ls->cell_area, Vh * ls->cell_area);
+    return step_undone(ls, ls->z_undo, DFLE_EINVAL);
+}
+
 int ls_implicit_step(dfle_landscape *ls, double dt, double tol, double quantile,
                      dfle_landscape_status *st, dfle_error *err)
 {
@@ -188,14 +220,9 @@ int ls_implicit_step(dfle_landscape *ls, double dt, double tol, double quantile,
         Ln[d] = n_one ? ls->len[d] : pow(ls->len[d], nexp);
     if ((st_ = ls_route(ls, err)) != DFLE_OK)
         return st_;
-    /* The surface before the step, to put back if the step leaves no
-     * surface (below); kept in the landscape, so that nothing leaks if
-     * a callback raises through the step. */
-    if (ls->z_undo == NULL && (ls->z_undo = malloc(ls->n * sizeof *ls->z_undo)) == NULL)
-        return dfle_error_set(err, DFLE_ENOMEM, "landscape: out of memory for a step of %zu cells",
-                              ls->n);
+    if ((st_ = keep_surface(ls, err)) != DFLE_OK)
+        return st_;
     z_before = ls->z_undo;
-    memcpy(z_before, z, ls->n * sizeof *z);
     t1 = cpu_seconds();
     if (ls->model != NULL) {
         if ((st_ = ls_model_evaluate(ls, err)) != DFLE_OK)
@@ -281,22 +308,8 @@ int ls_implicit_step(dfle_landscape *ls, double dt, double tol, double quantile,
         Vh += before - after;
         dV += after - before;
     }
-    /* Everything the step produced is checked: a step of 1e300 yr, or a
-     * U of 1e300 m/yr, overflowed the volumes and made the diffusion
-     * solve NaN, and the step "succeeded" with a surface that was none. */
-    {
-        size_t finite = 0;
-        for (size_t c = 0; c < ls->n; c++)
-            finite += isfinite(z[c]) != 0;
-        if (finite != ls->n_data || !isfinite((VU + Vf + Vdf + Vh + dV) * ca)) {
-            dfle_error_set(err, DFLE_EINVAL, "landscape: a step of dt = %g yr gave %s (uplift "
-                           "volume %g m^3, hillslope %g m^3); it was undone: take shorter steps, "
-                           "or check U", dt, finite != ls->n_data ? "elevations that are not finite"
-                                                                  : "volumes that are not finite",
-                           VU * ca, Vh * ca);
-            return step_undone(ls, z_before, DFLE_EINVAL);
-        }
-    }
+    if ((st_ = check_surface(ls, dt, VU + Vf + Vdf + Vh + dV, VU, Vh, err)) != DFLE_OK)
+        return st_;
     if (st != NULL) {
         st->route_seconds = t1 - t0;
         st->solve_seconds = cpu_seconds() - t1;
@@ -420,6 +433,8 @@ int ls_explicit_step(dfle_landscape *ls, double dt_cap, double cfl, double tol,
         double h = fmin(ls->o.dx, ls->o.dy);
         dt = fmin(dt, cfl * h * h / (4.0 * ls->o.D));
     }
+    if ((s = keep_surface(ls, err)) != DFLE_OK)
+        return s;
     /* Rates were evaluated at the old surface: apply them, then the
      * threshold in stack order (receivers first). */
     for (size_t k = 0; k < n_stack; k++) {
@@ -450,6 +465,8 @@ int ls_explicit_step(dfle_landscape *ls, double dt_cap, double cfl, double tol,
     }
     ls->routed = 0;
     ls->model_z_current = 0;
+    if ((s = check_surface(ls, dt, VU + Vh + dV + Vf + Vdf, VU, Vh, err)) != DFLE_OK)
+        return s;
     *dt_out = dt;
     if (st != NULL) {
         ls_ratios(ls, tol, quantile, st);

@@ -288,6 +288,23 @@ tests["a landscape step that leaves no surface is an error, and undone"] = funct
     ls = dfle.landscape{ nx = 8, ny = 3, dx = 30, U = 1e300 }
     T.raises_here(function() return ls:step(1e10) end, "gave volumes that are not finite")
     T.ok(ls:step(10).dt == 10, "a sane step afterwards")
+    -- the explicit method's steps too
+    ls = dfle.landscape{ nx = 3, ny = 3, dx = 30, router = false, U = 1e300 }
+    T.raises_here(function() return ls:run{ years = 1e10, dt = 1e10, method = "explicit", max_steps = 5 } end,
+                  "gave volumes that are not finite", "it was undone")
+    T.eq(ls.time, 0)
+end
+
+tests["a closed object in an options table is named, not 'bad argument #-1'"] = function()
+    local ch = dfle.channel{ dx = 50, A_max = 5e4 }
+    debug.getmetatable(ch).__gc(ch)
+    local A_, S_ = {}, {}
+    for i = 1, 6 do A_[i] = 2e3 * 1.6^i; S_[i] = 0.8 / (1 + (A_[i] / 3e4)^0.9) end
+    local msg = T.raises_here(function() return dfle.invert{ data = { A = A_, S = S_ }, channel = ch,
+        build = function(q, c) return dfle.model{ channel = c, U = q.U } end,
+        params = { U = { 1e-4, 1e-3 } }, walkers = 4, steps = 0, workers = 1 } end,
+        "dfle.channel has been closed")
+    T.ok(not msg:find("bad argument", 1, true), msg)
 end
 
 tests["ens:write_netcdf checks the count against the rows"] = function()
