@@ -156,9 +156,10 @@ static void test_xy_png(void **state)
         y2[i] = 0.1 * i;
     }
     y1[10] = NAN; /* a gap, not a failure */
-    dfle_plot_series s[2] = {{"sqrt", 50, x, y1, 1, NULL, NULL, NULL, NULL, 0},
-                             {NULL, 50, x, y2, 0, NULL, NULL, NULL, NULL, 0}};
-    dfle_plot_opts o = {"Title", "x (m)", "y", 0, 0, 640, 480, NULL, 0};
+    dfle_plot_series s[2] = {{.label = "sqrt", .n = 50, .x = x, .y = y1, .style = DFLE_PLOT_LINES},
+                             {.n = 50, .x = x, .y = y2}};
+    dfle_plot_opts o = {.title = "Title", .x.label = "x (m)", .y.label = "y", .width = 640,
+                        .height = 480, .unit = DFLE_PLOT_PX};
     dfle_error err = {0};
     assert_ok(dfle_plot_xy(in_dir(fx, "xy.png"), &o, s, 2, &err), &err);
     assert_png(fx->path);
@@ -179,8 +180,9 @@ static void test_xy_colour(void **state)
         c[i] = 1.0 + i;
     }
     c[3] = NAN; /* left out, not a failure */
-    dfle_plot_series s = {"coloured", 40, x, y, 0, c, NULL, NULL, NULL, 0};
-    dfle_plot_opts o = {"colour", "x", "y", 0, 0, 0, 0, "U (m/yr)", 1};
+    dfle_plot_series s = {.label = "coloured", .n = 40, .x = x, .y = y, .c = c};
+    dfle_plot_opts o = {.title = "colour", .x.label = "x", .y.label = "y",
+                        .c = {.label = "U (m/yr)", .log = 1}};
     dfle_error err = {0};
     assert_ok(dfle_plot_xy(in_dir(fx, "colour.png"), &o, &s, 1, &err), &err);
     assert_png(fx->path);
@@ -195,8 +197,8 @@ static void test_xy_log_svg(void **state)
 {
     fixture *fx = *state;
     double x[5] = {-1, 1, 10, 100, 1000}, y[5] = {1, 0, 2, 3, 4};
-    dfle_plot_series s = {"log", 5, x, y, 1, NULL, NULL, NULL, NULL, 0};
-    dfle_plot_opts o = {NULL, NULL, NULL, 1, 1, 0, 0, NULL, 0};
+    dfle_plot_series s = {.label = "log", .n = 5, .x = x, .y = y, .style = DFLE_PLOT_LINES};
+    dfle_plot_opts o = {.x.log = 1, .y.log = 1};
     dfle_error err = {0};
     /* The points with x <= 0 or y <= 0 are dropped from the log plot. */
     assert_ok(dfle_plot_xy(in_dir(fx, "xy.svg"), &o, &s, 1, &err), &err);
@@ -215,9 +217,11 @@ static void test_xy_band(void **state)
         lo[i] = 0.8 * y[i];
         hi[i] = 1.25 * y[i];
     }
-    dfle_plot_series s[2] = {{"band", 20, x, NULL, 0, NULL, lo, hi, "#9ecae1", 0},
-                             {"median", 20, x, y, 1, NULL, NULL, NULL, "#08306b", 1}};
-    dfle_plot_opts o = {"Bands", "A", "S", 1, 1, 640, 480, NULL, 0};
+    dfle_plot_series s[2] = {{.label = "band", .n = 20, .x = x, .lo = lo, .hi = hi, .rgb = "#9ecae1"},
+                             {.label = "median", .n = 20, .x = x, .y = y, .style = DFLE_PLOT_LINES, .rgb = "#08306b", .dash = 1}};
+    dfle_plot_opts o = {.title = "Bands", .x = {.label = "A", .log = 1},
+                        .y = {.label = "S", .log = 1}, .width = 640, .height = 480,
+                        .unit = DFLE_PLOT_PX};
     dfle_error err = {0};
     assert_ok(dfle_plot_xy(in_dir(fx, "band.png"), &o, s, 2, &err), &err);
     assert_png(fx->path);
@@ -236,7 +240,8 @@ static void test_corner(void **state)
     const char *labels[3] = {"{/:Italic U}", "{/Symbol g}", "k_{df}"};
     int logs[3] = {1, 0, 1};
     double truth[3] = {3e-4, 0.5, NAN};
-    dfle_corner_opts o = {"Corner", labels, logs, truth, 120, 20};
+    dfle_corner_opts o = {labels, logs, truth, 20};
+    dfle_plot_opts po = {.title = "Corner", .width = 12};
     dfle_error err = {0};
     uint64_t st = 88172645463325252ULL;
     for (int i = 0; i < N; i++) {
@@ -253,13 +258,13 @@ static void test_corner(void **state)
         x[3 * i + 1] = 0.5 + 0.2 * (0.8 * u[0] + 0.6 * u[1]);
         x[3 * i + 2] = 1e-4 * exp(u[2] + u[1]);
     }
-    assert_ok(dfle_plot_corner(in_dir(fx, "corner.png"), &o, 3, N, x, &err), &err);
+    assert_ok(dfle_plot_corner(in_dir(fx, "corner.png"), &po, &o, 3, N, x, &err), &err);
     assert_png(fx->path);
-    assert_ok(dfle_plot_corner(in_dir(fx, "corner.svg"), NULL, 2, N, x, &err), &err);
-    assert_int_equal(dfle_plot_corner(in_dir(fx, "c0.png"), &o, 0, N, x, &err), DFLE_EINVAL);
-    assert_int_equal(dfle_plot_corner(in_dir(fx, "c1.png"), &o, 3, 1, x, &err), DFLE_EINVAL);
+    assert_ok(dfle_plot_corner(in_dir(fx, "corner.svg"), NULL, NULL, 2, N, x, &err), &err);
+    assert_int_equal(dfle_plot_corner(in_dir(fx, "c0.png"), &po, &o, 0, N, x, &err), DFLE_EINVAL);
+    assert_int_equal(dfle_plot_corner(in_dir(fx, "c1.png"), &po, &o, 3, 1, x, &err), DFLE_EINVAL);
     assert_msg_contains(err.msg, "at least 2 samples");
-    assert_int_equal(dfle_plot_corner(in_dir(fx, "c.jpg"), &o, 3, N, x, &err), DFLE_EINVAL);
+    assert_int_equal(dfle_plot_corner(in_dir(fx, "c.jpg"), &po, &o, 3, N, x, &err), DFLE_EINVAL);
 }
 
 static void test_slope_area_png(void **state)
@@ -267,9 +272,10 @@ static void test_slope_area_png(void **state)
     fixture *fx = *state;
     dfle_bins bins;
     dfle_eq2_fit fit;
+    dfle_plot_opts title = {.title = "Fig. 1"};
     dfle_error err = {0};
     make_slope_area(&bins, &fit);
-    assert_ok(dfle_plot_slope_area(in_dir(fx, "sa.png"), "Fig. 1", NPTS, sa_A,
+    assert_ok(dfle_plot_slope_area(in_dir(fx, "sa.png"), &title, NPTS, sa_A,
                                    sa_S, &bins, &fit, &err), &err);
     assert_png(fx->path);
     /* Raw points only, and with a fit whose A_df lies beyond the data. */
@@ -294,8 +300,9 @@ static void test_profile_png(void **state)
     z[99] = 0;
     for (int i = 98; i >= 0; i--) z[i] = z[i + 1] + 5 * S[i];
     S[99] = NAN; /* no downstream difference at the outlet */
+    dfle_plot_opts title = {.title = "Profile"};
     dfle_error err = {0};
-    assert_ok(dfle_plot_profile(in_dir(fx, "p.png"), "Profile", 100, x, z, S,
+    assert_ok(dfle_plot_profile(in_dir(fx, "p.png"), &title, 100, x, z, S,
                                 &err), &err);
     assert_png(fx->path);
     assert_ok(dfle_plot_profile(in_dir(fx, "p1.png"), NULL, 100, x, z, NULL,
@@ -316,9 +323,8 @@ static void test_hostile_path(void **state)
         "my \"quoted\" plot.png", "it's `touch INJ` $HOME @x \\n.png",
         "|touch INJ2.png", "~x.svg"};
     double x[3] = {1, 2, 3}, y[3] = {3, 1, 2};
-    dfle_plot_series s = {"a 'label' with `touch INJ3`\nand a new line", 3,
-                          x, y, 1, NULL, NULL, NULL, NULL, 0};
-    dfle_plot_opts o = {"it's \"fine\"", "x\\", "`touch INJ4`", 0, 0, 0, 0, NULL, 0};
+    dfle_plot_series s = {.label = "a 'label' with `touch INJ3`\nand a new line", .n = 3, .x = x, .y = y, .style = DFLE_PLOT_LINES};
+    dfle_plot_opts o = {.title = "it's \"fine\"", .x.label = "x\\", .y.label = "`touch INJ4`"};
     dfle_error err = {0};
     char cwd[4096];
     assert_non_null(getcwd(cwd, sizeof cwd));
@@ -338,16 +344,16 @@ static void test_hostile_path(void **state)
 static void test_bad_extension(void **state)
 {
     fixture *fx = *state;
-    static const char *const bad[] = {"plot.pdf", "plot", "dir.png/plot",
+    static const char *const bad[] = {"plot.eps", "plot", "dir.png/plot",
                                       "plot.png.txt"};
     double x[2] = {1, 2}, y[2] = {1, 2};
-    dfle_plot_series s = {NULL, 2, x, y, 1, NULL, NULL, NULL, NULL, 0};
+    dfle_plot_series s = {.n = 2, .x = x, .y = y, .style = DFLE_PLOT_LINES};
     dfle_error err = {0};
     for (size_t k = 0; k < 4; k++) {
         assert_int_equal(dfle_plot_xy(in_dir(fx, bad[k]), NULL, &s, 1, &err),
                          DFLE_EINVAL);
         assert_msg_contains(err.msg, fx->path);
-        assert_msg_contains(err.msg, ".png or .svg");
+        assert_msg_contains(err.msg, ".png, .pdf or .svg");
     }
     assert_int_equal(dfle_plot_profile(in_dir(fx, "p.jpg"), NULL, 2, x, y,
                                        NULL, &err), DFLE_EINVAL);
@@ -362,10 +368,10 @@ static void test_bad_arguments(void **state)
 {
     fixture *fx = *state;
     double x[2] = {1, 2}, y[2] = {1, 2};
-    dfle_plot_series s = {NULL, 2, x, y, 1, NULL, NULL, NULL, NULL, 0},
-                     empty = {NULL, 0, NULL, NULL, 1, NULL, NULL, NULL, NULL, 0};
-    dfle_plot_series nox = {NULL, 2, NULL, y, 1, NULL, NULL, NULL, NULL, 0};
-    dfle_plot_opts tiny = {NULL, NULL, NULL, 0, 0, 10, 10, NULL, 0};
+    dfle_plot_series s = {.n = 2, .x = x, .y = y, .style = DFLE_PLOT_LINES},
+                     empty = {.n = 0, .style = DFLE_PLOT_LINES};
+    dfle_plot_series nox = {.n = 2, .y = y, .style = DFLE_PLOT_LINES};
+    dfle_plot_opts tiny = {.width = 10, .height = 10, .unit = DFLE_PLOT_PX};
     dfle_eq2_fit fit = {0};
     dfle_error err = {0};
     const char *p = in_dir(fx, "a.png");
@@ -375,7 +381,7 @@ static void test_bad_arguments(void **state)
     assert_int_equal(dfle_plot_xy(p, NULL, NULL, 1, &err), DFLE_EINVAL);
     assert_int_equal(dfle_plot_xy(p, NULL, &empty, 1, &err), DFLE_EINVAL);
     assert_int_equal(dfle_plot_xy(p, NULL, &nox, 1, &err), DFLE_EINVAL);
-    assert_msg_contains(err.msg, "series 0");
+    assert_msg_contains(err.msg, "series 1");
     assert_int_equal(dfle_plot_xy(p, &tiny, &s, 1, &err), DFLE_EINVAL);
     assert_int_equal(dfle_plot_slope_area(p, NULL, 0, x, y, NULL, NULL, &err),
                      DFLE_EINVAL);
@@ -397,9 +403,9 @@ static void test_nothing_finite(void **state)
 {
     fixture *fx = *state;
     double nan3[3] = {NAN, NAN, NAN}, x[3] = {1, 2, 3}, neg[3] = {-1, 0, -2};
-    dfle_plot_series s = {"nan", 3, x, nan3, 1, NULL, NULL, NULL, NULL, 0},
-                     sn = {"neg", 3, x, neg, 0, NULL, NULL, NULL, NULL, 0};
-    dfle_plot_opts logy = {NULL, NULL, NULL, 0, 1, 0, 0, NULL, 0};
+    dfle_plot_series s = {.label = "nan", .n = 3, .x = x, .y = nan3, .style = DFLE_PLOT_LINES},
+                     sn = {.label = "neg", .n = 3, .x = x, .y = neg};
+    dfle_plot_opts logy = {.y.log = 1};
     dfle_error err = {0};
     const char *p = in_dir(fx, "a.png");
     assert_int_equal(dfle_plot_xy(p, NULL, &s, 1, &err), DFLE_EINVAL);
@@ -420,7 +426,7 @@ static void test_unwritable(void **state)
 {
     fixture *fx = *state;
     double x[2] = {1, 2}, y[2] = {1, 2};
-    dfle_plot_series s = {NULL, 2, x, y, 1, NULL, NULL, NULL, NULL, 0};
+    dfle_plot_series s = {.n = 2, .x = x, .y = y, .style = DFLE_PLOT_LINES};
     dfle_error err = {0};
     /* A regular file as a directory fails even for root. */
     int fd = open(in_dir(fx, "file"), O_WRONLY | O_CREAT, 0644);
@@ -504,7 +510,7 @@ static void test_gnuplot_missing(void **state)
 static int plot_small(fixture *fx, dfle_error *err)
 {
     double x[3] = {1, 2, 3};
-    dfle_plot_series s = {"s", 3, x, x, 1, NULL, NULL, NULL, NULL, 0};
+    dfle_plot_series s = {.label = "s", .n = 3, .x = x, .y = x, .style = DFLE_PLOT_LINES};
     return dfle_plot_xy(in_dir(fx, "small.png"), NULL, &s, 1, err);
 }
 

@@ -93,7 +93,7 @@ local subjects = {
         call = function(o) return dfle.analytical_exponent(dfle.router.empirical{}, dfle.law.power{}, o) end,
     },
     {
-        name = "dfle.plot.slope_area", base = {}, num = "nbins", known = "nbins, title",
+        name = "dfle.plot.slope_area", base = {}, num = "nbins", known = "nbins, dpi, title",
         call = function(o) return dfle.plot.slope_area(small_model(), T.tmpname(".png"), nil, o) end,
     },
 }
