@@ -30,7 +30,12 @@ local csv = assert(io.open(outdir .. "/alpha_beta.csv", "w"))
 csv:write("gamma,alpha,beta,converged,time_yr,S_df,A_df_m2,a2,r2,S_max_minus_S_ch\n")
 print(("%5s %5s %5s %10s %8s %10s %6s %7s %9s"):format(
   "gamma", "alpha", "beta", "method", "S_df", "A_df (m2)", "a2", "R^2", "Smax-Sch"))
-local series = {}
+-- One curve per (gamma, beta): colour by beta, dashed for gamma = 0.5.
+-- Where every curve of a gamma is zero (gamma = 0.5: slope never rises
+-- with area), they are drawn as one, since lines on top of each other
+-- cannot be told apart.
+local colours = { [0.5] = "blue", [1] = "vermillion", [2] = "green", [3] = "purple" }
+local curves = {}
 for _, gamma in ipairs(gammas) do
 local router = dfle.router.empirical{ M0 = 3000, gamma = gamma, mu = 500, tau_y = 300 }
 for _, beta in ipairs(betas) do
@@ -53,15 +58,36 @@ for _, beta in ipairs(betas) do
       csv:write(("%g,%g,%g,%s,%g,,,,,\n"):format(gamma, alpha, beta, tostring(run.converged), run.time))
     end
   end
-  if #xs > 0 then
-    series[#series + 1] = { x = xs, y = ys, label = ("gamma = %g, beta = %g"):format(gamma, beta), lines = true }
-  end
+  if #xs > 0 then curves[#curves + 1] = { gamma = gamma, beta = beta, x = xs, y = ys } end
 end
 end
 csv:close()
+
+local series = {}
+for _, gamma in ipairs(gammas) do
+  local all_zero, betas_zero = true, {}
+  for _, c in ipairs(curves) do
+    if c.gamma == gamma then
+      for _, v in ipairs(c.y) do all_zero = all_zero and v == 0 end
+      betas_zero[#betas_zero + 1] = ("%g"):format(c.beta)
+    end
+  end
+  for _, c in ipairs(curves) do
+    if c.gamma == gamma and (not all_zero or c.beta == betas[1]) then
+      series[#series + 1] = {
+        x = c.x, y = c.y, style = "linespoints", dash = gamma > 0,
+        rgb = all_zero and "black" or colours[c.beta],
+        marker = gamma > 0 and "open circle" or "circle",
+        label = all_zero and ("γ = %g, β = %s: all 0"):format(gamma, table.concat(betas_zero, ", "))
+                or ("γ = %g, β = %g"):format(gamma, c.beta),
+      }
+    end
+  end
+end
 dfle.plot.xy{
   path = outdir .. "/alpha_beta.png", series = series,
   title = "Steady-state profiles, empirical router",
-  xlabel = "alpha (slope exponent)", ylabel = "S_max - S_ch",
+  xlabel = dfle.plot.label("alpha"), ylabel = dfle.plot.label("S_max_minus_S_ch"),
+  xticks = 1,
 }
 print("wrote " .. outdir .. "/alpha_beta.csv and " .. outdir .. "/alpha_beta.png")

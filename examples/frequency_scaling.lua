@@ -22,6 +22,7 @@ local quick, outdir = opts.quick, opts.output
 local gammas = quick and { 0, 0.5, 1 } or { 0, 0.25, 0.5, 0.75, 1 }
 local channel = dfle.channel{ dx = quick and 20 or 5 }
 local profiles, slopes = {}, {}
+local DASHES = { "solid", "dash", "dot", "dashdot", "dashdotdot" }
 local csv = assert(io.open(outdir .. "/frequency_scaling.csv", "w"))
 csv:write("gamma,converged,S_df,A_df,r2,S_max_minus_S_ch\n")
 print(("%6s %10s %8s %10s %7s %9s"):format("gamma", "converged", "S_df", "A_df (m2)", "R^2", "Smax-Sch"))
@@ -40,18 +41,20 @@ for _, g in ipairs(gammas) do
         f.r2, f.S_max_minus_S_ch))
   csv:write(("%g,%s,%.17g,%.17g,%.17g,%.17g\n"):format(g, tostring(run.converged), f.S_df, f.A_df,
             f.r2, f.S_max_minus_S_ch))
-  local label = ("{/Symbol g} = %g"):format(g)
-  profiles[#profiles + 1] = { x = m:get("x"), y = m:get("z"), label = label, lines = true }
-  slopes[#slopes + 1] = { x = m:get("A"), y = m:get("S"), label = label, lines = true }
+  -- Above about 10^5 m^2 rivers set the slope and the curves coincide:
+  -- a dash pattern per gamma keeps each visible there.
+  local label, dash = ("γ = %g"):format(g), DASHES[#profiles % #DASHES + 1]
+  profiles[#profiles + 1] = { x = m:get("x"), y = m:get("z"), label = label, lines = true, dash = dash }
+  slopes[#slopes + 1] = { x = m:get("A"), y = m:get("S"), label = label, lines = true, dash = dash }
 end
 csv:close()
 dfle.plot.xy{
   path = outdir .. "/frequency_scaling_profiles.png", series = profiles,
   title = "Steady-state profiles, debris-flow frequency scaled with area (Appendix D)",
-  xlabel = "Distance from the head (m)", ylabel = "Elevation (m)",
+  xlabel = dfle.plot.label("x"), ylabel = dfle.plot.label("z"),
 }
 dfle.plot.xy{
-  path = outdir .. "/frequency_scaling_slope_area.png", series = slopes, logx = true, logy = true,
+  path = outdir .. "/frequency_scaling_slope_area.png", series = slopes, xlog = true, ylog = true,
   title = "Slope-area, debris-flow frequency scaled with area (Appendix D)",
-  xlabel = "A (m^2)", ylabel = "S",
+  xlabel = dfle.plot.label("A"), ylabel = dfle.plot.label("S"),
 }

@@ -24,8 +24,8 @@
 -- fig1_invert_<run>_chain.csv (resumable), fig1_invert_<run>_corner.png
 -- and fig1_invert_<run>_pp.png, and fig1_invert.csv (the posterior
 -- summaries).  The full run takes 10-20 minutes on two cores.  --quick (the test
--- suite) runs a very short chain on a coarse channel and skips the
--- figures.  The DEM is found relative to this script
+-- suite, the figure gallery) runs a very short chain on a coarse channel,
+-- whose figures only show that they are drawn.  The DEM is found relative to this script
 -- (../../shared/data/dem/) or in $DFLE_DATA_DIR/dem; without it the
 -- script says so (and, in --quick mode, exits successfully).
 
@@ -119,20 +119,19 @@ for _, run in ipairs(runs) do
                   corr("U", "k_df"), corr("U", "gamma"), corr("k_df", "gamma"),
                   run.free_ke and (", ln U - ln k_e %.2f"):format(corr("U", "k_e")) or ""))
     rows[#rows + 1] = { run, res }
-    if not quick then
-      dfle.plot.corner(res, ("%s/fig1_invert_%s_corner.png"):format(outdir, run.tag), {
-        params = run.free_ke and { "U", "k_e", "k_df", "gamma", "sigma" }
-                 or { "U", "k_df", "gamma", "sigma" },
-        labels = { U = "{/:Italic U} (m/yr)", k_df = "{/:Italic k}_{df}", k_e = "{/:Italic k}_e",
-                   gamma = "{/Symbol g}", sigma = "{/Symbol s}" },
-        title = ("Big Tujunga, %s outlet: posterior%s"):format(c.name,
-                 run.free_ke and " with k_e free" or " (k_e = 5×10^{-14})"),
-      })
-      dfle.plot.posterior_predictive(res, ("%s/fig1_invert_%s_pp.png"):format(outdir, run.tag), {
-        title = ("Big Tujunga, %s outlet: posterior-predictive slope-area%s"):format(c.name,
-                 run.free_ke and " (k_e free)" or ""),
-      })
-    end
+    dfle.plot.corner(res, ("%s/fig1_invert_%s_corner.png"):format(outdir, run.tag), {
+      params = run.free_ke and { "U", "k_e", "k_df", "gamma", "sigma" }
+               or { "U", "k_df", "gamma", "sigma" },
+      scale = { U = 1e3 }, -- mm/yr
+      labels = { U = "{/:Italic U} (mm/yr)", k_df = "{/:Italic k}_{df}", k_e = "{/:Italic k}_e",
+                 gamma = "γ", sigma = "σ" },
+      title = ("Big Tujunga, %s outlet: posterior%s"):format(c.name,
+               run.free_ke and " with k_e free" or " (k_e = 5×10^{-14})"),
+    })
+    dfle.plot.posterior_predictive(res, ("%s/fig1_invert_%s_pp.png"):format(outdir, run.tag), {
+      title = ("Big Tujunga, %s outlet: posterior-predictive slope-area%s"):format(c.name,
+               run.free_ke and " (k_e free)" or ""),
+    })
   end
 end
 
@@ -148,5 +147,5 @@ for _, r in ipairs(rows) do
   end
 end
 out:close()
-print("wrote " .. csv .. ", fig1_invert_<run>_chain.csv" ..
-      (quick and "" or ", fig1_invert_<run>_corner.png, fig1_invert_<run>_pp.png"))
+print("wrote " .. csv .. ", fig1_invert_<run>_chain.csv, fig1_invert_<run>_corner.png, " ..
+      "fig1_invert_<run>_pp.png")
