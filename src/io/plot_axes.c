@@ -210,28 +210,48 @@ static void linear_minor(dfle_gp_axis *a, double step, double len_pt)
     }
 }
 
-/* The automatic linear ticks: the smallest 1, 2, 5 x 10^e step whose
- * labels keep a gap, and no more than about nine ticks. */
-static void auto_linear(dfle_gp_axis *a, double len_pt, double font_pt, int vertical)
+/* How much room the ticks now in a leave between labels beyond what
+ * they need [pt] (negative: they touch), on an axis len_pt long. */
+static double slack(const dfle_gp_axis *a, double len_pt, double font_pt, int vertical,
+                    double per)
 {
-    double span = a->hi - a->lo;
-    int e0 = (int)floor(log10(span)) - 2;
+    return min_gap(a, len_pt) - fmax(label_need(a, font_pt, vertical), len_pt / per);
+}
+
+/* The smallest 1, 2, 5 x 10^e step of at least two ticks whose labels
+ * keep a gap, and no more than about nine ticks; *best_step the step
+ * that came closest (0: none had two ticks).  Returns 1 if one fits. */
+static int linear_steps(dfle_gp_axis *a, double len_pt, double font_pt, int vertical,
+                        double *best_step, double *best_slack)
+{
     static const double mant[3] = {1, 2, 5};
+    int e0 = (int)floor(log10(a->hi - a->lo)) - 2;
     for (int e = e0; e < e0 + 6; e++)
         for (int k = 0; k < 3; k++) {
-            double step = mant[k] * pow(10.0, e);
-            if (linear_ticks(a, step) == 0)
+            double step = mant[k] * pow(10.0, e), sl;
+            if (linear_ticks(a, step) < 2)
                 continue;
-            if (a->n <= 1 ||
-                min_gap(a, len_pt) >= fmax(label_need(a, font_pt, vertical), len_pt / 9)) {
-                if (a->n < 2 && step > span) /* none fits: the ends at least */
-                    continue;
-                linear_minor(a, step, len_pt);
-                return;
-            }
+            sl = slack(a, len_pt, font_pt, vertical, 9);
+            if (sl >= 0)
+                return 1;
+            if (sl > *best_slack)
+                *best_slack = sl, *best_step = step;
         }
-    /* A very short axis: its two ends. */
+    return 0;
+}
+
+/* The automatic linear ticks; on an axis too short for any set to keep
+ * its gap, the set that comes closest, and at worst the two ends. */
+static void auto_linear(dfle_gp_axis *a, double len_pt, double font_pt, int vertical)
+{
+    double best = 0, best_slack = -HUGE_VAL, span = a->hi - a->lo;
+    if (linear_steps(a, len_pt, font_pt, vertical, &best, &best_slack) ||
+        (best > 0 && linear_ticks(a, best) >= 2)) {
+        linear_minor(a, a->v[1] - a->v[0], len_pt);
+        return;
+    }
     a->n = 2;
+    a->nminor = 0;
     a->v[0] = a->lo, a->v[1] = a->hi;
     label_linear(a->lab[0], DFLE_GP_TICKLAB, a->lo, span, fmax(fabs(a->lo), fabs(a->hi)));
     label_linear(a->lab[1], DFLE_GP_TICKLAB, a->hi, span, fmax(fabs(a->lo), fabs(a->hi)));
@@ -293,39 +313,41 @@ static void auto_log(dfle_gp_axis *a, double len_pt, double font_pt, int vertica
     } cand[] = {{m12357, 5, 1}, {m125, 3, 1}, {m13, 2, 1}, {m1, 1, 1}, {m1, 1, 2},
                 {m1, 1, 3},     {m1, 1, 5},   {m1, 1, 10}};
     const size_t ncand = sizeof cand / sizeof cand[0];
-    double span = log10(a->hi) - log10(a->lo);
+    double span = log10(a->hi) - log10(a->lo), best_slack = -HUGE_VAL, best_step = 0;
+    size_t best = ncand;
     /* Decades alone read best when there are four or more of them. */
-    if (log_ticks(a, m1, 1, 1) >= 4 && a->n <= 9 &&
-        min_gap(a, len_pt) >= fmax(label_need(a, font_pt, vertical), len_pt / 10)) {
+    if (log_ticks(a, m1, 1, 1) >= 4 && a->n <= 9 && slack(a, len_pt, font_pt, vertical, 10) >= 0) {
         log_minor(a);
         return;
     }
     /* Otherwise the richest set whose labels keep their gap. */
     for (size_t c = span < 1.3 ? 0 : 1; c < ncand; c++) {
+        double sl;
         if (log_ticks(a, cand[c].m, cand[c].nm, cand[c].every) < 2)
             break; /* sparser sets give fewer still */
-        if (a->n <= 9 &&
-            min_gap(a, len_pt) >= fmax(label_need(a, font_pt, vertical), len_pt / 10)) {
+        sl = slack(a, len_pt, font_pt, vertical, 10);
+        if (a->n <= 9 && sl >= 0) {
             log_minor(a);
             return;
         }
+        if (sl > best_slack)
+            best_slack = sl, best = c;
     }
     /* Less than a decade or so: round values at even linear steps. */
-    {
-        double s = (a->hi - a->lo);
-        int e0 = (int)floor(log10(s)) - 2;
-        static const double mant[3] = {1, 2, 5};
-        for (int e = e0; e < e0 + 6; e++)
-            for (int k = 0; k < 3; k++) {
-                double step = mant[k] * pow(10.0, e);
-                if (linear_ticks(a, step) >= 2 &&
-                    min_gap(a, len_pt) >= label_need(a, font_pt, vertical)) {
-                    log_minor(a);
-                    return;
-                }
-            }
-        auto_linear(a, len_pt, font_pt, vertical);
+    if (linear_steps(a, len_pt, font_pt, vertical, &best_step, &best_slack)) {
+        log_minor(a);
+        return;
     }
+    /* Nothing keeps its gap (a short axis): what comes closest. */
+    if (best_step > 0 && linear_ticks(a, best_step) >= 2) {
+        log_minor(a);
+        return;
+    }
+    if (best < ncand && log_ticks(a, cand[best].m, cand[best].nm, cand[best].every) >= 2) {
+        log_minor(a);
+        return;
+    }
+    auto_linear(a, len_pt, font_pt, vertical);
 }
 
 void dfle_gp_axis_ticks(dfle_gp_axis *a, double len_pt, double font_pt, int vertical,

@@ -445,6 +445,79 @@ tests["plot: bad paths, fits and series"] = function()
     raises(function() return dfle.plot.xy("x.png") end, "table")
 end
 
+-- The options every dfle.plot function shares: a wrong shape or name
+-- raises at the script's line, naming the option (and what it could be).
+tests["plot: the shared options refuse bad values, naming the option"] = function()
+    local S = { { x = { 1, 2, 3 }, y = { 1, 4, 9 } } }
+    -- on one line: the errors are at xy's call of dfle.plot.xy
+    local function xy(o) o.path, o.series = o.path or T.tmpname(".png"), o.series or S; return dfle.plot.xy(o) end
+    local function bad(o, ...) return raises_at(xy, function() return xy(o) end, ...) end
+    bad({ size = { 17, 11, "mm" } }, "dfle.plot.xy", "size unit 'mm'",
+       "'cm', 'in', 'px'")
+    bad({ size = { "17", 11 } }, "size[1] must be a number")
+    bad({ size = 17 }, "size must be a table {width, height")
+    bad({ size = {} }, "size needs a width or a height")
+    bad({ size = { 1, 1 } }, "outside 2 to 200 cm")
+    bad({ legend = "middle" }, "legend 'middle' is not a legend position",
+        "'top left'", "'below'")
+    bad({ legend = 3 }, "legend must be a position")
+    bad({ xrange = { 5, 1 } }, "xrange must be increasing")
+    bad({ yrange = "0..1" }, "yrange must be a table {lo, hi}")
+    bad({ xlog = true, xrange = { 0, 3 } }, "xrange must be > 0")
+    bad({ xlog = "yes" }, "'xlog'", "boolean")
+    bad({ xticks = "many" }, "xticks must be a spacing")
+    bad({ xticks = { 1, "two" } }, "xticks[2] must be a number or {value")
+    bad({ yticks = { { 1, 2 } } }, "yticks[1]: the label must be a string")
+    bad({ ylog = true, yticks = 2 }, "a spacing (2) needs a linear axis")
+    bad({ font = "Helvetica,1000" }, "font 'Helvetica,1000'", "4 to 72")
+    bad({ dpi = 5 }, "dpi must be from 30 to 2400")
+    bad({ series = { { x = { 1 }, y = { 1 }, style = "bars" } } },
+        "series[1].style 'bars' is not a style")
+    bad({ series = { { x = { 1 }, y = { 1 }, marker = "hexagon" } } },
+        "series[1].marker 'hexagon'", "'open circle'")
+    bad({ series = { { x = { 1 }, y = { 1 }, dash = "long" } } },
+        "series[1].dash 'long'")
+    bad({ series = { S[1], { x = { 1 }, y = { 1 }, rgb = "mauve" } } },
+        "series[2]: rgb 'mauve' is not a colour")
+    bad({ series = { { x = { 1 }, y = { 1 }, width = 50 } } },
+        "series[1]: width must be from 0 to 20 pt")
+    bad({ series = { { x = { 1 }, hi = { 1 } } } }, "series[1] has hi but no lo")
+    bad({ path = T.tmpname(".jpg") }, ".png, .pdf or .svg")
+    -- the other figures take the same options and give the same messages
+    local m = small_model()
+    raises(function() return dfle.plot.profile(m, T.tmpname(".png"), { legend = "up" }) end,
+           "dfle.plot.profile", "legend 'up'")
+    raises(function() return dfle.plot.slope_area(m, T.tmpname(".png"), nil, { size = { 8, 6, "pt" } }) end,
+           "dfle.plot.slope_area", "size unit 'pt'")
+    raises(function() return dfle.plot.panels{ path = T.tmpname(".png"), panels = { { series = S, yrange = { 2, 2 } } } } end,
+           "dfle.plot.panels", "yrange must be increasing")
+    raises(function() return dfle.plot.sheet{ path = T.tmpname(".png"), images = { 5 } } end,
+           "images[1] must be a path")
+    raises(function() return dfle.plot.sheet{ path = T.tmpname(".png"), images = { "a.png" }, xlog = true } end,
+           "unknown parameter 'xlog'")
+    raises(function() return dfle.plot.label("Q_s") end, "no house label for 'Q_s'", "A, S")
+end
+
+-- A PDF and an SVG through the Lua options: size and font reach the file.
+tests["plot: PDF and SVG from a script, sized in cm and inches"] = function()
+    local pdf, svg = T.tmpname(".pdf"), T.tmpname(".svg")
+    local S = { { x = { 1, 2, 3 }, y = { 1, 4, 9 }, label = "squares", style = "linespoints" } }
+    dfle.plot.xy{ path = pdf, series = S, size = { 8.3, 6, "cm" }, font = "Helvetica,8",
+                  xticks = { { 1, "one" }, 2, 3 }, legend = "top left", title = "small" }
+    local t = assert(T.read_file(pdf))
+    T.eq(t:sub(1, 5), "%PDF-")
+    T.ok(t:sub(-16):find("%%EOF", 1, true), "the PDF ends with %%EOF")
+    T.ok(t:find("/MediaBox [ 0 0 235 170 ]", 1, true), "an 8.3 x 6 cm page")
+    dfle.plot.xy{ path = svg, series = S, size = { 4, nil, "in" }, legend = false, ylog = true }
+    t = assert(T.read_file(svg))
+    T.ok(t:find('width="288pt"', 1, true), "4 inches wide, in points")
+    T.ok(t:find("</svg>%s*$"), "the SVG is whole")
+    local label, factor = dfle.plot.label("U")
+    T.eq(label, "Uplift rate, {/:Italic U} (mm/yr)")
+    T.eq(factor, 1000)
+    T.eq(dfle.plot.number(1.42e5), "1.42×10^{5}")
+end
+
 -- Options with a misspelt key are silently ignored by plot.profile.
 tests["plot.profile: unknown option keys and non-table options are refused"] = function()
     local m = small_model()

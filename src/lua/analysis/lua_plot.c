@@ -308,6 +308,11 @@ static int l_plot_panels(lua_State *L)
             luaL_error(L, "dfle.%s must be a table", fn);
         dfle_lua_read_params(L, pidx, fn, nums, 1, panel_keys);
         dfle_lua_plot_axis(L, pidx, fn, 'y', &panels[p].y);
+        {
+            dfle_plot_opts check = {.y = panels[p].y}; /* the checks of the shared y */
+            if (dfle_plot_opts_check(&check, &err) != DFLE_OK)
+                dfle_lua_plot_raise(L, fn, &err);
+        }
         panels[p].weight = weight;
         panels[p].series = read_series(L, pidx, fn, "series", &panels[p].nseries);
     }
