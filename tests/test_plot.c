@@ -510,33 +510,45 @@ static void test_gnuplot_missing(void **state)
     assert_missing(in_dir(fx, "big.png")); /* no empty file left */
 }
 
-static int plot_small(fixture *fx, dfle_error *err)
+/* Three points to `name` in the fixture's directory. */
+static int plot_three(fixture *fx, const char *name, dfle_error *err)
 {
     double x[3] = {1, 2, 3};
     dfle_plot_series s = {.label = "s", .n = 3, .x = x, .y = x, .style = DFLE_PLOT_LINES};
-    return dfle_plot_xy(in_dir(fx, "small.png"), NULL, &s, 1, err);
+    return dfle_plot_xy(in_dir(fx, name), NULL, &s, 1, err);
+}
+
+static int plot_small(fixture *fx, dfle_error *err) { return plot_three(fx, "small.png", err); }
+static int plot_pdf(fixture *fx, dfle_error *err) { return plot_three(fx, "t.pdf", err); }
+
+/* f run with a "gnuplot" that is the shell script `body`. */
+static int with_fake_gnuplot(fixture *fx, const char *body, int (*f)(fixture *, dfle_error *),
+                             dfle_error *err)
+{
+    char prog[600];
+    snprintf(prog, sizeof prog, "%s/fake gnuplot's", fx->dir);
+    write_script(prog, body);
+    return with_gnuplot(prog, f, fx, err);
 }
 
 static void test_gnuplot_fails(void **state)
 {
     fixture *fx = *state;
-    char prog[600];
     dfle_error err = {0};
     /* A "gnuplot" that reads the script, complains and fails. */
-    snprintf(prog, sizeof prog, "%s/bad gnuplot's", fx->dir);
-    write_script(prog, "#!/bin/sh\ncat >/dev/null\n"
-                       "echo 'line 3: boom, undefined thing' >&2\nexit 1\n");
-    assert_int_equal(with_gnuplot(prog, plot_small, fx, &err), DFLE_EEXTERNAL);
+    assert_int_equal(with_fake_gnuplot(fx, "#!/bin/sh\ncat >/dev/null\n"
+                                           "echo 'line 3: boom, undefined thing' >&2\nexit 1\n",
+                                       plot_small, &err), DFLE_EEXTERNAL);
     assert_msg_contains(err.msg, "boom, undefined thing");
     assert_missing(in_dir(fx, "small.png"));
     /* One that exits happily without writing an image. */
-    write_script(prog, "#!/bin/sh\ncat >/dev/null\nexit 0\n");
-    assert_int_equal(with_gnuplot(prog, plot_small, fx, &err), DFLE_EEXTERNAL);
+    assert_int_equal(with_fake_gnuplot(fx, "#!/bin/sh\ncat >/dev/null\nexit 0\n", plot_small,
+                                       &err), DFLE_EEXTERNAL);
     assert_msg_contains(err.msg, "wrote nothing");
     assert_missing(in_dir(fx, "small.png"));
     /* A wrapper with a space and a quote in its name that runs gnuplot. */
-    write_script(prog, "#!/bin/sh\nexec gnuplot \"$@\"\n");
-    assert_ok(with_gnuplot(prog, plot_small, fx, &err), &err);
+    assert_ok(with_fake_gnuplot(fx, "#!/bin/sh\nexec gnuplot \"$@\"\n", plot_small, &err),
+              &err);
     assert_png(in_dir(fx, "small.png"));
 }
 
@@ -915,25 +927,16 @@ static void test_pdf_and_svg(void **state)
     assert_ok(dfle_plot_profile(in_dir(fx, "p.pdf"), NULL, 30, x, y, y, &err), &err);
 }
 
-static int plot_pdf(fixture *fx, dfle_error *err)
-{
-    double x[3] = {1, 2, 3};
-    dfle_plot_series s = {.n = 3, .x = x, .y = x};
-    return dfle_plot_xy(in_dir(fx, "t.pdf"), NULL, &s, 1, err);
-}
-
 /* A gnuplot without the terminal: a message that says which terminal
  * and what to do, and no file. */
 static void test_missing_terminal(void **state)
 {
     fixture *fx = *state;
-    char prog[600];
     dfle_error err = {0};
-    snprintf(prog, sizeof prog, "%s/old-gnuplot", fx->dir);
-    write_script(prog, "#!/bin/sh\ncat >/dev/null\n"
-                       "echo \"line 1: unknown or ambiguous terminal type; type just 'set "
-                       "terminal' for a list\" >&2\nexit 1\n");
-    assert_int_equal(with_gnuplot(prog, plot_pdf, fx, &err), DFLE_EEXTERNAL);
+    assert_int_equal(with_fake_gnuplot(fx, "#!/bin/sh\ncat >/dev/null\n"
+                                           "echo \"line 1: unknown or ambiguous terminal "
+                                           "type; type just 'set terminal' for a list\" >&2\n"
+                                           "exit 1\n", plot_pdf, &err), DFLE_EEXTERNAL);
     assert_msg_contains(err.msg, "has no pdfcairo terminal");
     assert_msg_contains(err.msg, "t.pdf");
     assert_msg_contains(err.msg, "gnuplot-nox");
