@@ -62,7 +62,7 @@ LIB_LUA   := $(BUILD)/libdfle_lua.a
 CLI       := $(BUILD)/dfle
 MODULE    := $(BUILD)/dfle.so
 
-.PHONY: all test check memcheck bench install uninstall clean mpi test-mpi
+.PHONY: figures all test check memcheck bench install uninstall clean mpi test-mpi
 # Keep test objects between builds (make would delete them as intermediates).
 .SECONDARY:
 all: $(CLI) $(MODULE) $(SHLIB)
@@ -156,6 +156,11 @@ memcheck: all $(TEST_BIN) $(GATE_TEST)
 
 bench: all $(BENCH_BIN)
 	@sh bench/run.sh $(CLI) $(BUILD)/bench
+
+# Every example's figures in quick mode, checked against doc/figures.md,
+# with an index page and a contact sheet (doc/figures.md).
+figures: all
+	@DFLE_DATA_DIR="$${DFLE_DATA_DIR:-$(CURDIR)/../shared/data}" $(CLI) doc/gallery.lua $(BUILD)/figures
 
 # --- MPI build (doc/ensembles.md): only these rules need mpicc ---
 

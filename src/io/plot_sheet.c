@@ -43,7 +43,7 @@ int dfle_plot_sheet(const char *path, const dfle_plot_opts *opts, const char *co
                     const char *const *titles, size_t n, size_t columns, dfle_error *err)
 {
     unsigned long *wh = NULL;
-    double aspect = 0, fs, tile_w, tile_h, head;
+    double *aspect = NULL, total = 0, fs, tile_w, head, scale, ytop;
     size_t rows;
     dfle_gp_frame fr;
     dfle_gp_run r;
@@ -57,58 +57,70 @@ int dfle_plot_sheet(const char *path, const dfle_plot_opts *opts, const char *co
     if (columns > n)
         columns = n;
     rows = (n + columns - 1) / columns;
-    if ((wh = malloc(2 * n * sizeof *wh)) == NULL)
-        return dfle_error_set(err, DFLE_ENOMEM, "plot: out of memory");
+    wh = malloc(2 * n * sizeof *wh);
+    aspect = calloc(rows, sizeof *aspect); /* each row as tall as its tallest image */
+    if (wh == NULL || aspect == NULL) {
+        rc = dfle_error_set(err, DFLE_ENOMEM, "plot: out of memory");
+        goto done;
+    }
     for (size_t k = 0; k < n && rc == DFLE_OK; k++) {
         if (paths[k] == NULL || dfle_gp_format(paths[k], NULL) != FMT_PNG)
             rc = dfle_error_set(err, DFLE_EINVAL, "plot: image %zu ('%s') is not a .png file",
                                 k + 1, paths[k] != NULL ? paths[k] : "(null)");
         else if ((rc = png_size(paths[k], &wh[2 * k], &wh[2 * k + 1], err)) == DFLE_OK)
-            aspect = fmax(aspect, (double)wh[2 * k + 1] / (double)wh[2 * k]);
+            aspect[k / columns] = fmax(aspect[k / columns],
+                                       (double)wh[2 * k + 1] / (double)wh[2 * k]);
     }
     if (rc != DFLE_OK)
         goto done;
-    /* 9 cm tiles as tall as the tallest image, with a line of title. */
-    head = 1.6 * 8;
+    for (size_t i = 0; i < rows; i++)
+        total += aspect[i];
+    /* 9 cm tiles with a line of title each; a page of another size given
+     * in opts scales them. */
     {
-        double w_cm = 9.0 * (double)columns, tw = w_cm / (double)columns * 72 / 2.54;
-        double h_cm = (double)rows * (tw * aspect + head) / 72 * 2.54;
+        double w_cm = 9.0 * (double)columns, tw = 9.0 / 2.54 * 72;
+        double h_cm = ((double)rows * 1.6 * 8 + tw * total) / 72 * 2.54;
         if ((rc = dfle_gp_frame_of(path, opts, w_cm, fmin(h_cm, 199), &fr, err)) < 0)
             goto done;
     }
     fs = fr.font_pt;
     head = 1.6 * fs;
     tile_w = fr.w_pt / (double)columns;
-    tile_h = fr.h_pt / (double)rows;
+    /* the rows' images share what the titles leave of the height */
+    scale = fmin(tile_w, (fr.h_pt - (double)rows * head) / total);
     if ((rc = dfle_gp_begin_frame(&r, path, &fr, err)) < 0)
         goto done;
     fputs("set multiplot\nunset key\nunset border\nunset tics\nunset grid\nunset colorbox\n"
           "set autoscale noextend\n", r.f);
+    ytop = fr.h_pt;
     for (size_t k = 0; k < n; k++) {
         size_t row = k / columns, col = k % columns;
         double iw = (double)wh[2 * k], ih = (double)wh[2 * k + 1];
         /* the image fitted into the tile under its title, centred */
-        double bw = tile_w - 0.6 * fs, bh = tile_h - head - 0.4 * fs, s = fmin(bw / iw, bh / ih);
-        double x0 = (double)col * tile_w + (tile_w - iw * s) / 2;
-        double ytop = fr.h_pt - (double)row * tile_h - head;
+        double bw = tile_w - 0.6 * fs, bh = scale * aspect[row] - 0.4 * fs;
+        double s = fmin(bw / iw, bh / ih), x0 = (double)col * tile_w + (tile_w - iw * s) / 2;
+        double top = ytop - head;
         const char *t = titles != NULL && titles[k] != NULL ? titles[k] : NULL;
         const char *base = strrchr(paths[k], '/');
         fprintf(r.f, "set lmargin at screen %.5f\nset rmargin at screen %.5f\n"
                 "set tmargin at screen %.5f\nset bmargin at screen %.5f\n", x0 / fr.w_pt,
-                (x0 + iw * s) / fr.w_pt, ytop / fr.h_pt, (ytop - ih * s) / fr.h_pt);
+                (x0 + iw * s) / fr.w_pt, top / fr.h_pt, (top - ih * s) / fr.h_pt);
         fprintf(r.f, "set xrange [-0.5:%.1f]\nset yrange [-0.5:%.1f]\n", iw - 0.5, ih - 0.5);
         dfle_gp_page_label(r.f, 1, t != NULL ? t : base != NULL ? base + 1 : paths[k],
-                           (double)col * tile_w + tile_w / 2, ytop + 0.7 * fs, 0, t == NULL,
+                           (double)col * tile_w + tile_w / 2, top + 0.7 * fs, 0, t == NULL,
                            &fr);
         fputs("plot ", r.f);
         if (paths[k][0] != '/')
             fputs("'./'.", r.f);
         dfle_gp_str(r.f, paths[k]);
         fputs(" binary filetype=png with rgbimage\nunset label\n", r.f);
+        if (col == columns - 1 || k == n - 1)
+            ytop -= head + scale * aspect[row];
     }
     fputs("unset multiplot\n", r.f);
     rc = dfle_gp_end(&r, err);
 done:
     free(wh);
+    free(aspect);
     return rc;
 }
