@@ -7,7 +7,8 @@
 --   dfle examples/frequency_scaling.lua [--quick] [output-directory]
 --
 -- Writes frequency_scaling.csv (gamma, S_df, A_df, R^2, S_max - S_ch),
--- frequency_scaling_profiles.png (elevation against distance) and
+-- frequency_scaling_profiles.png (elevation against distance, the
+-- first 400 m, where the profiles part) and
 -- frequency_scaling_slope_area.png (slope against area, log-log).
 -- --quick: three values of gamma on a coarse channel (dx = 20 m).
 
@@ -48,10 +49,12 @@ for _, g in ipairs(gammas) do
   slopes[#slopes + 1] = { x = m:get("A"), y = m:get("S"), label = label, lines = true, dash = dash }
 end
 csv:close()
+-- The profiles part only near the head, where debris flows set the
+-- slope: the figure shows that reach.
 dfle.plot.xy{
   path = outdir .. "/frequency_scaling_profiles.png", series = profiles,
-  title = "Steady-state profiles, debris-flow frequency scaled with area (Appendix D)",
-  xlabel = dfle.plot.label("x"), ylabel = dfle.plot.label("z"),
+  title = "Steady-state profiles near the head, debris-flow frequency scaled with area (Appendix D)",
+  xlabel = dfle.plot.label("x"), ylabel = dfle.plot.label("z"), xrange = { 0, 400 },
 }
 dfle.plot.xy{
   path = outdir .. "/frequency_scaling_slope_area.png", series = slopes, xlog = true, ylog = true,

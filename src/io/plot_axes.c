@@ -215,7 +215,18 @@ static void linear_minor(dfle_gp_axis *a, double step, double len_pt)
 static double slack(const dfle_gp_axis *a, double len_pt, double font_pt, int vertical,
                     double per)
 {
-    return min_gap(a, len_pt) - fmax(label_need(a, font_pt, vertical), len_pt / per);
+    double sl = min_gap(a, len_pt) - fmax(label_need(a, font_pt, vertical), len_pt / per);
+    if (a->end_room > 0 && a->n > 0) { /* the end labels stay out of the neighbours' */
+        double ulo = to_ax(a->lo, a->log), span = to_ax(a->hi, a->log) - ulo;
+        for (size_t i = 0; i < a->n; i += a->n - 1) {
+            double from = (to_ax(a->v[i], a->log) - ulo) / span * len_pt;
+            double half = vertical ? 0.6 * font_pt : 0.5 * dfle_gp_text_em(a->lab[i]) * font_pt;
+            sl = fmin(sl, fmin(from, len_pt - from) + a->end_room - half);
+            if (a->n == 1)
+                break;
+        }
+    }
+    return sl;
 }
 
 /* The smallest 1, 2, 5 x 10^e step of at least two ticks whose labels
@@ -320,20 +331,27 @@ static void auto_log(dfle_gp_axis *a, double len_pt, double font_pt, int vertica
         log_minor(a);
         return;
     }
-    /* Otherwise the richest set whose labels keep their gap. */
+    /* Otherwise the richest set whose labels keep their gap; under a
+     * decade or so round values at even linear steps may give more. */
     for (size_t c = span < 1.3 ? 0 : 1; c < ncand; c++) {
         double sl;
         if (log_ticks(a, cand[c].m, cand[c].nm, cand[c].every) < 2)
             break; /* sparser sets give fewer still */
         sl = slack(a, len_pt, font_pt, vertical, 10);
         if (a->n <= 9 && sl >= 0) {
+            size_t n_log = a->n;
+            if (span < 1 && linear_steps(a, len_pt, font_pt, vertical, &best_step, &best_slack) &&
+                a->n > n_log) {
+                log_minor(a);
+                return;
+            }
+            log_ticks(a, cand[c].m, cand[c].nm, cand[c].every);
             log_minor(a);
             return;
         }
         if (sl > best_slack)
             best_slack = sl, best = c;
     }
-    /* Less than a decade or so: round values at even linear steps. */
     if (linear_steps(a, len_pt, font_pt, vertical, &best_step, &best_slack)) {
         log_minor(a);
         return;

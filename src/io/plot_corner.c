@@ -188,13 +188,14 @@ int dfle_plot_corner(const char *path, const dfle_plot_opts *opts,
         axis_range(n, d, x, j, lg[j], o->truth != NULL ? o->truth[j] : NAN, &lo[j], &hi[j]);
     }
     /* The panels' size sets the ticks, whose labels set the margins. */
-    gap = 0.5 * fs;
+    gap = 1.2 * fs; /* room for the end labels of neighbouring panels */
     bottom = (1.25 + 1.3 + 0.45 + 1.2) * fs;
     top = fr.h_pt - (title != NULL ? 2.4 * fs : 0.6 * fs) - 1.6 * fs; /* the top header */
     w = (fmin(fr.w_pt - 6 * fs, top - bottom) - gap * (double)(d - 1)) / (double)d;
     for (size_t j = 0; j < d; j++) {
         dfle_gp_axis_range(&tx[j], lg[j], from_axis(lo[j], lg[j]), from_axis(hi[j], lg[j]), 0,
                            NULL);
+        tx[j].end_room = gap / 2; /* panels side by side: labels keep to their own */
         ty[j] = tx[j];
         dfle_gp_axis_ticks(&tx[j], w, fs, 0, NULL);
         dfle_gp_axis_ticks(&ty[j], w, fs, 1, NULL);
@@ -204,6 +205,7 @@ int dfle_plot_corner(const char *path, const dfle_plot_opts *opts,
     left = (0.5 + 1.5 + 0.7 + 0.3) * fs + yem * fs;
     right = fr.w_pt - 1.5 * fs;
     w = (fmin(right - left, top - bottom) - gap * (double)(d - 1)) / (double)d;
+
     if (!(w > 3 * fs)) {
         rc = dfle_error_set(err, DFLE_EINVAL, "plot: the page (%.3g x %.3g cm) is too small for "
                             "%zu panels at a %g pt font", fr.w_pt / 72 * 2.54,

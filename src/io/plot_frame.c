@@ -111,7 +111,7 @@ static const int places[NPLACES] = {DFLE_LEGEND_TOP_RIGHT, DFLE_LEGEND_TOP_LEFT,
 
 static void place_box(int where, double kw, double kh, double box[4])
 {
-    const double m = 0.015;
+    const double m = 0.035; /* the inset, and a clear gap to the data */
     int right = where == DFLE_LEGEND_TOP_RIGHT || where == DFLE_LEGEND_BOTTOM_RIGHT;
     int left = where == DFLE_LEGEND_TOP_LEFT || where == DFLE_LEGEND_BOTTOM_LEFT;
     int top = where == DFLE_LEGEND_TOP_RIGHT || where == DFLE_LEGEND_TOP_LEFT ||
@@ -444,6 +444,10 @@ int dfle_gp_figure(const char *path, const dfle_gp_frame *fr, const dfle_plot_op
                 if (!row_ok(l, i, xlog, ylog, logc))
                     continue;
                 grow(&ex, ax(l->x[i], xlog));
+                l->used++;
+                /* zoomed in x: y and colour fit what is in view */
+                if ((o->x.has_lo && l->x[i] < o->x.lo) || (o->x.has_hi && l->x[i] > o->x.hi))
+                    continue;
                 if (l->y != NULL)
                     grow(&ey, ax(l->y[i], ylog));
                 if (l->lo != NULL) { /* bars and bands count where they end */
@@ -452,7 +456,6 @@ int dfle_gp_figure(const char *path, const dfle_gp_frame *fr, const dfle_plot_op
                 }
                 if (l->c != NULL)
                     grow(&ec, ax(l->c[i], logc));
-                l->used++;
             }
             used += l->used;
         }

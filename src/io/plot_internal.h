@@ -133,6 +133,8 @@ typedef struct dfle_gp_axis {
     double minor[DFLE_GP_MAXMINOR];
     const char *format;     /* the caller's format: labels left to gnuplot */
     double max_em;          /* widest tick label [em] */
+    double end_room;        /* > 0: how far labels may reach beyond the axis's
+                             * ends [pt] (panels side by side); 0: any */
 } dfle_gp_axis;
 
 /* The range of an axis from the data's extent [dlo, dhi] (data units;
