@@ -175,6 +175,35 @@ static void widest(dfle_gp_axis *a)
         a->max_em = fmax(a->max_em, dfle_gp_text_em(a->lab[i]));
 }
 
+/* Where the axis allows it (a->factor_ok), ticks of tiny or huge values
+ * are labelled by mantissas (3, 4, 5) with one factor 10^e for the axis
+ * label, rather than each as "3×10^{-14}": short labels fit narrow
+ * panels.  `step` is the spacing to resolve (in data units); returns 1
+ * if the labels were written so. */
+static int label_factored(dfle_gp_axis *a, double step)
+{
+    double amax = 0;
+    int e, d;
+    for (size_t i = 0; i < a->n; i++)
+        amax = fmax(amax, fabs(a->v[i]));
+    a->factored = 0;
+    if (!a->factor_ok || a->n == 0 || !(amax >= 1e5 || amax < 1e-2))
+        return 0;
+    /* the factor of the spacing, unless the labels would get long */
+    e = (int)floor(log10(step) + 1e-9);
+    if (amax / pow(10.0, e) >= 1000)
+        e = (int)floor(log10(amax) + 1e-9) - 2;
+    d = (int)floor(log10(step) + 1e-9) - e;
+    d = d < 0 ? -d : 0;
+    if (fabs(step / pow(10.0, floor(log10(step) + 1e-9)) - 2.5) < 1e-6)
+        d++;
+    for (size_t i = 0; i < a->n; i++)
+        snprintf(a->lab[i], DFLE_GP_TICKLAB, "%.*f", d, a->v[i] / pow(10.0, e));
+    a->factored = 1;
+    a->factor_exp = e;
+    return 1;
+}
+
 /* Ticks at multiples of step within the range; 0 if too many. */
 static size_t linear_ticks(dfle_gp_axis *a, double step)
 {
@@ -188,6 +217,7 @@ static size_t linear_ticks(dfle_gp_axis *a, double step)
         label_linear(a->lab[a->n], DFLE_GP_TICKLAB, k * step, step, amax);
         a->n++;
     }
+    label_factored(a, step);
     widest(a);
     return a->n;
 }
@@ -232,7 +262,7 @@ static double slack(const dfle_gp_axis *a, double len_pt, double font_pt, int ve
 /* The smallest 1, 2, 5 x 10^e step of at least two ticks whose labels
  * keep a gap, and no more than about nine ticks; *best_step the step
  * that came closest (0: none had two ticks).  Returns 1 if one fits. */
-static int linear_steps(dfle_gp_axis *a, double len_pt, double font_pt, int vertical,
+static int linear_steps(dfle_gp_axis *a, double len_pt, double font_pt, int vertical, double per,
                         double *best_step, double *best_slack)
 {
     static const double mant[3] = {1, 2, 5};
@@ -242,7 +272,7 @@ static int linear_steps(dfle_gp_axis *a, double len_pt, double font_pt, int vert
             double step = mant[k] * pow(10.0, e), sl;
             if (linear_ticks(a, step) < 2)
                 continue;
-            sl = slack(a, len_pt, font_pt, vertical, 9);
+            sl = slack(a, len_pt, font_pt, vertical, per);
             if (sl >= 0)
                 return 1;
             if (sl > *best_slack)
@@ -256,7 +286,7 @@ static int linear_steps(dfle_gp_axis *a, double len_pt, double font_pt, int vert
 static void auto_linear(dfle_gp_axis *a, double len_pt, double font_pt, int vertical)
 {
     double best = 0, best_slack = -HUGE_VAL, span = a->hi - a->lo;
-    if (linear_steps(a, len_pt, font_pt, vertical, &best, &best_slack) ||
+    if (linear_steps(a, len_pt, font_pt, vertical, 9, &best, &best_slack) ||
         (best > 0 && linear_ticks(a, best) >= 2)) {
         linear_minor(a, a->v[1] - a->v[0], len_pt);
         return;
@@ -266,6 +296,7 @@ static void auto_linear(dfle_gp_axis *a, double len_pt, double font_pt, int vert
     a->v[0] = a->lo, a->v[1] = a->hi;
     label_linear(a->lab[0], DFLE_GP_TICKLAB, a->lo, span, fmax(fabs(a->lo), fabs(a->hi)));
     label_linear(a->lab[1], DFLE_GP_TICKLAB, a->hi, span, fmax(fabs(a->lo), fabs(a->hi)));
+    label_factored(a, span);
     widest(a);
 }
 
@@ -290,6 +321,14 @@ static size_t log_ticks(dfle_gp_axis *a, const double *mant, int nm, int every)
     }
     for (size_t i = 0; i < a->n; i++)
         label_log(a->lab[i], DFLE_GP_TICKLAB, a->v[i], plain);
+    /* within a decade or so a factor reads better than powers of ten */
+    a->factored = 0;
+    if (!plain && dhi - dlo < 1.3 && a->n > 0) {
+        double step = a->v[0];
+        for (size_t i = 1; i < a->n; i++)
+            step = fmin(step, a->v[i] - a->v[i - 1]);
+        label_factored(a, step);
+    }
     widest(a);
     return a->n;
 }
@@ -340,7 +379,7 @@ static void auto_log(dfle_gp_axis *a, double len_pt, double font_pt, int vertica
         sl = slack(a, len_pt, font_pt, vertical, 10);
         if (a->n <= 9 && sl >= 0) {
             size_t n_log = a->n;
-            if (span < 1 && linear_steps(a, len_pt, font_pt, vertical, &best_step, &best_slack) &&
+            if (span < 1 && linear_steps(a, len_pt, font_pt, vertical, 14, &best_step, &best_slack) &&
                 a->n > n_log) {
                 log_minor(a);
                 return;
@@ -352,7 +391,8 @@ static void auto_log(dfle_gp_axis *a, double len_pt, double font_pt, int vertica
         if (sl > best_slack)
             best_slack = sl, best = c;
     }
-    if (linear_steps(a, len_pt, font_pt, vertical, &best_step, &best_slack)) {
+    /* even steps on a log axis crowd only at its top: allow more */
+    if (linear_steps(a, len_pt, font_pt, vertical, 14, &best_step, &best_slack)) {
         log_minor(a);
         return;
     }
@@ -373,6 +413,7 @@ void dfle_gp_axis_ticks(dfle_gp_axis *a, double len_pt, double font_pt, int vert
 {
     a->format = user != NULL ? user->format : NULL;
     a->n = a->nminor = 0;
+    a->factored = 0;
     if (user != NULL && user->ticks != NULL) {
         double gap = HUGE_VAL, amax = 0;
         for (size_t i = 1; i < user->nticks; i++)
@@ -407,6 +448,20 @@ void dfle_gp_axis_ticks(dfle_gp_axis *a, double len_pt, double font_pt, int vert
         auto_log(a, len_pt, font_pt, vertical);
     else
         auto_linear(a, len_pt, font_pt, vertical);
+}
+
+const char *dfle_gp_axis_label(const dfle_gp_axis *a, const char *label, char *buf, size_t cap)
+{
+    const char *open = label != NULL ? strrchr(label, '(') : NULL;
+    size_t len = label != NULL ? strlen(label) : 0;
+    if (!a->factored || label == NULL)
+        return label;
+    if (open != NULL && len > 0 && label[len - 1] == ')') /* "D (m^2/s)": "D (×10^{-6} m^2/s)" */
+        snprintf(buf, cap, "%.*s×10^{%d} %s", (int)(open - label + 1), label, a->factor_exp,
+                 open + 1);
+    else
+        snprintf(buf, cap, "%s (×10^{%d})", label, a->factor_exp);
+    return buf;
 }
 
 void dfle_gp_axis_put(FILE *f, const char *name, const dfle_gp_axis *a, int labels)

@@ -196,6 +196,7 @@ int dfle_plot_corner(const char *path, const dfle_plot_opts *opts,
         dfle_gp_axis_range(&tx[j], lg[j], from_axis(lo[j], lg[j]), from_axis(hi[j], lg[j]), 0,
                            NULL);
         tx[j].end_room = gap / 2; /* panels side by side: labels keep to their own */
+        tx[j].factor_ok = 1;      /* ...and short: 3, 4, 5 with ×10^{-14} in the label */
         ty[j] = tx[j];
         dfle_gp_axis_ticks(&tx[j], w, fs, 0, NULL);
         dfle_gp_axis_ticks(&ty[j], w, fs, 1, NULL);
@@ -276,7 +277,7 @@ int dfle_plot_corner(const char *path, const dfle_plot_opts *opts,
     for (size_t i = 0; i < d; i++)         /* row, top to bottom */
         for (size_t j = 0; j <= i; j++) {  /* column */
             double L0 = left + (double)j * (w + gap), T0 = top - (double)i * (w + gap);
-            char bj[32], bi[32];
+            char bj[32], bi[32], fx[320];
             const char *lab_j = axis_label(o, j, bj, sizeof bj);
             const char *lab_i = axis_label(o, i, bi, sizeof bi);
             fprintf(r.f, "set lmargin at screen %.5f\nset rmargin at screen %.5f\n"
@@ -288,7 +289,8 @@ int dfle_plot_corner(const char *path, const dfle_plot_opts *opts,
             if (i == 0 && j == 0 && title != NULL)
                 dfle_gp_page_label(r.f, 100, title, fr.w_pt / 2, fr.h_pt - 1.25 * fs, 0, 0, &fr);
             if (i == d - 1)
-                dfle_gp_page_label(r.f, 101, lab_j, L0 + w / 2, 0.95 * fs, 0, 0, &fr);
+                dfle_gp_page_label(r.f, 101, dfle_gp_axis_label(&tx[j], lab_j, fx, sizeof fx),
+                                   L0 + w / 2, 0.95 * fs, 0, 0, &fr);
             if (i == j) {
                 dfle_summary s;
                 char txt[200], head[320];
@@ -312,7 +314,8 @@ int dfle_plot_corner(const char *path, const dfle_plot_opts *opts,
             } else {
                 dfle_gp_axis_put(r.f, "y", &ty[i], j == 0);
                 if (j == 0)
-                    dfle_gp_page_label(r.f, 102, lab_i, 1.1 * fs, T0 - w / 2, 90, 0, &fr);
+                    dfle_gp_page_label(r.f, 102, dfle_gp_axis_label(&ty[i], lab_i, fx, sizeof fx),
+                                       1.1 * fs, T0 - w / 2, 90, 0, &fr);
                 if (o->truth != NULL && isfinite(o->truth[j]))
                     fprintf(r.f, "set arrow 4 from %.10g, graph 0 to %.10g, graph 1 nohead lc "
                             "rgb '%s' lw 2.5 front\n", o->truth[j], o->truth[j], DFLE_GP_FIT);

@@ -135,6 +135,9 @@ typedef struct dfle_gp_axis {
     double max_em;          /* widest tick label [em] */
     double end_room;        /* > 0: how far labels may reach beyond the axis's
                              * ends [pt] (panels side by side); 0: any */
+    int factor_ok;          /* tiny or huge values may be labelled by
+                             * mantissas with one factor for the axis */
+    int factored, factor_exp; /* they are: the axis label says ×10^{e} */
 } dfle_gp_axis;
 
 /* The range of an axis from the data's extent [dlo, dhi] (data units;
@@ -149,6 +152,10 @@ void dfle_gp_axis_range(dfle_gp_axis *a, int log, double dlo, double dhi, double
  * 5 times powers of ten; the caller's ticks, step or format win. */
 void dfle_gp_axis_ticks(dfle_gp_axis *a, double len_pt, double font_pt, int vertical,
                         const dfle_plot_axis *user);
+/* The axis label for a: `label`, or with a's factor when its ticks are
+ * labelled by mantissas ("D (×10^{-6} m^2/s)", "k_e (×10^{-14})"); buf
+ * holds the new text. */
+const char *dfle_gp_axis_label(const dfle_gp_axis *a, const char *label, char *buf, size_t cap);
 /* "set <name>range", log scale, tick list (labels or none) and minor
  * ticks for axis `name` ("x", "y", "cb"). */
 void dfle_gp_axis_put(FILE *f, const char *name, const dfle_gp_axis *a, int labels);
