@@ -878,6 +878,36 @@ static void test_ticks_never_touch(void **state)
                 }
 }
 
+/* Narrow panels label tiny values by mantissas with one factor in the
+ * axis label, which says it. */
+static void test_factored_ticks(void **state)
+{
+    (void)state;
+    static dfle_gp_axis a;
+    char buf[128];
+    dfle_gp_axis_range(&a, 1, 1.9e-14, 5.2e-14, 0, NULL);
+    a.factor_ok = 1;
+    dfle_gp_axis_ticks(&a, 110, 9, 0, NULL);
+    assert_true(a.factored);
+    assert_int_equal(a.factor_exp, -14);
+    assert_true(a.n >= 2);
+    for (size_t i = 0; i < a.n; i++)
+        assert_null(strstr(a.lab[i], "10^"));
+    assert_string_equal(dfle_gp_axis_label(&a, "k_e", buf, sizeof buf), "k_e (×10^{-14})");
+    assert_string_equal(dfle_gp_axis_label(&a, "D (m^2/s)", buf, sizeof buf),
+                        "D (×10^{-14} m^2/s)");
+    /* ordinary magnitudes are not factored, nor any axis that did not ask */
+    dfle_gp_axis_range(&a, 0, 0.2, 0.9, 0, NULL);
+    a.factor_ok = 1;
+    dfle_gp_axis_ticks(&a, 110, 9, 0, NULL);
+    assert_false(a.factored);
+    assert_string_equal(dfle_gp_axis_label(&a, "S", buf, sizeof buf), "S");
+    dfle_gp_axis_range(&a, 0, 1e-6, 1e-5, 0, NULL);
+    dfle_gp_axis_ticks(&a, 400, 9, 0, NULL);
+    assert_false(a.factored);
+    assert_non_null(strstr(a.lab[0], "×10^{-6}"));
+}
+
 /* A PDF and an SVG, really drawn: the PDF's magic and trailer, the SVG's
  * closing tag and a header that gives its size in points. */
 static void test_pdf_and_svg(void **state)
@@ -1010,6 +1040,7 @@ int main(void)
         cmocka_unit_test_setup_teardown(test_option_checks, setup, teardown),
         cmocka_unit_test_setup_teardown(test_options_reach_the_script, setup, teardown),
         cmocka_unit_test(test_ticks_never_touch),
+        cmocka_unit_test(test_factored_ticks),
         cmocka_unit_test_setup_teardown(test_pdf_and_svg, setup, teardown),
         cmocka_unit_test_setup_teardown(test_missing_terminal, setup, teardown),
         cmocka_unit_test_setup_teardown(test_panels_and_sheet, setup, teardown),
