@@ -101,6 +101,9 @@ local dfle_cmd = arg[k]
 local out = opts.output == "." and "build/figures" or opts.output
 dfle.mkdir(out)
 
+if not os.getenv("DFLE_DATA_DIR") then
+  print("gallery: DFLE_DATA_DIR is not set: the DEM examples will draw nothing")
+end
 local drawn, t_all = {}, os.time()
 for _, script in ipairs(scripts) do
   local name = script:match("([%w_]+)%.lua$")
