@@ -26,14 +26,10 @@ local gammas = { 0, 0.5 }
 local channel = dfle.channel{ dx = quick and 20 or 5, A_max = 8e6 }
 local fluvial = dfle.fluvial.stochastic_threshold{ k_e = 5e-14 }
 
-local csv = assert(io.open(outdir .. "/alpha_beta.csv", "w"))
-csv:write("gamma,alpha,beta,converged,time_yr,S_df,A_df_m2,a2,r2,S_max_minus_S_ch\n")
+local rows = {} -- of alpha_beta.csv
 print(("%5s %5s %5s %10s %8s %10s %6s %7s %9s"):format(
   "gamma", "alpha", "beta", "method", "S_df", "A_df (m2)", "a2", "R^2", "Smax-Sch"))
 -- One curve per (gamma, beta): colour by beta, dashed for gamma = 0.5.
--- Where every curve of a gamma is zero (gamma = 0.5: slope never rises
--- with area), they are drawn as one, since lines on top of each other
--- cannot be told apart.
 local colours = { [0.5] = "blue", [1] = "vermillion", [2] = "green", [3] = "purple" }
 local curves = {}
 for _, gamma in ipairs(gammas) do
@@ -50,43 +46,64 @@ for _, beta in ipairs(betas) do
     if fit then
       print(("%5g %5g %5g %10s %8.3f %10.3g %6.2f %7.4f %9.4f"):format(
         gamma, alpha, beta, run.method, fit.S_df, fit.A_df, fit.a2, fit.r2, fit.S_max_minus_S_ch))
-      csv:write(("%g,%g,%g,%s,%g,%g,%g,%g,%g,%g\n"):format(gamma, alpha, beta, tostring(run.converged),
-        run.time, fit.S_df, fit.A_df, fit.a2, fit.r2, fit.S_max_minus_S_ch))
+      rows[#rows + 1] = { gamma = gamma, alpha = alpha, beta = beta, converged = run.converged,
+        time = run.time, S_df = fit.S_df, A_df = fit.A_df, a2 = fit.a2, r2 = fit.r2,
+        S_max_minus_S_ch = fit.S_max_minus_S_ch }
       xs[#xs + 1], ys[#ys + 1] = alpha, fit.S_max_minus_S_ch
     else
       print(("%5g %5g %5g  no fit: %s"):format(gamma, alpha, beta, why))
-      csv:write(("%g,%g,%g,%s,%g,,,,,\n"):format(gamma, alpha, beta, tostring(run.converged), run.time))
+      rows[#rows + 1] = { gamma = gamma, alpha = alpha, beta = beta, converged = run.converged,
+        time = run.time }
     end
   end
   if #xs > 0 then curves[#curves + 1] = { gamma = gamma, beta = beta, x = xs, y = ys } end
 end
 end
-csv:close()
+dfle.write_csv(outdir .. "/alpha_beta.csv", {
+  about = "steady states for each alpha and beta of the power law (k_df = 1e-4) and gamma of "
+          .. "the empirical router (M0 = 3000, mu = 500, tau_y = 300), U = 5e-4 m/yr",
+  columns = { "gamma", "alpha", "beta", "converged", "time", "S_df", "A_df", "a2", "r2",
+              "S_max_minus_S_ch" },
+  units = { gamma = "-", alpha = "-", beta = "-", time = "yr", S_df = "-", A_df = "m^2", a2 = "-",
+            r2 = "-", S_max_minus_S_ch = "-" },
+  rows = rows,
+  params = { channel = channel:params(), fluvial = fluvial:params() },
+})
 
-local series = {}
+-- Curves that are zero everywhere (slope never rises with area) would
+-- lie on top of each other: they are drawn as one, black and dashed,
+-- whose legend entry names them all.
+local series, zero, zero_names = {}, nil, {}
 for _, gamma in ipairs(gammas) do
-  local all_zero, betas_zero = true, {}
+  local betas_zero = {}
   for _, c in ipairs(curves) do
     if c.gamma == gamma then
+      local all_zero = true
       for _, v in ipairs(c.y) do all_zero = all_zero and v == 0 end
-      betas_zero[#betas_zero + 1] = ("%g"):format(c.beta)
+      if all_zero then
+        betas_zero[#betas_zero + 1] = ("%g"):format(c.beta)
+        if zero == nil or #c.x > #zero.x then zero = c end
+      else
+        series[#series + 1] = {
+          x = c.x, y = c.y, style = "linespoints", rgb = colours[c.beta],
+          dash = gamma > 0, marker = gamma > 0 and "open circle" or "circle",
+          label = ("γ = %g, β = %g"):format(gamma, c.beta),
+        }
+      end
     end
   end
-  for _, c in ipairs(curves) do
-    if c.gamma == gamma and (not all_zero or c.beta == betas[1]) then
-      series[#series + 1] = {
-        x = c.x, y = c.y, style = "linespoints", dash = gamma > 0,
-        rgb = all_zero and "black" or colours[c.beta],
-        marker = gamma > 0 and "open circle" or "circle",
-        label = all_zero and ("γ = %g, β = %s: all 0"):format(gamma, table.concat(betas_zero, ", "))
-                or ("γ = %g, β = %g"):format(gamma, c.beta),
-      }
-    end
+  if #betas_zero > 0 then
+    zero_names[#zero_names + 1] = ("γ = %g, β = %s"):format(gamma, table.concat(betas_zero, ", "))
   end
+end
+if zero then
+  series[#series + 1] = { x = zero.x, y = zero.y, style = "linespoints", rgb = "black",
+                          dash = true, marker = "open circle",
+                          label = "all 0: " .. table.concat(zero_names, "; ") }
 end
 dfle.plot.xy{
   path = outdir .. "/alpha_beta.png", series = series,
-  title = "Steady-state profiles, empirical router",
+  title = "S_{max} − S_{ch} of the steady state against α, empirical router",
   xlabel = dfle.plot.label("alpha"), ylabel = dfle.plot.label("S_max_minus_S_ch"),
   xticks = 1,
 }

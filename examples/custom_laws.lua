@@ -78,7 +78,7 @@ local laws = {
     style = { rgb = "purple", lines = true, dash = true } },
 }
 
-local series, rows = {}, { "law,A_m2,S" }
+local series, rows = {}, {}
 for _, L in ipairs(laws) do
   local m = dfle.model{
     channel = channel, U = 5e-4,
@@ -106,7 +106,7 @@ for _, L in ipairs(laws) do
   local a, s = {}, {}
   for i = 1, m.n - 1 do
     a[#a + 1], s[#s + 1] = A[i], S[i]
-    rows[#rows + 1] = ("%q,%.6g,%.6g"):format(L.label, A[i], S[i])
+    rows[#rows + 1] = { law = L.label, A = A[i], S = S[i] }
   end
   local look = L.style
   if look.markers then -- about that many markers, evenly spaced in log A
@@ -124,9 +124,10 @@ for _, L in ipairs(laws) do
 end
 
 local csv = outdir .. "/custom_laws.csv"
-local f = assert(io.open(csv, "w"))
-f:write(table.concat(rows, "\n"), "\n")
-f:close()
+dfle.write_csv(csv, {
+  about = "steady-state slope and drainage area of every node above the outlet, for each law",
+  columns = { "law", "A", "S" }, units = { A = "m^2", S = "-" }, rows = rows,
+})
 local png = outdir .. "/custom_laws.png"
 dfle.plot.xy{ path = png, series = series, xlog = true, ylog = true,
               title = "Steady-state slope-area relations of custom incision laws",

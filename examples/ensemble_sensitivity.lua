@@ -57,6 +57,17 @@ local experiments = {
   },
 }
 
+-- Units of the sampled parameters, for the file's "# units:" line (dfle
+-- knows those of its own outputs).
+local UNITS = { M0 = "m^(3-2 gamma)", gamma = "-", mu = "Pa s", tau_y = "Pa", U = "m/yr",
+                k_df = "m^(1-beta) s^-1 yr^-1", k_e = "m^2.5 s^2 kg^-1.5", mu2 = "-",
+                D = "m^2/s", eta = "Pa s", alpha = "-", beta = "-" }
+local function units_of(params)
+  local u = {}
+  for name in pairs(params) do u[name] = UNITS[name] end
+  return u
+end
+
 local results = {}
 for _, name in ipairs{ "empirical", "process" } do
   if only == nil or only == name then
@@ -64,6 +75,7 @@ for _, name in ipairs{ "empirical", "process" } do
     results[name] = dfle.ensemble{
       params = e.params, n = e.n, seed = 1,
       out = outdir .. "/sensitivity_" .. name .. ".csv",
+      units = units_of(e.params),
       build = function(p)
         return dfle.model{
           channel = dfle.channel{ dx = dx }, U = p.U,
@@ -109,8 +121,31 @@ local function colored(ens, x, y, color, factor)
   return { { x = column(ens, x), y = column(ens, y), color = c } }
 end
 
--- A parameter sampled over a decade or more reads best on a log axis.
-local function wide(range) return range[2] / range[1] >= 10 end
+-- A parameter sampled log-uniformly, or over a decade or more, reads
+-- best on a log axis (gamma from 0 to 1 does not).
+local function wide(range)
+  return range.log == true or (range[1] > 0 and range[2] / range[1] >= 10)
+end
+
+-- A name as a title shows it: gamma as γ, k_df as k_{df}.
+local SYMBOLS = { gamma = "γ", mu = "μ", mu2 = "μ_2", eta = "η", tau_y = "τ_y", M0 = "M_0" }
+local function symbol(name)
+  return (SYMBOLS[name] or name):gsub("_(%w+)", "_{%1}")
+end
+
+-- The axis of a parameter spans the range it was sampled from (times
+-- `factor`), padded 4 % so no point sits on the frame: the figure shows
+-- where in its range each sample lies, and the range's round ends
+-- (10^{-6}, 10^{-5}) are labelled.
+local function sampled_range(range, log, factor)
+  local lo, hi = range[1] * factor, range[2] * factor
+  if log then
+    local r = (hi / lo) ^ 0.04
+    return { lo / r, hi * r }
+  end
+  local pad = 0.04 * (hi - lo)
+  return { lo - pad, hi + pad }
+end
 
 local STATS = { "minimum", "mean", "median", "maximum", "CV", "stdev" }
 for _, name in ipairs{ "empirical", "process" } do
@@ -121,22 +156,28 @@ for _, name in ipairs{ "empirical", "process" } do
     if ens.ok >= 10 then
       local si = dfle.pawn(ens, { outputs = { "A_df", "S_df" }, S = 10,
                                   bootstrap = quick and 50 or 1000 })
-      local f = assert(io.open(outdir .. "/pawn_" .. name .. ".csv", "w"))
-      f:write("output,input," .. table.concat(STATS, ",") .. ",median_lo,median_hi\n")
+      local rows = {}
       print(("  PAWN median index (S = 10), %s router:"):format(name))
       print(("  %-8s %8s %8s"):format("input", "A_df", "S_df"))
       for _, x in ipairs(ens.inputs) do
         for _, o in ipairs{ "A_df", "S_df" } do
           local r = si[o][x]
-          local row = { o, x }
-          for _, st in ipairs(STATS) do row[#row + 1] = ("%.6g"):format(r[st]) end
-          row[#row + 1] = ("%.6g"):format(r.ci.median.lo)
-          row[#row + 1] = ("%.6g"):format(r.ci.median.hi)
-          f:write(table.concat(row, ","), "\n")
+          local row = { output = o, input = x, median_lo = r.ci.median.lo,
+                        median_hi = r.ci.median.hi }
+          for _, st in ipairs(STATS) do row[st] = r[st] end
+          rows[#rows + 1] = row
         end
         print(("  %-8s %8.3f %8.3f"):format(x, si.A_df[x].median, si.S_df[x].median))
       end
-      f:close()
+      local columns, units = { "output", "input" }, { median_lo = "-", median_hi = "-" }
+      for _, st in ipairs(STATS) do columns[#columns + 1], units[st] = st, "-" end
+      columns[#columns + 1], columns[#columns + 2] = "median_lo", "median_hi"
+      dfle.write_csv(outdir .. "/pawn_" .. name .. ".csv", {
+        about = ("PAWN indices (S = 10) of each input for A_df and S_df, %s router, from %s; "
+                 .. "median_lo, median_hi: 95 %% bootstrap interval of the median"):format(name, ens.file),
+        columns = columns, units = units, rows = rows,
+        params = { pawn = { S = 10, bootstrap = quick and 50 or 1000, ok_rows = ens.ok } },
+      })
       -- A_df and S_df against each parameter, coloured by U (Figs. 5-8).
       local Ulabel, Ufactor = dfle.plot.label("U")
       local params = experiments[name].params
@@ -146,9 +187,10 @@ for _, name in ipairs{ "empirical", "process" } do
             dfle.plot.xy{
               path = ("%s/sens_%s_%s_%s.png"):format(outdir, name, x, o),
               title = ("%s against %s (%s router), coloured by U"):format(
-                o:gsub("_(%w+)", "_{%1}"), x:gsub("_(%w+)", "_{%1}"), name),
+                symbol(o), symbol(x), name),
               xlabel = dfle.plot.label(x), ylabel = dfle.plot.label(o), clabel = Ulabel,
               xlog = wide(params[x]), ylog = o == "A_df",
+              xrange = sampled_range(params[x], wide(params[x]), 1),
               series = colored(ens, x, o, "U", Ufactor),
             }
           end
@@ -160,7 +202,7 @@ for _, name in ipairs{ "empirical", "process" } do
       for i, u in ipairs(U) do Umm[i] = u * Ufactor end
       for _, o in ipairs{ "A_df", "S_df" } do
         local y = column(ens, o)
-        local sym = o:gsub("_(%w+)", "_{%1}")
+        local sym = symbol(o)
         local series = { { x = Umm, y = y, label = "samples", rgb = "grey" } }
         local c, k = power_fit(U, y)
         if c then
@@ -172,13 +214,15 @@ for _, name in ipairs{ "empirical", "process" } do
             ys[j + 1] = c * (xs[j + 1] / Ufactor) ^ k
           end
           series[2] = { x = xs, y = ys, lines = true, rgb = "vermillion",
-                        label = ("%s = %.3g U^{%.3g} (U in mm/yr)"):format(sym, c / Ufactor ^ k, k) }
+                        label = ("%s = %s U^{%.3g} (U in mm/yr)"):format(sym,
+                          dfle.plot.number(c / Ufactor ^ k), k) }
           print(("  power-law fit: %s = %.4g U^%.4g (U in m/yr)"):format(o, c, k))
         end
         dfle.plot.xy{
           path = ("%s/sens_%s_U_%s.png"):format(outdir, name, o), xlog = true, ylog = true,
           title = ("%s against uplift rate (%s router)"):format(sym, name),
           xlabel = Ulabel, ylabel = dfle.plot.label(o), series = series,
+          xrange = sampled_range(params.U, true, Ufactor),
         }
       end
     end

@@ -58,7 +58,9 @@ if quick then
   dem = ls0:dem()
 end
 
-local A0 = 1e4 -- channel heads at 1 ha: about 11 cells of 30 m
+-- channel heads at 1 ha: about 11 cells of 30 m; on the quick 90 m grid
+-- 1 ha is about one cell (every cell a channel), so heads at 11 cells
+local A0 = quick and 11 * 90 * 90 or 1e4
 local ls = dfle.landscape{
   dem = dem, outlet = outlet,
   U = 5e-4, A0 = A0, S_c = 0.8,

@@ -482,17 +482,39 @@ static void test_write_csv(void **state)
     fd = mkstemp(path);
     assert_true(fd >= 0);
     close(fd);
-    assert_ok(dfle_profile_write_csv(p, path, &err), &err);
+    assert_ok(dfle_profile_write_csv(p, path, NULL, &err), &err);
     f = fopen(path, "r");
     assert_non_null(f);
     assert_non_null(fgets(line, sizeof line, f));
-    assert_string_equal(line, "E (m),N (m),x (m),d (m),z (m),A (m^2),S (-),receiver\n");
+    assert_string_equal(line, "# units: E=m, N=m, x=m, d=m, z=m, A=m^2, S=-\n");
+    assert_non_null(fgets(line, sizeof line, f));
+    assert_string_equal(line, "E,N,x,d,z,A,S,receiver\n");
     while (fgets(line, sizeof line, f) != NULL)
         lines++;
     fclose(f);
     remove(path);
     assert_int_equal(lines, (int)dfle_profile_size(p));
-    assert_int_equal(dfle_profile_write_csv(p, "/no/such/dir/p.csv", &err), DFLE_EIO);
+    {
+        /* With its provenance: the DEM, the point given and snapped. */
+        dfle_record *rec;
+        char first[512];
+        assert_ok(dfle_record_new(&rec, &err), &err);
+        dfle_profile_describe(p, rec);
+        assert_ok(dfle_profile_write_csv(p, path, rec, &err), &err);
+        dfle_record_free(rec);
+        f = fopen(path, "r");
+        assert_non_null(f);
+        assert_non_null(fgets(first, sizeof first, f));
+        fclose(f);
+        remove(path);
+        assert_true(strncmp(first, "# profile profile: dem=", 23) == 0);
+        assert_msg_contains(first, dfle_dem_path(tif));
+        assert_msg_contains(first, ", from=outlet, given_E=");
+        assert_msg_contains(first, " m, snapped_E=");
+        assert_msg_contains(first, ", radius=");
+        assert_msg_contains(first, ", ds=");
+    }
+    assert_int_equal(dfle_profile_write_csv(p, "/no/such/dir/p.csv", NULL, &err), DFLE_EIO);
     assert_msg_contains(err.msg, "/no/such/dir/p.csv");
     dfle_profile_free(p);
 }

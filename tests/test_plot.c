@@ -141,7 +141,7 @@ static void make_slope_area(dfle_bins *bins, dfle_eq2_fit *fit)
     }
     b_q25[3] = NAN; /* a bin without quartiles must not break the plot */
     *bins = (dfle_bins){NBINS, NBINS, 0, b_A, b_lo, b_hi, b_S, b_S,
-                        b_q25, b_q75, b_cnt};
+                        b_q25, b_q75, b_S, b_cnt};
     *fit = (dfle_eq2_fit){0};
     fit->S_df = 0.7;
     fit->A_df = 2e4;
@@ -832,6 +832,48 @@ static void test_options_reach_the_script(void **state)
     assert_null(strstr(sc, "'first' at screen"));
 }
 
+/* The colour scale's options (range, log, ticks, label), tick formats
+ * and a marker's size reach the script as the caller gave them. */
+static void test_colour_scale_and_formats_reach_the_script(void **state)
+{
+    fixture *fx = *state;
+    char prog[600];
+    double x[5] = {1, 2, 3, 4, 5}, y[5] = {2, 3, 5, 7, 11}, c[5] = {1, 3, 10, 30, 100};
+    double ct[3] = {1, 10, 100};
+    dfle_error err = {0};
+    teeing_gnuplot(fx, prog, sizeof prog);
+    script_series[0] = (dfle_plot_series){.label = "coloured", .n = 5, .x = x, .y = y, .c = c,
+                                          .marker_size = 9};
+    script_series[1] = (dfle_plot_series){.label = "plain", .n = 5, .x = x, .y = y,
+                                          .marker_size = 2};
+    dfle_plot_opts o = {.x = {.format = "%.2f"},
+                        .y = {.format = "%.1e"},
+                        .c = {.label = "colour (units)", .log = 1, .has_lo = 1, .lo = 0.5,
+                              .has_hi = 1, .hi = 200, .ticks = ct, .nticks = 3}};
+    script_opts = &o;
+    in_dir(fx, "c.png");
+    assert_ok(with_gnuplot(prog, plot_for_script, fx, &err), &err);
+    const char *sc = last_script(fx);
+    assert_non_null(strstr(sc, "set format x '%.2f'"));
+    assert_non_null(strstr(sc, "set format y '%.1e'"));
+    assert_non_null(strstr(sc, "set logscale cb 10"));
+    assert_non_null(strstr(sc, "set cbrange [0.5:200]"));
+    assert_non_null(strstr(sc, "set cbtics ('10^{0}' 1, '10^{1}' 10, '10^{2}' 100)"));
+    assert_non_null(strstr(sc, "colour (units)"));
+    /* sizes differ by the ratio given (9 pt against 2 pt) */
+    double ps[2] = {0, 0};
+    const char *p = sc;
+    for (int k = 0; k < 2; k++) {
+        p = strstr(p, " ps ");
+        assert_non_null(p);
+        ps[k] = strtod(p + 4, NULL);
+        p += 4;
+    }
+    assert_true(ps[0] > 0 && ps[1] > 0);
+    assert_true(fabs(fmax(ps[0], ps[1]) / fmin(ps[0], ps[1]) - 4.5) < 0.05);
+    assert_png(in_dir(fx, "c.png"));
+}
+
 /* Automatic ticks: over many ranges, scales and axis lengths, the
  * labels chosen keep a gap (side by side on x, stacked on y), there are
  * at least two of them, and a log axis over two decades or more shows
@@ -1039,6 +1081,8 @@ int main(void)
         cmocka_unit_test(test_option_names),
         cmocka_unit_test_setup_teardown(test_option_checks, setup, teardown),
         cmocka_unit_test_setup_teardown(test_options_reach_the_script, setup, teardown),
+        cmocka_unit_test_setup_teardown(test_colour_scale_and_formats_reach_the_script, setup,
+                                        teardown),
         cmocka_unit_test(test_ticks_never_touch),
         cmocka_unit_test(test_factored_ticks),
         cmocka_unit_test_setup_teardown(test_pdf_and_svg, setup, teardown),

@@ -24,7 +24,8 @@ enum dfle_status {
     DFLE_ESTATE = -6,    /* the object is not in a state for this call   */
     DFLE_EFIT = -7,      /* a fit did not converge or had too few points */
     DFLE_ECANCELED = -8, /* a progress callback asked the run to stop    */
-    DFLE_EEXTERNAL = -9  /* an external program (gnuplot) failed         */
+    DFLE_EEXTERNAL = -9  /* an external program (gnuplot) failed, or a   */
+                         /* library (GDAL, netCDF) could not be loaded   */
 };
 
 #define DFLE_ERROR_MSG_MAX 512

@@ -6,7 +6,8 @@
  * description (dfle_nc_var) and its choices: the classic 64-bit-offset
  * format (every netCDF reader, no HDF5), CF-1.8 attributes so xarray's
  * open_dataset decodes units, coordinates and fill values as they are,
- * NaN as _FillValue, and the whole file or none (file.h).
+ * NaN as _FillValue, and the whole file or none (file.h).  libnetcdf
+ * is loaded by the first file written (raster.h).
  */
 #ifndef DFLE_NETCDF_H
 #define DFLE_NETCDF_H

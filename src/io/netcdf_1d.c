@@ -14,8 +14,7 @@
 #include <stdlib.h>
 #include <string.h>
 
-#include <netcdf.h>
-
+#include "base/netcdf_lib.h" /* libnetcdf, loaded by the first file (out_begin) */
 #include "dfle/file.h"
 
 /* One file being written: its temporary name and netCDF id. */
@@ -49,6 +48,8 @@ static int out_begin(nc_out *o, const char *path, dfle_error *err)
     const char *write_to;
     int st, s;
     o->ncid = -1;
+    if ((st = dfle_netcdf_load("netcdf", err)) != DFLE_OK)
+        return st;
     if ((st = dfle_file_begin_external(&o->file, path, "netcdf", &write_to, err)) != DFLE_OK)
         return st;
     if ((s = nc_create(write_to, NC_CLOBBER | NC_64BIT_OFFSET, &o->ncid)) != NC_NOERR) {

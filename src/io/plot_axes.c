@@ -103,6 +103,11 @@ void dfle_gp_axis_range(dfle_gp_axis *a, int log, double dlo, double dhi, double
     }
     a->lo = from_ax(ulo, log);
     a->hi = from_ax(uhi, log);
+    /* the ends the caller gave, exactly (not through log10 and back) */
+    if (user != NULL && user->has_lo)
+        a->lo = user->lo;
+    if (user != NULL && user->has_hi)
+        a->hi = user->hi;
 }
 
 /* A label of v in linear steps of `step`: fixed decimals for ordinary

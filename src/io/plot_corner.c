@@ -35,7 +35,9 @@ static int cmp_desc(const void *a, const void *b)
 }
 
 /* median^{+up}_{-down}, scaled by a power of ten when the numbers are
- * large or small, as enhanced text. */
+ * large or small, as enhanced text.  The scripts are set at 0.8 of the
+ * font: at full size gnuplot stacks them into each other and into the
+ * "×10" after them. */
 static void fmt_interval(char *buf, size_t cap, double med, double lo, double hi)
 {
     double ref = fabs(med) > 0 ? fabs(med) : fmax(fabs(lo), fabs(hi));
@@ -53,9 +55,10 @@ static void fmt_interval(char *buf, size_t cap, double med, double lo, double hi
     if (dec > 5)
         dec = 5;
     if (e != 0)
-        snprintf(buf, cap, "%.*f@^{+%.*f}_{-%.*f} ×10^{%d}", dec, med * s, dec, up, dec, dn, e);
+        snprintf(buf, cap, "%.*f@^{/*0.8 +%.*f}_{/*0.8 −%.*f} ×10^{%d}", dec, med * s, dec, up,
+                 dec, dn, e);
     else
-        snprintf(buf, cap, "%.*f@^{+%.*f}_{-%.*f}", dec, med * s, dec, up, dec, dn);
+        snprintf(buf, cap, "%.*f@^{/*0.8 +%.*f}_{/*0.8 −%.*f}", dec, med * s, dec, up, dec, dn);
 }
 
 /* The axis range of parameter j in axis units, padded 4 %. */

@@ -156,11 +156,12 @@ tests["network: the catchment's cells, fit, CSV"] = function()
     for _, a in ipairs(channels:get("A")) do T.ok(a >= 1e5) end
     local csv = T.tmpname(".csv")
     T.eq(channels:write_csv(csv), channels)
-    local text = assert(T.read_file(csv))
-    T.eq(text:match("^[^\n]*"), "E (m),N (m),x (m),d (m),z (m),A (m^2),S (-),receiver")
-    local rows = 0
-    for _ in text:gmatch("\n") do rows = rows + 1 end
-    T.eq(rows, channels.n + 1)
+    local tab = T.read_csv(csv)
+    T.eq(tab.header, "E,N,x,d,z,A,S,receiver")
+    T.eq(tab.units.A, "m^2"); T.eq(tab.units.receiver, nil)
+    T.eq(#tab.rows, channels.n)
+    -- where it came from: the DEM and the limits asked for
+    T.has(table.concat(tab.comments, "\n"), "# profile network: dem=", "A_min=100000 m^2")
     -- Without an outlet: all channels of the DEM.
     local all = dem:network{ A_min = 1e7 }
     T.ok(all.n > 0)

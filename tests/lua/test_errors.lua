@@ -483,6 +483,13 @@ tests["plot: the shared options refuse bad values, naming the option"] = functio
         "series[1]: width must be from 0 to 20 pt")
     bad({ series = { { x = { 1 }, hi = { 1 } } } }, "series[1] has hi but no lo")
     bad({ path = T.tmpname(".jpg") }, ".png, .pdf or .svg")
+    bad({ crange = { 3, 1 } }, "crange must be increasing")
+    bad({ clog = true, crange = { 0, 1 } }, "crange must be > 0")
+    bad({ cticks = "x" }, "cticks must be a spacing")
+    bad({ xformat = 5 }, "'xformat' must be a string")
+    bad({ cformat = {} }, "'cformat' must be a string")
+    bad({ series = { { x = { 1 }, y = { 1 }, marker_size = 100 } } },
+        "series[1]: marker_size must be from 0 to 50 pt")
     -- the other figures take the same options and give the same messages
     local m = small_model()
     raises(function() return dfle.plot.profile(m, T.tmpname(".png"), { legend = "up" }) end,
@@ -495,6 +502,18 @@ tests["plot: the shared options refuse bad values, naming the option"] = functio
            "images[1] must be a path")
     raises(function() return dfle.plot.sheet{ path = T.tmpname(".png"), images = { "a.png" }, xlog = true } end,
            "unknown parameter 'xlog'")
+    raises(function() return dfle.plot.sheet{ path = T.tmpname(".png"), images = { "a.png" }, columns = 0 } end,
+           "dfle.plot.sheet", "columns must be a whole number")
+    raises(function() return dfle.plot.sheet{ path = T.tmpname(".png"), images = { "a.png" }, titles = { 5 } } end,
+           "titles[1] must be a string")
+    raises(function() return dfle.plot.panels{ path = T.tmpname(".png"), panels = { { series = S, weight = -1 } } } end,
+           "panel 1: weight must be >= 0")
+    local pm = dfle.model{ channel = dfle.channel{ dx = 50 }, U = 5e-4,
+                           router = dfle.router.process{ M0 = 200 },
+                           law = dfle.law.power{ k_df = 1e-4, alpha = 6, beta = 1 } }
+    local flow = dfle.router.process{ M0 = 200 }:route(pm, { snapshots = { 10 } })
+    T.raises_here(function() return dfle.plot.flow(pm, flow, T.tmpname(".png"), { exaggeration = 0 }) end,
+                  "dfle.plot.flow", "exaggeration must be > 0")
     raises(function() return dfle.plot.label("Q_s") end, "no house label for 'Q_s'", "A, S")
 end
 

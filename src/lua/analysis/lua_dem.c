@@ -480,13 +480,31 @@ static int l_profile_slope_area(lua_State *L)
     return 1;
 }
 
+/* p:write_csv(path [, { record = true | false | "p.json" }]) */
 static int l_profile_write_csv(lua_State *L)
 {
+    static const char *const keys[] = {"record", NULL};
     dfle_profile *p = check_profile(L, 1);
     const char *path = dfle_lua_check_string(L, 2, "profile:write_csv", "the path");
+    dfle_record *rec;
+    const char *jpath;
     dfle_error err;
-    if (dfle_profile_write_csv(p, path, &err) != DFLE_OK)
+
+    lua_settop(L, 3);
+    if (!lua_isnil(L, 3)) {
+        luaL_checktype(L, 3, LUA_TTABLE);
+        dfle_lua_read_params(L, 3, "profile:write_csv", NULL, 0, keys);
+    }
+    rec = dfle_lua_push_record(L, dfle_profile_is_network(p)
+                                      ? "DEM channel network: one row per cell, each before "
+                                        "its receiver"
+                                      : "DEM channel profile: one row per cell, from the head "
+                                        "to the outlet");
+    dfle_profile_describe(p, rec);
+    jpath = dfle_lua_record_path(L, rec, 3, path, "profile:write_csv");
+    if (dfle_profile_write_csv(p, path, rec, &err) != DFLE_OK)
         return dfle_lua_raise(L, &err);
+    dfle_lua_record_done(L, rec, path, jpath);
     dfle_lua_note(L, DFLE_LUA_DETAIL, "wrote %s (%zu cells)", path, dfle_profile_size(p));
     lua_settop(L, 1);
     return 1;

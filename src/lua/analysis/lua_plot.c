@@ -74,6 +74,7 @@ static int l_plot_slope_area(lua_State *L)
     dfle_bins_release(&bins);
     if (st != DFLE_OK)
         return dfle_lua_raise(L, &err);
+    dfle_lua_note_file(L, path); /* for run records */
     return 0;
 }
 
@@ -92,6 +93,7 @@ static int l_plot_profile(lua_State *L)
     S = dfle_lua_model_field(L, 1, DFLE_FIELD_S, "dfle.plot.profile");
     if (dfle_plot_profile(path, &o, dfle_model_size(m), x, z, S, &err) != DFLE_OK)
         return dfle_lua_raise(L, &err);
+    dfle_lua_note_file(L, path); /* for run records */
     return 0;
 }
 
@@ -166,18 +168,24 @@ static int l_plot_flow(lua_State *L)
                 luaL_error(L, "dfle.plot.flow: snapshot %d has %d depths, the model %d nodes",
                            (int)j, (int)nh, (int)n);
             surf = lua_newuserdatauv(L, n * sizeof *surf, 0);
+            size_t wet = 0;
             for (size_t i = 0; i < n; i++) {
                 if (!(h[i] >= 1e-3))
                     h[i] = NAN; /* no flow here (under 1 mm): draw nothing */
                 else
-                    reach = fmax(reach, x[i]);
+                    reach = fmax(reach, x[i]), wet++;
                 surf[i] = z[i] + e * h[i];
             }
+            /* a flow on one or two nodes (a coarse grid's first step) is
+             * no line, or a dot-long one: markers show it */
+            int style = wet < 3 ? DFLE_PLOT_LINESPOINTS : DFLE_PLOT_LINES;
             snprintf(labels + k * 48, 48, "{/:Italic t} = %.3g s", t);
-            top[k + 2] = (dfle_plot_series){.n = n, .x = x, .y = surf, .style = DFLE_PLOT_LINES,
-                                            .rgb = NULL, .width = 1.5};
+            top[k + 2] = (dfle_plot_series){.n = n, .x = x, .y = surf, .style = style,
+                                            .rgb = NULL, .width = 1.5,
+                                            .marker = DFLE_MARKER_CIRCLE};
             bot[k] = (dfle_plot_series){.label = labels + k * 48, .n = n, .x = x, .y = h,
-                                        .style = DFLE_PLOT_LINES, .width = 1.5};
+                                        .style = style, .width = 1.5,
+                                        .marker = DFLE_MARKER_CIRCLE};
             k++;
             /* leave the arrays on the stack: they back the series */
         }
@@ -214,8 +222,13 @@ static int l_plot_flow(lua_State *L)
         o.x.has_hi = 1;
         o.x.hi = fmin(x[n - 1], x[0] + 1.1 * (reach - x[0]));
     }
+    if (!o.x.has_lo && !(o.x.has_hi && o.x.hi <= x[0])) { /* from the head, markers or not */
+        o.x.has_lo = 1;
+        o.x.lo = x[0];
+    }
     if (dfle_plot_panels(path, &o, panels, 2, &err) != DFLE_OK)
         return dfle_lua_raise(L, &err);
+    dfle_lua_note_file(L, path); /* for run records */
     return 0;
 }
 
@@ -267,6 +280,7 @@ static int l_plot_xy(lua_State *L)
     series = read_series(L, 1, "plot.xy", "series", &ns);
     if (dfle_plot_xy(path, &o, series, ns, &err) != DFLE_OK)
         return dfle_lua_raise(L, &err);
+    dfle_lua_note_file(L, path); /* for run records */
     return 0;
 }
 
@@ -318,6 +332,7 @@ static int l_plot_panels(lua_State *L)
     }
     if (dfle_plot_panels(path, &o, panels, np, &err) != DFLE_OK)
         return dfle_lua_raise(L, &err);
+    dfle_lua_note_file(L, path); /* for run records */
     return 0;
 }
 
@@ -366,6 +381,7 @@ static int l_plot_sheet(lua_State *L)
     }
     if (dfle_plot_sheet(path, &o, paths, titles, n, (size_t)columns, &err) != DFLE_OK)
         return dfle_lua_raise(L, &err);
+    dfle_lua_note_file(L, path); /* for run records */
     return 0;
 }
 

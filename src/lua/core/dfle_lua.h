@@ -35,6 +35,7 @@
 #include "dfle/law.h"
 #include "dfle/model.h"
 #include "dfle/plot.h"
+#include "dfle/record.h"
 #include "dfle/solver.h"
 #include "dfle/router.h"
 
@@ -274,6 +275,53 @@ int dfle_lua_push_param_field(lua_State *L, const char *name, dfle_lua_params_fn
 void dfle_lua_push_described(lua_State *L, int obj, const char *prefix, const char *name,
                              dfle_lua_params_fn fn, const void *comp);
 
+/* --- lua_record.c: records of what produced an output --- */
+
+/* The command line that runs the script (argv[script] the script), set
+ * by the host before the script runs; without it records take the
+ * global `arg` (dfle loaded into a plain lua). */
+void dfle_lua_set_command(lua_State *L, char **argv, int argc, int script);
+
+/* Push a new record (a userdata that frees it) stamped with the version,
+ * the date, `about` (may be NULL), the command, the script and the
+ * working directory; returns it.  Raises if memory runs out. */
+dfle_record *dfle_lua_push_record(lua_State *L, const char *about);
+/* The same without a stamp: an empty record. */
+dfle_record *dfle_lua_push_empty_record(lua_State *L);
+
+/* Add the entries of the table at t to rec's current section, sorted by
+ * key (as parameters if `params`): numbers, booleans and strings as
+ * they are, anything else as its type name. */
+void dfle_lua_record_table(lua_State *L, dfle_record *rec, int t, int params);
+/* The value at v as entry `key` of rec's current section, as
+ * dfle_lua_record_table does it. */
+void dfle_lua_record_value(lua_State *L, dfle_record *rec, const char *key, int v, int params);
+/* The params a component written in Lua keeps (user value 2 of its
+ * object at obj), as parameters of rec's current section. */
+void dfle_lua_record_own_params(lua_State *L, dfle_record *rec, int obj);
+
+/* Remember that the script wrote `path` (records list the files). */
+void dfle_lua_note_file(lua_State *L, const char *path);
+
+/* Where the JSON record of the output `path` goes, from the option
+ * `record` of the table at opts (absent or true: beside it, "p.csv" ->
+ * "p.json", anything else + ".json", none beside a device or a pipe;
+ * false: none; a string: there), pushed (or nil) and returned; when
+ * there is one, rec names it at the top level ("record").  Raises for a
+ * `record` of another type, naming `fn`. */
+const char *dfle_lua_record_path(lua_State *L, dfle_record *rec, int opts, const char *path,
+                                 const char *fn);
+/* After `output` was written with rec: write the JSON record at jpath
+ * (NULL: none) with the output and the files written so far; note the
+ * files.  Raises if the record cannot be written. */
+void dfle_lua_record_done(lua_State *L, dfle_record *rec, const char *output, const char *jpath);
+void dfle_lua_write_record(lua_State *L, dfle_record *rec, const char *output, const char *jpath);
+
+/* (lua_model.c) The model at idx into rec (dfle_model_describe, the params
+ * of components written in Lua, a U(t) function, and the last run since
+ * the state was last set: section "run"). */
+void dfle_lua_record_model(lua_State *L, dfle_record *rec, int idx);
+
 /* --- lua_state.c: what the binding keeps per lua_State --- */
 
 /* A C pointer (host data that outlives the state) in the registry under
@@ -347,6 +395,7 @@ void dfle_lua_open_analysis(lua_State *L);
 void dfle_lua_open_plot(lua_State *L);
 void dfle_lua_open_sampling(lua_State *L);
 void dfle_lua_open_args(lua_State *L); /* dfle.args, dfle.mkdir (lua_args.c) */
+void dfle_lua_open_write_csv(lua_State *L); /* dfle.write_csv (lua_write_csv.c) */
 void dfle_lua_open_dem(lua_State *L);
 void dfle_lua_open_landscape(lua_State *L);
 void dfle_lua_open_ensemble(lua_State *L); /* after sampling: wraps dfle.pawn */

@@ -35,6 +35,7 @@ int luaopen_dfle(lua_State *L)
     dfle_lua_open_plot(L);
     dfle_lua_open_sampling(L);
     dfle_lua_open_args(L);
+    dfle_lua_open_write_csv(L);
     dfle_lua_open_dem(L);
     dfle_lua_open_landscape(L);
     dfle_lua_open_ensemble(L);

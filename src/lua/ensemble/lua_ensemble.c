@@ -34,6 +34,59 @@
 
 #include "lua/ensemble/lua_ensemble_internal.h"
 
+/* The counts of the result table at res into rec's current section, and
+ * its rows per status as section "status". */
+static void record_counts(lua_State *L, dfle_record *rec, int res)
+{
+    static const char *const keys[] = {"n", "count", "ok", "failed", "ran"};
+    for (int k = 0; k < 5; k++) {
+        lua_getfield(L, res, keys[k]);
+        dfle_record_number(rec, keys[k], lua_tonumber(L, -1), NULL);
+        lua_pop(L, 1);
+    }
+    lua_getfield(L, res, "complete");
+    dfle_record_bool(rec, "complete", lua_toboolean(L, -1));
+    lua_getfield(L, res, "status");
+    dfle_record_section(rec, "status", NULL);
+    dfle_lua_record_table(L, rec, -1, 0);
+    lua_pop(L, 2);
+}
+
+/* The JSON record of a finished dfle.ensemble (the table at 1, its
+ * context at ctx, its result at res): what ran it, the design, the
+ * options and the counts.  The CSV file's own comment lines carry only
+ * what is the same for every run (the date and command are here). */
+static void ensemble_record(lua_State *L, int ctx, int res, const char *path, int workers)
+{
+    const dfle_lua_ensemble_host *host = dfle_lua_ens_host(L);
+    dfle_record *rec = dfle_lua_push_record(L, "dfle.ensemble: one row per sample, in index "
+                                               "order");
+    const char *jpath;
+    int top = lua_gettop(L);
+
+    dfle_record_section(rec, "ensemble", NULL);
+    lua_getfield(L, ctx, "meta");
+    dfle_record_text(rec, "meta", lua_tostring(L, -1));
+    dfle_record_number(rec, "workers", workers, NULL);
+    if (host != NULL && host->shard_n > 1) {
+        char shard[64];
+        snprintf(shard, sizeof shard, "%zu/%zu", host->shard_i, host->shard_n);
+        dfle_record_text(rec, "shard", shard);
+    }
+    record_counts(L, rec, res);
+    for (int k = 0; k < 2; k++) {
+        const char *key = k == 0 ? "run" : "fit";
+        if (lua_getfield(L, 1, key) == LUA_TTABLE) {
+            dfle_record_section(rec, key, NULL);
+            dfle_lua_record_table(L, rec, -1, 1);
+        }
+        lua_pop(L, 1);
+    }
+    jpath = dfle_lua_record_path(L, rec, 1, path, "ensemble");
+    dfle_lua_record_done(L, rec, path, jpath);
+    lua_settop(L, top - 1);
+}
+
 /* ------------------------------------------------------------------ */
 /* dfle.ensemble                                                       */
 
@@ -65,10 +118,11 @@ static int l_ensemble(lua_State *L)
     dfle_lua_check_interrupt(L, "ensemble");
     started = dfle_lua_ens_now();
     box = dfle_lua_ens_new_box(L);
+    lua_getfield(L, ctx, "comments");
     lua_getfield(L, ctx, "meta");
     lua_getfield(L, ctx, "header");
-    if (dfle_ens_file_open(path, lua_tostring(L, -2), lua_tostring(L, -1), (size_t)s.n, s.resume,
-                           &box->file, &err) != DFLE_OK ||
+    if (dfle_ens_file_open(path, lua_tostring(L, -2), lua_tostring(L, -3), lua_tostring(L, -1),
+                           (size_t)s.n, s.resume, &box->file, &err) != DFLE_OK ||
         dfle_ens_queue_new((size_t)s.n, host ? host->shard_i : 0, host ? host->shard_n : 0,
                            box->file, s.limit, &box->queue, &err) != DFLE_OK)
         return luaL_error(L, "dfle.ensemble: %s", err.msg);
@@ -162,6 +216,7 @@ static int l_ensemble(lua_State *L)
                   ran == 1 ? "" : "s", dfle_lua_ens_now() - started);
     dfle_lua_ens_push_result(L, "ensemble", path, host ? host->shard_i : 0, host ? host->shard_n : 0,
                 (lua_Integer)ran);
+    ensemble_record(L, ctx, lua_gettop(L), path, nw);
     return 1;
 }
 
@@ -170,7 +225,7 @@ static int l_gather(lua_State *L)
 {
     double shards = 0;
     const dfle_lua_param nums[] = {{"shards", &shards}};
-    static const char *const other[] = {"files", "out", NULL};
+    static const char *const other[] = {"files", "out", "record", NULL};
     const char **files;
     size_t nf;
     dfle_error err;
@@ -210,6 +265,18 @@ static int l_gather(lua_State *L)
     if (dfle_ens_gather(files, nf, out, NULL, &err) != DFLE_OK)
         return luaL_error(L, "dfle.gather: %s", err.msg);
     dfle_lua_ens_push_result(L, "gather", out, 0, 0, 0);
+    {
+        int res = lua_gettop(L);
+        dfle_record *rec = dfle_lua_push_record(L, "dfle.gather: the rows of the shards, in "
+                                                   "index order");
+        const char *jpath;
+        dfle_record_section(rec, "gather", NULL);
+        dfle_record_list(rec, "from", files, nf);
+        record_counts(L, rec, res);
+        jpath = dfle_lua_record_path(L, rec, 1, out, "gather");
+        dfle_lua_record_done(L, rec, out, jpath);
+        lua_settop(L, res);
+    }
     return 1;
 }
 

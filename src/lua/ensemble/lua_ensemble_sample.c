@@ -13,6 +13,10 @@
 
 #include "lua/ensemble/lua_ensemble_internal.h"
 
+#ifndef DFLE_VERSION
+#define DFLE_VERSION "unknown"
+#endif
+
 /* ------------------------------------------------------------------ */
 /* C resources held while Lua code runs: freed by __gc if it raises.   */
 
@@ -184,7 +188,119 @@ void dfle_lua_ens_push_shard_path(lua_State *L, const char *out, size_t i, size_
 }
 
 static const char *const spec_keys[] = {"params", "order", "centered", "build", "measure",
-                                        "outputs", "out", "resume", "run", "fit", NULL};
+                                        "outputs", "out", "resume", "run", "fit", "units",
+                                        "record", NULL};
+
+/* Units of the outputs dfle computes (fit, run, derived); a script's
+ * `units` names those of its parameters and measured outputs. */
+static const struct { const char *name, *unit; } output_units[] = {
+    {"S_df", "-"},   {"A_df", "m^2"},   {"a2", "-"},      {"r2", "-"},       {"r2_log", "-"},
+    {"rmse", "-"},   {"rmse_log", "-"}, {"S_max", "-"},   {"S_ch", "-"},
+    {"S_max_minus_S_ch", "-"},          {"time", "yr"},   {"rate_ratio", "-"},
+    {"dt_min", "yr"}, {"dt_max", "yr"}, {"runout_A", "m^2"}, {"runout_x", "m"}};
+
+/* Push the unit of column `name` (nil if none is known): the script's
+ * `units` (table at units, may be 0) first, then dfle's own. */
+static void push_unit(lua_State *L, int units, const char *name, int output)
+{
+    if (units != 0 && lua_getfield(L, units, name) == LUA_TSTRING)
+        return;
+    if (units != 0)
+        lua_pop(L, 1);
+    for (size_t k = 0; output && k < sizeof output_units / sizeof output_units[0]; k++)
+        if (strcmp(name, output_units[k].name) == 0) {
+            lua_pushstring(L, output_units[k].unit);
+            return;
+        }
+    lua_pushnil(L);
+}
+
+/* The comment lines under the meta line: the version that wrote the
+ * file, the run and fit options, the units of the columns.  Nothing
+ * that changes from one run to the next (no date, no command): a file
+ * must be the same for any number of workers, shards or resumes. */
+static void push_comments(lua_State *L, int arg, int names, int outputs, const char *fn)
+{
+    dfle_record *rec = dfle_lua_push_empty_record(L);
+    int box = lua_gettop(L), units = 0;
+    lua_Integer np = (lua_Integer)lua_rawlen(L, names), no = (lua_Integer)lua_rawlen(L, outputs);
+    const char **nm, **un;
+    char *text = NULL, *line;
+    size_t len = 0;
+    FILE *fp;
+
+    if (lua_getfield(L, arg, "units") != LUA_TNIL) {
+        if (!lua_istable(L, -1))
+            luaL_error(L, "dfle.%s: parameter 'units' must be a table {name = \"unit\"} of "
+                          "parameters and outputs", fn);
+        units = lua_gettop(L);
+        lua_pushnil(L);
+        while (lua_next(L, units) != 0) {
+            int known = 0;
+            if (lua_type(L, -2) != LUA_TSTRING || lua_type(L, -1) != LUA_TSTRING ||
+                strpbrk(lua_tostring(L, -1), ",=\r\n") != NULL)
+                luaL_error(L, "dfle.%s: units must map names to unit texts (\"m/yr\", \"-\"), "
+                              "without commas or '='", fn);
+            for (lua_Integer k = 1; k <= np + no && !known; k++) {
+                lua_geti(L, k <= np ? names : outputs, k <= np ? k : k - np);
+                known = strcmp(lua_tostring(L, -1), lua_tostring(L, -3)) == 0;
+                lua_pop(L, 1);
+            }
+            if (!known)
+                luaL_error(L, "dfle.%s: units names '%s', which is neither a parameter nor an "
+                              "output", fn, lua_tostring(L, -2));
+            lua_pop(L, 1);
+        }
+    } else {
+        lua_pop(L, 1);
+    }
+    dfle_record_text(rec, "dfle", DFLE_VERSION);
+    for (int k = 0; k < 2; k++) {
+        const char *key = k == 0 ? "run" : "fit";
+        if (lua_getfield(L, arg, key) == LUA_TTABLE) {
+            dfle_record_section(rec, key, NULL);
+            dfle_lua_record_table(L, rec, -1, 1);
+        }
+        lua_pop(L, 1);
+    }
+    /* Names and units of every column: index, parameters, outputs,
+     * status, reason (units only for quantities). */
+    nm = lua_newuserdatauv(L, 2 * (size_t)(np + no + 3) * sizeof *nm, 0);
+    un = nm + np + no + 3;
+    lua_newtable(L); /* anchors the unit texts */
+    nm[0] = "index", un[0] = NULL;
+    for (lua_Integer k = 1; k <= np + no; k++) {
+        lua_geti(L, k <= np ? names : outputs, k <= np ? k : k - np);
+        nm[k] = lua_tostring(L, -1); /* anchored in names / outputs */
+        lua_pop(L, 1);
+        push_unit(L, units, nm[k], k > np);
+        un[k] = lua_tostring(L, -1);
+        lua_rawseti(L, -2, k);
+    }
+    nm[np + no + 1] = "status", un[np + no + 1] = NULL;
+    nm[np + no + 2] = "reason", un[np + no + 2] = NULL;
+    fp = dfle_record_status(rec, NULL) == DFLE_OK ? open_memstream(&text, &len) : NULL;
+    if (fp == NULL) {
+        luaL_error(L, "dfle.%s: out of memory", fn);
+        return;
+    }
+    dfle_record_write_comments(rec, fp);
+    line = dfle_units_line(nm, un, (size_t)(np + no + 3));
+    if (line != NULL)
+        fprintf(fp, "%s\n", line);
+    free(line);
+    if (fclose(fp) != 0 || text == NULL) {
+        free(text);
+        luaL_error(L, "dfle.%s: out of memory", fn);
+    }
+    if (len > 0 && text[len - 1] == '\n')
+        len--; /* the lines, joined by '\n' */
+    lua_pushlstring(L, text, len);
+    free(text);
+    lua_replace(L, box);
+    lua_settop(L, box);
+}
+
 
 /* Read and check the table at arg; push the context table. */
 void dfle_lua_ens_read_spec(lua_State *L, int arg, const char *fn, spec *s,
@@ -302,6 +418,8 @@ void dfle_lua_ens_read_spec(lua_State *L, int arg, const char *fn, spec *s,
     push_meta(L, s, lua_gettop(L), names, outputs, centered);
     lua_setfield(L, ctx, "meta");
     lua_pop(L, 1);
+    push_comments(L, arg, names, outputs, fn);
+    lua_setfield(L, ctx, "comments");
     {
         dfle_lua_text pc;
         dfle_lua_text_init(L, &pc);

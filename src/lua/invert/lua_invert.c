@@ -78,7 +78,7 @@ static void open_chain(lua_State *L, int ctx, inv_run *R, const char *path)
             R->table = NULL;
         }
     }
-    if (dfle_ens_file_open(path, lua_tostring(L, -2), lua_tostring(L, -1), n, R->resume,
+    if (dfle_ens_file_open(path, lua_tostring(L, -2), NULL, lua_tostring(L, -1), n, R->resume,
                            &R->file, &err) != DFLE_OK)
         luaL_error(L, "dfle.invert: %s", err.msg);
     lua_pop(L, 2);

@@ -154,6 +154,7 @@ static int l_corner(lua_State *L)
     o.nbins = (size_t)dfle_lua_check_whole(L, nbins, "plot.corner", "nbins", 0, 1000);
     if (dfle_plot_corner(path, &po, &o, d, m, x, &err) != DFLE_OK)
         return dfle_lua_raise(L, &err);
+    dfle_lua_note_file(L, path); /* for run records */
     return 0;
 }
 
@@ -252,6 +253,7 @@ static int l_predictive(lua_State *L)
         o.width = 16, o.height = 11;
     if (dfle_plot_xy(path, &o, s, (size_t)ns, &err) != DFLE_OK)
         return dfle_lua_raise(L, &err);
+    dfle_lua_note_file(L, path); /* for run records */
     return 0;
 }
 

@@ -159,6 +159,19 @@ static int l_channel_get(lua_State *L)
     return 1;
 }
 
+static size_t channel_params(const void *ch, dfle_param *out, size_t cap)
+{
+    return dfle_channel_params(ch, out, cap);
+}
+
+/* ch:params(): the options it was built from (only dx for a channel
+ * given area or width: its geometry is the arrays). */
+static int l_channel_params(lua_State *L)
+{
+    dfle_lua_push_params(L, 1, channel_params, dfle_lua_check_channel(L, 1));
+    return 1;
+}
+
 static int l_channel_property(lua_State *L)
 {
     dfle_channel *ch = dfle_lua_check_channel(L, 1);
@@ -199,7 +212,8 @@ static void channel_free(void *obj) { dfle_channel_free(obj); }
 
 void dfle_lua_open_channel(lua_State *L)
 {
-    static const luaL_Reg methods[] = {{"get", l_channel_get}, {NULL, NULL}};
+    static const luaL_Reg methods[] = {
+        {"get", l_channel_get}, {"params", l_channel_params}, {NULL, NULL}};
     static const luaL_Reg meta[] = {{"__len", l_channel_len}, {NULL, NULL}};
     static const dfle_lua_type type = {
         .name = DFLE_LUA_CHANNEL, .free = channel_free, .describe = channel_describe,

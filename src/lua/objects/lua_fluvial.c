@@ -126,6 +126,18 @@ static int l_fluvial_steady_slope(lua_State *L)
     return 1;
 }
 
+static size_t fluvial_params(const void *fl, dfle_param *out, size_t cap)
+{
+    return dfle_fluvial_params(fl, out, cap);
+}
+
+/* fl:params(): Table G1 and the K, m_s, n_s they give, or K, m, n. */
+static int l_fluvial_params(lua_State *L)
+{
+    dfle_lua_push_params(L, 1, fluvial_params, dfle_lua_check_fluvial(L, 1));
+    return 1;
+}
+
 static void fluvial_describe(lua_State *L, void *obj)
 {
     const dfle_fluvial *fl = obj;
@@ -141,7 +153,8 @@ static void fluvial_free(void *obj) { dfle_fluvial_free(obj); }
 void dfle_lua_open_fluvial(lua_State *L)
 {
     static const luaL_Reg methods[] = {
-        {"rate", l_fluvial_rate}, {"steady_slope", l_fluvial_steady_slope}, {NULL, NULL}};
+        {"rate", l_fluvial_rate}, {"steady_slope", l_fluvial_steady_slope},
+        {"params", l_fluvial_params}, {NULL, NULL}};
     static const dfle_lua_type type = {
         .name = DFLE_LUA_FLUVIAL, .free = fluvial_free, .describe = fluvial_describe,
         .methods = methods, .property = l_fluvial_property,
