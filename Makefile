@@ -3,6 +3,8 @@
 #   make            library, CLI (build/dfle) and Lua module (build/dfle.so)
 #   make test       every test: cmocka binaries, Lua tests, example smoke runs
 #   make check      the same tests built with AddressSanitizer + UBSan
+#   make fuzz       the API fuzzer's long mode (50,000 calls) in that build
+#                   (tests/fuzz/; a short fixed-seed mode is part of test)
 #   make memcheck   the cmocka tests under valgrind
 #   make bench      benchmark figures (see bench/; C drivers go to build/bench/)
 #   make mpi        build/dfle-mpi, ensembles across MPI ranks (needs mpicc;
@@ -69,7 +71,7 @@ LIB_LUA   := $(BUILD)/libdfle_lua.a
 CLI       := $(BUILD)/dfle
 MODULE    := $(BUILD)/dfle.so
 
-.PHONY: figures all test check memcheck bench install uninstall clean mpi test-mpi FORCE
+.PHONY: figures all test check fuzz fuzz-long memcheck bench install uninstall clean mpi test-mpi FORCE
 # Keep test objects between builds (make would delete them as intermediates).
 .SECONDARY:
 all: $(CLI) $(MODULE) $(SHLIB)
@@ -185,9 +187,18 @@ ifneq ($(HAVE_MPICC),)
 	@$(MAKE) --no-print-directory test-mpi
 endif
 
+# The sanitizer build, for `make check` and `make fuzz`.
+SAN_BUILD := BUILD=build/san OPT=-O1 \
+    SANITIZE="-fsanitize=address,undefined -fno-omit-frame-pointer -fno-sanitize-recover=all"
+
 check:
-	$(MAKE) BUILD=build/san OPT=-O1 \
-	    SANITIZE="-fsanitize=address,undefined -fno-omit-frame-pointer -fno-sanitize-recover=all" test
+	$(MAKE) $(SAN_BUILD) test
+
+fuzz:
+	$(MAKE) $(SAN_BUILD) fuzz-long
+
+fuzz-long: all
+	@sh tests/fuzz/run.sh long $(CLI)
 
 memcheck: all $(TEST_BIN) $(GATE_TEST) $(MISSING_TEST)
 	@BUILD=$(BUILD) MEMCHECK=1 sh tests/run-tests.sh

@@ -26,10 +26,13 @@
 -- suite, the figure gallery) runs 4 truths with short chains: its
 -- coverage numbers and figure are not meaningful.
 
-local quick, outdir = false, "."
-for _, a in ipairs(arg) do
-  if a == "--quick" then quick = true else outdir = a end
-end
+local opts = dfle.args{
+  usage = "dfle examples/invert_coverage.lua [options] [output-directory]",
+  about = "Coverage of the inversion's 95 % intervals over synthetic data sets.",
+  flags = { quick = "4 truths, short chains (for the test suite and the gallery)" },
+  output = true,
+}
+local quick, outdir = opts.quick, opts.output
 
 local NSETS = quick and 4 or 60
 local LEVELS = { 0.2, 0.1, 0.05 }
@@ -110,10 +113,7 @@ print(("%d synthetic data sets (%d failed: %s), %d walkers x %d steps each, %d s
               SAMPLER.walkers, SAMPLER.steps, os.time() - t0))
 print(("%-8s %8s %8s %8s %8s %14s %10s"):format("sigma", "U", "k_df", "gamma", "sigma",
                                                  "U width (dex)", "tau"))
-local summary = assert(io.open(outdir .. "/coverage_summary.csv", "w"))
-summary:write("sigma,sets,coverage_U,coverage_k_df,coverage_gamma,coverage_sigma," ..
-              "median_width_U_dex,median_tau\n")
-local widths = {}
+local summary, widths = {}, {}
 for k, sigma in ipairs(LEVELS) do
   local function mean(col)
     local s = 0
@@ -131,10 +131,20 @@ for k, sigma in ipairs(LEVELS) do
   widths[k] = w
   print(("%-8.2f %8.3f %8.3f %8.3f %8.3f %14.3f %10.1f"):format(sigma, mean("U_in"),
         mean("kdf_in"), mean("gamma_in"), mean("sigma_in"), w, tau))
-  summary:write(("%g,%d,%.4f,%.4f,%.4f,%.4f,%.4f,%.2f\n"):format(sigma, #ok, mean("U_in"),
-                mean("kdf_in"), mean("gamma_in"), mean("sigma_in"), w, tau))
+  summary[#summary + 1] = { sigma = sigma, sets = #ok, coverage_U = mean("U_in"),
+                            coverage_k_df = mean("kdf_in"), coverage_gamma = mean("gamma_in"),
+                            coverage_sigma = mean("sigma_in"), median_width_U_dex = w,
+                            median_tau = tau }
 end
-summary:close()
+dfle.write_csv(outdir .. "/coverage_summary.csv", {
+  columns = { "sigma", "sets", "coverage_U", "coverage_k_df", "coverage_gamma", "coverage_sigma",
+              "median_width_U_dex", "median_tau" },
+  rows = summary,
+  units = { sigma = "-", sets = "-", coverage_U = "-", coverage_k_df = "-", coverage_gamma = "-",
+            coverage_sigma = "-", median_width_U_dex = "dex", median_tau = "steps" },
+  about = "coverage of the 95 % intervals and median width of U's, per noise level (sd of ln S)",
+  params = { walkers = SAMPLER.walkers, steps = SAMPLER.steps, burn = SAMPLER.burn },
+})
 
 -- The acceptance criteria of the study (meaningful for the full run).
 local cov = 0

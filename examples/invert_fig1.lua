@@ -25,25 +25,30 @@
 -- and fig1_invert_<run>_pp.png, and fig1_invert.csv (the posterior
 -- summaries).  The full run takes 10-20 minutes on two cores.  --quick (the test
 -- suite, the figure gallery) runs a very short chain on a coarse channel,
--- whose figures only show that they are drawn.  The DEM is found relative to this script
--- (../../shared/data/dem/) or in $DFLE_DATA_DIR/dem; without it the
--- script says so (and, in --quick mode, exits successfully).
+-- whose figures only show that they are drawn.  The DEM is read from
+-- --data DIR or $DFLE_DATA_DIR (the directory holding dem/); without it
+-- the script says so and stops.
 
-local quick, outdir = false, "."
-for _, a in ipairs(arg) do
-  if a == "--quick" then quick = true else outdir = a end
-end
+local opts = dfle.args{
+  usage = "dfle examples/invert_fig1.lua [options] [output-directory]",
+  about = "The posterior of U for the two Fig. 1 catchments of the Big Tujunga DEM.",
+  flags = { quick = "a very short chain on a coarse channel (for the test suite and the gallery)" },
+  options = { data = { "DIR", "the data directory, holding dem/ (default: $DFLE_DATA_DIR)",
+                       default = os.getenv("DFLE_DATA_DIR") } },
+  output = true,
+}
+local quick, outdir = opts.quick, opts.output
 
-local here = arg[0]:match("^(.*)/[^/]*$") or "."
-local data = os.getenv("DFLE_DATA_DIR") or (here .. "/../../shared/data")
-local path = data .. "/dem/srtm_bigtujunga30m_utm11.tif"
-local f = io.open(path, "rb")
-if f == nil then
-  print(("invert_fig1: the Big Tujunga DEM is not at %s; set DFLE_DATA_DIR to the directory " ..
-         "holding dem/srtm_bigtujunga30m_utm11.tif"):format(path))
-  os.exit(quick and 0 or 1)
+-- The DEM: --data DIR or $DFLE_DATA_DIR, the directory holding dem/.
+local path = (opts.data or "") .. "/dem/srtm_bigtujunga30m_utm11.tif"
+local probe = opts.data and io.open(path, "rb")
+if not probe then
+  io.stderr:write(("%s: needs the Big Tujunga DEM, dem/srtm_bigtujunga30m_utm11.tif: "
+                   .. "pass --data DIR or set DFLE_DATA_DIR to the directory holding dem/%s\n")
+                  :format(arg[0], opts.data and (" (not in " .. opts.data .. ")") or ""))
+  os.exit(2)
 end
-f:close()
+probe:close()
 
 local catchments = {
   { name = "black", E = 396887, N = 3799338 },
@@ -137,15 +142,23 @@ end
 
 if dfle.worker() then return end
 local csv = outdir .. "/fig1_invert.csv"
-local out = assert(io.open(csv, "w"))
-out:write("run,parameter,median,lo68,hi68,lo95,hi95,tau,steps,walkers\n")
+local table_rows = {}
 for _, r in ipairs(rows) do
   for _, name in ipairs(r[2].names) do
     local s = r[2].summary[name]
-    out:write(("%s,%s,%.6g,%.6g,%.6g,%.6g,%.6g,%.1f,%d,%d\n"):format(r[1].tag, name, s.median,
-              s.lo68, s.hi68, s.lo95, s.hi95, r[2].tau[name], r[2].steps, r[2].walkers))
+    table_rows[#table_rows + 1] = { run = r[1].tag, parameter = name, median = s.median,
+                                    lo68 = s.lo68, hi68 = s.hi68, lo95 = s.lo95, hi95 = s.hi95,
+                                    tau = r[2].tau[name], steps = r[2].steps,
+                                    walkers = r[2].walkers }
   end
 end
-out:close()
+dfle.write_csv(csv, {
+  columns = { "run", "parameter", "median", "lo68", "hi68", "lo95", "hi95", "tau", "steps",
+              "walkers" },
+  rows = table_rows,
+  units = { tau = "steps" },
+  about = "posterior summaries per run and parameter (each in the unit of its prior: U in " ..
+          "m/yr); 68 and 95 % central intervals",
+})
 print("wrote " .. csv .. ", fig1_invert_<run>_chain.csv, fig1_invert_<run>_corner.png, " ..
       "fig1_invert_<run>_pp.png")

@@ -18,10 +18,14 @@
 -- gallery run it; its figures only show that they are drawn); the full
 -- run takes about a minute on two cores.
 
-local quick, outdir = false, "."
-for _, a in ipairs(arg) do
-  if a == "--quick" then quick = true else outdir = a end
-end
+local opts = dfle.args{
+  usage = "dfle examples/invert_synthetic.lua [options] [output-directory]",
+  about = "An inversion whose answer is known: a synthetic profile inverted for U, k_df, gamma.",
+  flags = { quick = "a short chain (for the test suite and the gallery); the full run takes "
+                    .. "about a minute" },
+  output = true,
+}
+local quick, outdir = opts.quick, opts.output
 
 local truth = { U = 4e-4, k_df = 2e-4, gamma = 0.5 }
 local sigma = 0.1 -- noise sd of ln S
@@ -46,18 +50,18 @@ local m = build(truth, ch)
 assert(m:run_to_steady{}.converged)
 local bins = assert(dfle.fit_slope_area(m, { nbins = 30 })).bins
 math.randomseed(42)
--- (workers replaying the script need not write it again)
-local data = not dfle.worker() and assert(io.open(outdir .. "/synthetic_bins.csv", "w")) or nil
 local S = {}
 for i, s in ipairs(bins.S) do
   local u1, u2 = math.random(), math.random()
   S[i] = s * math.exp(sigma * math.sqrt(-2 * math.log(u1)) * math.cos(2 * math.pi * u2))
 end
-if data then
-  data:write("# synthetic binned slope-area data: truth U = 4e-4 m/yr, k_df = 2e-4, gamma = 0.5, ",
-             "sigma = 0.1\nA,S\n")
-  for i = 1, #S do data:write(("%.17g,%.17g\n"):format(bins.A[i], S[i])) end
-  data:close()
+-- (workers replaying the script need not write it again)
+if not dfle.worker() then
+  dfle.write_csv(outdir .. "/synthetic_bins.csv", {
+    columns = { "A", "S" }, data = { A = bins.A, S = S }, units = { A = "m^2", S = "-" },
+    about = "synthetic binned slope-area data (mean slope of 30 log bins times exp(sigma eps))",
+    params = { U = truth.U, k_df = truth.k_df, gamma = truth.gamma, sigma = sigma },
+  })
 end
 
 local res = dfle.invert{

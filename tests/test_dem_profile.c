@@ -6,9 +6,11 @@
  *
  * The test runner (tests/run-tests.sh) sets DFLE_DATA_DIR.
  */
+#include <errno.h>
 #include <math.h>
 #include <stdlib.h>
 #include <string.h>
+#include <sys/stat.h>
 #include <unistd.h>
 
 #include "dfle/analysis.h"
@@ -516,6 +518,22 @@ static void test_write_csv(void **state)
     }
     assert_int_equal(dfle_profile_write_csv(p, "/no/such/dir/p.csv", NULL, &err), DFLE_EIO);
     assert_msg_contains(err.msg, "/no/such/dir/p.csv");
+    assert_msg_contains(err.msg, strerror(ENOENT)); /* the system's reason */
+    /* Written through dfle_file like every output (found by the fuzzer:
+     * a plain fopen waited for ever on a FIFO nobody read, which an
+     * alarm ends here, and left half a file on a full disk). */
+    {
+        char dir[] = "/tmp/dfle_test_profile_XXXXXX", fifo[64];
+        assert_non_null(mkdtemp(dir));
+        snprintf(fifo, sizeof fifo, "%s/pipe", dir);
+        assert_int_equal(mkfifo(fifo, 0600), 0);
+        alarm(20);
+        assert_int_equal(dfle_profile_write_csv(p, fifo, NULL, &err), DFLE_EIO);
+        alarm(0);
+        assert_msg_contains(err.msg, "no process is reading");
+        remove(fifo);
+        rmdir(dir);
+    }
     dfle_profile_free(p);
 }
 

@@ -3,11 +3,14 @@
  * rows, resume over a truncated last line, the sorted rewrite, gather of
  * shards, and the index queue (shards, done samples, limit, threads).
  */
+#define _XOPEN_SOURCE 700 /* mknod */
 #include "dfle_test.h"
 
 #include <pthread.h>
 #include <stdlib.h>
 #include <string.h>
+#include <sys/stat.h>
+#include <sys/sysmacros.h> /* makedev */
 #include <unistd.h>
 
 #include "dfle/ensemble.h"
@@ -297,7 +300,8 @@ static void test_malformed_files(void **state)
 /* Two runs with one `out` once interleaved their rows (duplicates, a
  * torn line): the second must stop at once, saying why, and the first
  * must write on unharmed.  A device as `out` must be refused, never read
- * without end (/dev/zero) nor written into (/dev/full). */
+ * without end (a zero device) nor written into (a full one): nodes made
+ * here, never /dev's own (an earlier bug replaced /dev/null). */
 static void test_one_writer_per_file(void **state)
 {
     char p[128], r[64];
@@ -318,11 +322,16 @@ static void test_one_writer_per_file(void **state)
     assert_ok(dfle_ens_file_open(p, META, NULL, HEADER, 6, 1, &b, &err), &err);
     assert_int_equal(dfle_ens_file_ndone(b), 2);
     assert_ok(dfle_ens_file_close(b, 0, &err), &err);
-    for (int k = 0; k < 2; k++) {
-        const char *dev = k ? "/dev/full" : "/dev/zero";
+    for (int k = 0; k < 3; k++) {
+        char dev[128];
+        dfle_ens_table *t;
+        path(dev, sizeof dev, k == 0 ? "fifo" : k == 1 ? "zero" : "full");
+        if (k == 0)
+            assert_int_equal(mkfifo(dev, 0600), 0);
+        else if (mknod(dev, S_IFCHR | 0600, makedev(1, k == 1 ? 5 : 7)) != 0)
+            continue; /* not root: the FIFO alone */
         assert_int_equal(dfle_ens_file_open(dev, META, NULL, HEADER, 6, 1, &b, &err), DFLE_EINVAL);
         assert_msg_contains(err.msg, "regular file");
-        dfle_ens_table *t;
         assert_int_equal(dfle_ens_table_read(dev, &t, &err), DFLE_EIO);
         assert_msg_contains(err.msg, "not a regular file");
     }

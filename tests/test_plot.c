@@ -675,6 +675,13 @@ static void test_option_names(void **state)
     assert_string_equal(num, "1.42×10^{5}");
     dfle_plot_number(num, sizeof num, 0.5);
     assert_string_equal(num, "0.5");
+    /* not finite: a word, not a crash on an exponent that is not there */
+    dfle_plot_number(num, sizeof num, INFINITY);
+    assert_string_equal(num, "inf");
+    dfle_plot_number(num, sizeof num, -INFINITY);
+    assert_string_equal(num, "-inf");
+    dfle_plot_number(num, sizeof num, NAN);
+    assert_string_equal(num, "NaN");
 }
 
 /* Bad values of the shared options are refused before gnuplot starts,

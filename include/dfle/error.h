@@ -36,7 +36,8 @@ typedef struct dfle_error {
 } dfle_error;
 
 /* Record `code` and a printf-style message in `err` (which may be NULL).
- * Returns `code` so callers can write `return dfle_error_set(...)`. */
+ * A NaN formatted by %g, %f or %e reads "NaN" (printf says "nan" or
+ * "-nan").  Returns `code` so callers can write `return dfle_error_set(...)`. */
 int dfle_error_set(dfle_error *err, int code, const char *fmt, ...)
 #if defined(__GNUC__) || defined(__clang__)
     __attribute__((format(printf, 3, 4)))

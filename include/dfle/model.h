@@ -173,8 +173,9 @@ void dfle_model_advance_time(dfle_model *m, double dt);
  * field and time.  dfle_model_is_evaluated says whether that is needed. */
 int dfle_model_evaluate(dfle_model *m, dfle_error *err);
 int dfle_model_is_evaluated(const dfle_model *m);
-/* From the last evaluation: max over non-base nodes of |dz/dt| / U,
- * the number of those with S <= 0, and routings since creation. */
+/* From the last evaluation: max over non-base nodes of |dz/dt| / U
+ * (DBL_MAX when that overflows, for a U near the smallest double), the
+ * number of those with S <= 0, and routings since creation. */
 double dfle_model_rate_ratio(const dfle_model *m);
 size_t dfle_model_nonpositive_slopes(const dfle_model *m);
 size_t dfle_model_routings(const dfle_model *m);

@@ -149,7 +149,8 @@ const char *dfle_plot_label(const char *name, double *factor);
 const char *dfle_plot_label_name(size_t i);
 
 /* v as a label shows it: 3 significant digits, and large or small
- * values as enhanced text "1.42×10^{5}" rather than "1.42e+05". */
+ * values as enhanced text "1.42×10^{5}" rather than "1.42e+05";
+ * "inf", "-inf" or "NaN" for a value that is not finite. */
 void dfle_plot_number(char *buf, size_t cap, double v);
 
 /* Check options and series before anything is drawn: ranges finite and

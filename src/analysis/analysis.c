@@ -205,8 +205,10 @@ int dfle_bins_compute(size_t n, const double *A, const double *S,
         out->S_q25[j] = quantile_of_sorted(s, m, 0.25);
         out->S_q75[j] = quantile_of_sorted(s, m, 0.75);
         /* Flats (S = 0) have no logarithm: the log-space mean is that of
-         * the positive slopes. */
-        out->S_geomean[j] = positive > 0 ? exp(sum_lnS / (double)positive) : NAN;
+         * the positive slopes; a bin with none gets 0 (the limit of the
+         * product, and a value the log fit already leaves out) rather than
+         * a NaN that would travel into every file and plot. */
+        out->S_geomean[j] = positive > 0 ? exp(sum_lnS / (double)positive) : 0.0;
         out->count[j++] = m;
     }
     out->nbins = nbins;

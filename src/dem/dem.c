@@ -431,6 +431,11 @@ int dfle_dem_read(const char *path, const dfle_dem_read_opts *opts, dfle_dem **o
         st = dfle_error_set(err, DFLE_EIO, "dem: cannot read '%s': no such file", path);
     } else if (VSI_ISDIR(sb.st_mode)) {
         st = dfle_error_set(err, DFLE_EIO, "dem: cannot read '%s': it is a directory", path);
+    } else if (!VSI_ISREG(sb.st_mode)) {
+        /* GDAL would open a FIFO and wait for a writer for ever, or read
+         * a device such as /dev/zero: rasters are files. */
+        st = dfle_error_set(err, DFLE_EIO, "dem: cannot read '%s': not a regular file (a "
+                            "device, pipe or socket)", path);
     } else if ((ds = GDALOpenEx(path, GDAL_OF_RASTER | GDAL_OF_READONLY, NULL, NULL, NULL)) ==
                NULL) {
         st = dfle_error_set(err, DFLE_EIO, "dem: cannot read '%s': %s", path,

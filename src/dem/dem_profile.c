@@ -20,6 +20,7 @@
 #include "dem/dem_internal.h"
 
 #include "dfle/record.h"
+#include "dfle/file.h"
 
 #include <math.h>
 #include <stdio.h>

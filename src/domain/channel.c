@@ -47,9 +47,16 @@ void dfle_channel_opts_default(dfle_channel_opts *o)
 static int channel_alloc(size_t n, double dx, dfle_channel **out,
                          dfle_error *err)
 {
-    dfle_channel *ch = malloc(sizeof *ch);
-    double *block = calloc(3 * n, sizeof *block);
+    dfle_channel *ch;
+    double *block;
 
+    /* dx is finite, but (n - 1) dx need not be (dx = 1e308): x would be
+     * inf beyond some node, and every distance after it. */
+    if (!isfinite((double)(n - 1) * dx))
+        return dfle_error_set(err, DFLE_EINVAL, "channel: %zu nodes of dx = %g m reach beyond "
+                              "the largest number (x at the outlet is not finite)", n, dx);
+    ch = malloc(sizeof *ch);
+    block = calloc(3 * n, sizeof *block);
     if (ch == NULL || block == NULL) {
         free(ch);
         free(block);

@@ -392,11 +392,17 @@ int dfle_ens_file_close(dfle_ens_file *f, int sort, dfle_error *err)
 
     if (f == NULL)
         return DFLE_OK;
-    if (fclose(f->fp) != 0)
+    /* The sorted rewrite happens while the lock is held (it goes with
+     * the descriptor fclose closes): a second run let in between would
+     * lock the old file, which the rename then unlinks, and append its
+     * rows where nobody reads them. */
+    if (fflush(f->fp) != 0)
         st = dfle_error_set(err, DFLE_EIO, "%s: cannot write: %s", f->path, strerror(errno));
-    f->fp = NULL;
     if (st == DFLE_OK && sort && (st = dfle_ens_table_read(f->path, &t, err)) == DFLE_OK)
         st = dfle_ens_table_write(t, f->path, err);
+    if (fclose(f->fp) != 0 && st == DFLE_OK)
+        st = dfle_error_set(err, DFLE_EIO, "%s: cannot write: %s", f->path, strerror(errno));
+    f->fp = NULL;
     dfle_ens_table_free(t);
     file_free(f);
     return st;

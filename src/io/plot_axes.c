@@ -54,6 +54,10 @@ double dfle_gp_text_em(const char *s)
 void dfle_plot_number(char *buf, size_t cap, double v)
 {
     double a = fabs(v);
+    if (!isfinite(v)) { /* "%.2e" of these has no exponent to split off */
+        snprintf(buf, cap, "%s", isnan(v) ? "NaN" : v > 0 ? "inf" : "-inf");
+        return;
+    }
     if (a == 0 || (a >= 1e-3 && a < 1e4)) {
         snprintf(buf, cap, "%.3g", v);
         return;

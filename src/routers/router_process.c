@@ -379,6 +379,10 @@ int dfle_router_process_set_snapshots(dfle_router *rt, size_t k, const double *t
 
     if (rt == NULL || dfle_router_get_ops(rt) != &process_ops)
         return dfle_error_set(err, DFLE_EINVAL, "router: snapshots need a process-based router");
+    /* The running routing writes into the snapshot arrays. */
+    if (dfle_router_is_routing(rt))
+        return dfle_error_set(err, DFLE_ECALLBACK, "router.process: snapshots cannot change "
+                              "while it is routing (from inside the erosion law's integrand)");
     pr = dfle_router_state(rt);
     if (k > MAX_SNAPSHOTS)
         return dfle_error_set(err, DFLE_EINVAL, "router.process: at most %d snapshots (got %zu)",

@@ -535,6 +535,8 @@ tests["plot: PDF and SVG from a script, sized in cm and inches"] = function()
     T.eq(label, "Uplift rate, {/:Italic U} (mm/yr)")
     T.eq(factor, 1000)
     T.eq(dfle.plot.number(1.42e5), "1.42×10^{5}")
+    T.eq(dfle.plot.number(1 / 0), "inf")
+    T.eq(dfle.plot.number(0 / 0), "NaN")
 end
 
 -- Options with a misspelt key are silently ignored by plot.profile.

@@ -334,7 +334,7 @@ tests["predict and the two figures"] = function()
 end
 
 tests["DEM profile: binned by nbins, the default channel on its main stem"] = function()
-    local path = T.root .. "/../shared/data/dem/srtm_bigtujunga30m_utm11.tif"
+    local path = T.data .. "/dem/srtm_bigtujunga30m_utm11.tif"
     if not T.read_file(path) then
         print("  (skipped: " .. path .. " not found)")
         return

@@ -102,7 +102,7 @@ end
 
 tests["method and record errors name themselves"] = function()
     local m = model()
-    T.raises_here(function() return m:run_to_steady{ method = "newton" } end, "method 'newton' is not one of explicit, implicit, direct, auto")
+    T.raises_here(function() return m:run_to_steady{ method = "newton" } end, "method must be 'explicit', 'implicit', 'direct' or 'auto' (got 'newton')")
     T.raises_here(function() return m:run_to_steady{ method = 3 } end, "'method' must be a string")
     T.raises_here(function() return m:run{ years = 10, method = "direct" } end, "steady states only")
     T.raises_here(function() return m:run{ years = 10, record = { 5, 2 } } end, "record times must increase")

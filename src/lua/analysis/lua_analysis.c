@@ -371,6 +371,20 @@ static void analytical_params(lua_State *L, dfle_analytical_params *p, double *A
     }
 }
 
+/* Eq. (19) at one area, raising when it is not finite: parameters that
+ * are each valid can overflow the power (U = 1e300, a tiny k_df). */
+static double slope_at(lua_State *L, const dfle_analytical_params *p, double A)
+{
+    double S = dfle_analytical_slope(p, A);
+    if (!isfinite(S))
+        luaL_error(L, "dfle.analytical_slope: S of Eq. (19) is not finite (%s) at A = %s m^2 "
+                      "for U = %s m/yr, k_df = %s, alpha = %s, beta = %s",
+                   dfle_lua_number_text(L, S), dfle_lua_number_text(L, A),
+                   dfle_lua_number_text(L, p->U), dfle_lua_number_text(L, p->k_df),
+                   dfle_lua_number_text(L, p->alpha), dfle_lua_number_text(L, p->beta));
+    return S;
+}
+
 /* dfle.analytical_slope(rt, law, {U =, A = number | array}) -> S */
 static int l_analytical_slope(lua_State *L)
 {
@@ -383,7 +397,7 @@ static int l_analytical_slope(lua_State *L)
         if (!(isfinite(A) && A > 0))
             luaL_error(L, "dfle.analytical_slope: A must be a finite area > 0 m^2 (got %s)",
                        dfle_lua_number_text(L, A));
-        lua_pushnumber(L, dfle_analytical_slope(&p, A));
+        lua_pushnumber(L, slope_at(L, &p, A));
         return 1;
     }
     if (lua_istable(L, -1)) {
@@ -393,7 +407,7 @@ static int l_analytical_slope(lua_State *L)
             if (!(isfinite(a[i]) && a[i] > 0))
                 luaL_error(L, "dfle.analytical_slope: A[%d] must be a finite area > 0 m^2 (got %s)",
                            (int)i + 1, dfle_lua_number_text(L, a[i]));
-            a[i] = dfle_analytical_slope(&p, a[i]);
+            a[i] = slope_at(L, &p, a[i]);
         }
         dfle_lua_push_array(L, a, n);
         return 1;
@@ -406,8 +420,15 @@ static int l_analytical_slope(lua_State *L)
 static int l_analytical_exponent(lua_State *L)
 {
     dfle_analytical_params p;
+    double N;
     analytical_params(L, &p, NULL);
-    lua_pushnumber(L, dfle_analytical_N(&p));
+    N = dfle_analytical_N(&p);
+    if (!isfinite(N))
+        luaL_error(L, "dfle.analytical_exponent: N of Eq. (20) is not finite (%s) for alpha = "
+                      "%s, beta = %s, b = %s", dfle_lua_number_text(L, N),
+                   dfle_lua_number_text(L, p.alpha), dfle_lua_number_text(L, p.beta),
+                   dfle_lua_number_text(L, p.b));
+    lua_pushnumber(L, N);
     return 1;
 }
 

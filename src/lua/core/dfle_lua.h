@@ -90,17 +90,24 @@ typedef struct dfle_lua_type {
 /* Lifetime while in use (C objects point at each other, and Lua code
  * runs in the middle of C calls: U(t), laws and routers written in Lua).
  * An object is freed only when nothing uses it: __gc and __close of an
- * object that a model holds, or that a running call uses, only mark it,
- * and the last user frees it.  __close of a busy object raises (a model
- * closed from inside its own U(t) or law).
+ * object that a model holds, or that a running call uses, only mark it
+ * ("doomed").  The last holder to let go frees it; an object a call was
+ * using is closed when the call ends its use, but freed only by its next
+ * __gc (the collector's, once unreachable), because the call may still
+ * read it (a model's field values, a router's report) after end_use.
+ * __close of a busy object raises (a model closed from inside its own
+ * U(t) or law).
  *
  * dfle_lua_begin_use marks the object at idx busy for a call that may run
  * Lua code, raising if it is busy already (re-entry: m:run inside its own
- * U(t)); `what` names the call in that message.  dfle_lua_end_use undoes
- * it (never raises) and frees a doomed object.  Between the two, nothing
- * may raise: collect the error status and raise after end_use. */
+ * U(t)) or closed; `what` names the call in that message.
+ * dfle_lua_end_use undoes it (never raises, never frees).  Between the
+ * two, nothing may raise: collect the error status and raise after
+ * end_use. */
 dfle_lua_object *dfle_lua_begin_use(lua_State *L, int idx, const char *what);
 void dfle_lua_end_use(lua_State *L, int idx);
+/* The C object of the dfle object at idx, or NULL if it is closed. */
+void *dfle_lua_object_ptr(lua_State *L, int idx);
 /* The n values of field `field` of the model at idx, evaluated if need
  * be (which may run Lua laws and routers: the model is in use meanwhile);
  * raises on error, naming `what`. */

@@ -214,6 +214,10 @@ size_t dfle_lua_slope_area(lua_State *L, int arg, const char *fn, const double *
      * own pairs through p:slope_area(), a table read like a user's. --- */
     if (luaL_testudata(L, arg, "dfle.profile") != NULL ||
         luaL_testudata(L, arg, "dfle.landscape") != NULL) { /* lua_landscape.c: channel cells */
+        /* Closed, it would fail inside the call below, which has no
+         * position of the script's to give. */
+        dfle_lua_check_object(L, arg, luaL_testudata(L, arg, "dfle.profile") != NULL
+                                          ? "dfle.profile" : "dfle.landscape");
         lua_getfield(L, arg, "slope_area");
         lua_pushvalue(L, arg);
         lua_call(L, 1, 1);

@@ -280,10 +280,43 @@ static int l_gather(lua_State *L)
     return 1;
 }
 
+/* The plain dfle.pawn (upvalue 1 of l_pawn_ensemble) on the nargs values
+ * on top of the stack, leaving nres results; its errors get the
+ * script's position here (called from C, they carry none). */
+static void plain_pawn(lua_State *L, int nargs, int nres)
+{
+    lua_pushvalue(L, lua_upvalueindex(1));
+    lua_insert(L, -nargs - 1);
+    if (lua_pcall(L, nargs, nres, 0) != LUA_OK) {
+        if (lua_type(L, -1) == LUA_TSTRING) {
+            luaL_where(L, 1);
+            lua_insert(L, -2);
+            lua_concat(L, 2);
+        }
+        lua_error(L);
+    }
+}
+
+/* The array of names at idx: a table of strings (the script's options,
+ * or the result table, which a script may have changed). */
+static void check_names(lua_State *L, int idx, const char *what)
+{
+    lua_Integer n;
+    if (!lua_istable(L, idx))
+        luaL_error(L, "dfle.pawn: %s must be an array of names, got %s", what,
+                   dfle_lua_typename(L, idx));
+    n = (lua_Integer)lua_rawlen(L, idx);
+    for (lua_Integer i = 1; i <= n; i++) {
+        if (lua_rawgeti(L, idx, i) != LUA_TSTRING)
+            luaL_error(L, "dfle.pawn: %s[%d] must be a name, got %s", what, (int)i,
+                       dfle_lua_typename(L, -1));
+        lua_pop(L, 1);
+    }
+}
+
 /* dfle.pawn(ens, {outputs =, inputs =, S =, ...}): PAWN of each output
  * on the rows with status "ok"; anything else goes to the plain
- * dfle.pawn (upvalue 1), whose errors get the script's position here
- * (called from C, they carry none). */
+ * dfle.pawn. */
 static int l_pawn_ensemble(lua_State *L)
 {
     static const char *const keys[] = {"outputs", "inputs", NULL};
@@ -298,43 +331,39 @@ static int l_pawn_ensemble(lua_State *L)
         lua_pop(L, 2);
     }
     if (!is_ens) {
-        lua_pushvalue(L, lua_upvalueindex(1));
-        lua_insert(L, 1);
-        if (lua_pcall(L, lua_gettop(L) - 1, LUA_MULTRET, 0) != LUA_OK) {
-            if (lua_type(L, -1) == LUA_TSTRING) {
-                luaL_where(L, 1);
-                lua_insert(L, -2);
-                lua_concat(L, 2);
-            }
-            return lua_error(L);
-        }
+        plain_pawn(L, lua_gettop(L), LUA_MULTRET);
         return lua_gettop(L);
     }
     lua_settop(L, 2);
     dfle_lua_read_params(L, 2, "pawn", nums, 4, keys);
+    /* The result is a plain table the script may have changed: every
+     * part used is checked before it is used. */
     lua_getfield(L, 1, "data");
     data = lua_gettop(L);
+    if (!lua_istable(L, data))
+        return luaL_error(L, "dfle.pawn: the ensemble's 'data' is not a table (got %s)",
+                          dfle_lua_typename(L, data));
     if (!lua_istable(L, 2) || lua_getfield(L, 2, "outputs") == LUA_TNIL) {
         lua_settop(L, data);
         lua_getfield(L, 1, "outputs");
     }
     outs = lua_gettop(L);
-    if (!lua_istable(L, outs))
-        return luaL_error(L, "dfle.pawn: parameter 'outputs' must be an array of output names");
+    check_names(L, outs, "outputs");
     if (!lua_istable(L, 2) || lua_getfield(L, 2, "inputs") == LUA_TNIL) {
         /* default: the numeric parameters */
         lua_Integer nin, j = 0;
         lua_settop(L, outs);
         lua_getfield(L, 1, "inputs");
-        nin = luaL_len(L, -1);
+        check_names(L, -1, "the ensemble's inputs");
+        nin = (lua_Integer)lua_rawlen(L, -1);
         lua_newtable(L);
         for (lua_Integer c = 1; c <= nin; c++) {
             int numeric = 1;
             lua_Integer nr;
-            lua_geti(L, -2, c);
+            lua_rawgeti(L, -2, c);
             lua_pushvalue(L, -1);
-            lua_gettable(L, data);
-            nr = (lua_Integer)lua_rawlen(L, -1);
+            numeric = lua_gettable(L, data) == LUA_TTABLE;
+            nr = numeric ? (lua_Integer)lua_rawlen(L, -1) : 0;
             for (lua_Integer r = 1; r <= nr && numeric; r++) {
                 numeric = lua_geti(L, -1, r) == LUA_TNUMBER;
                 lua_pop(L, 1);
@@ -348,16 +377,17 @@ static int l_pawn_ensemble(lua_State *L)
         lua_remove(L, -2);
     }
     ins = lua_gettop(L);
-    if (!lua_istable(L, ins))
-        return luaL_error(L, "dfle.pawn: parameter 'inputs' must be an array of parameter names");
+    check_names(L, ins, "inputs");
     /* Row numbers with status ok. */
     lua_newtable(L);
     okrows = lua_gettop(L);
-    lua_getfield(L, data, "status");
+    if (lua_getfield(L, data, "status") != LUA_TTABLE)
+        return luaL_error(L, "dfle.pawn: the ensemble's data.status is not a table (got %s)",
+                          dfle_lua_typename(L, -1));
     count = (lua_Integer)lua_rawlen(L, -1);
     for (lua_Integer r = 1; r <= count; r++) {
-        lua_geti(L, -1, r);
-        if (strcmp(lua_tostring(L, -1), "ok") == 0) {
+        lua_rawgeti(L, -1, r);
+        if (lua_type(L, -1) == LUA_TSTRING && strcmp(lua_tostring(L, -1), "ok") == 0) {
             lua_pushinteger(L, r);
             lua_rawseti(L, okrows, ++k);
         }
@@ -368,17 +398,16 @@ static int l_pawn_ensemble(lua_State *L)
     si = lua_gettop(L);
     lua_newtable(L);
     info = lua_gettop(L);
-    for (lua_Integer o = 1, no = luaL_len(L, outs); o <= no; o++) {
+    for (lua_Integer o = 1, no = (lua_Integer)lua_rawlen(L, outs); o <= no; o++) {
         int cols, base = lua_gettop(L);
-        lua_pushvalue(L, lua_upvalueindex(1));
         lua_createtable(L, 0, 8);
         lua_newtable(L);
         cols = lua_gettop(L);
-        for (lua_Integer c = 0, nin = luaL_len(L, ins); c <= nin; c++) {
+        for (lua_Integer c = 0, nin = (lua_Integer)lua_rawlen(L, ins); c <= nin; c++) {
             if (c == 0)
-                lua_geti(L, outs, o);
+                lua_rawgeti(L, outs, o);
             else
-                lua_geti(L, ins, c);
+                lua_rawgeti(L, ins, c);
             lua_pushvalue(L, -1);
             if (lua_gettable(L, data) != LUA_TTABLE)
                 return luaL_error(L, "dfle.pawn: the ensemble has no column '%s'",
@@ -392,18 +421,18 @@ static int l_pawn_ensemble(lua_State *L)
             lua_remove(L, -2);
             lua_settable(L, cols);
         }
-        lua_setfield(L, base + 2, "data");
-        lua_pushvalue(L, ins), lua_setfield(L, base + 2, "inputs");
-        lua_geti(L, outs, o), lua_setfield(L, base + 2, "output");
-        lua_pushnumber(L, S), lua_setfield(L, base + 2, "S");
-        lua_pushnumber(L, boot), lua_setfield(L, base + 2, "bootstrap");
-        lua_pushnumber(L, conf), lua_setfield(L, base + 2, "conf");
-        lua_pushnumber(L, seed), lua_setfield(L, base + 2, "seed");
-        lua_call(L, 1, 2);
-        lua_geti(L, outs, o);
+        lua_setfield(L, base + 1, "data");
+        lua_pushvalue(L, ins), lua_setfield(L, base + 1, "inputs");
+        lua_rawgeti(L, outs, o), lua_setfield(L, base + 1, "output");
+        lua_pushnumber(L, S), lua_setfield(L, base + 1, "S");
+        lua_pushnumber(L, boot), lua_setfield(L, base + 1, "bootstrap");
+        lua_pushnumber(L, conf), lua_setfield(L, base + 1, "conf");
+        lua_pushnumber(L, seed), lua_setfield(L, base + 1, "seed");
+        plain_pawn(L, 1, 2);
+        lua_rawgeti(L, outs, o);
         lua_insert(L, -2);
         lua_settable(L, info);
-        lua_geti(L, outs, o);
+        lua_rawgeti(L, outs, o);
         lua_insert(L, -2);
         lua_settable(L, si);
         lua_settop(L, base);

@@ -653,14 +653,28 @@ int dfle_lua_ens_sample_row(lua_State *L, int ctx, size_t i)
 /* ------------------------------------------------------------------ */
 /* Reading a result file back into the table dfle.ensemble returns.    */
 
-/* Split one CSV line; push each field (strings); return the count.
- * quoted[k] says whether field k was quoted (up to maxq fields). */
-static int push_fields(lua_State *L, const char *s, unsigned char *quoted, int maxq)
+/* Split one CSV line; push each of its first maxpush fields (strings)
+ * and return the count of all.  quoted[k] says whether field k was
+ * quoted (up to maxq fields).  Fields past maxpush are only counted: a
+ * damaged line of a million commas ran the stack out ("stack overflow
+ * (too many columns)") instead of saying it has too many fields. */
+static int push_fields(lua_State *L, const char *s, unsigned char *quoted, int maxq,
+                       int maxpush)
 {
     int n = 0;
     for (;;) {
         luaL_Buffer b;
         int q = 0;
+        if (n >= maxpush) {
+            int inq = 0;
+            for (; *s != '\0'; s++) {
+                if (*s == '"')
+                    inq = !inq;
+                else if (*s == ',' && !inq)
+                    n++;
+            }
+            return n + 1;
+        }
         luaL_checkstack(L, 2, "too many columns");
         luaL_buffinit(L, &b);
         if (*s == '"') {
@@ -793,7 +807,7 @@ void dfle_lua_ens_push_result(lua_State *L, const char *fn, const char *path, si
     luaL_checkstack(L, (int)ncols + 8, "too many columns");
     for (size_t r = 0; r < t->nrows; r++) {
         int base = lua_gettop(L);
-        int nf = push_fields(L, t->rows[r], quoted, (int)sizeof quoted);
+        int nf = push_fields(L, t->rows[r], quoted, (int)sizeof quoted, (int)ncols + 1);
         if (nf != ncols)
             luaL_error(L, "dfle.%s: %s: sample %d has %d fields, the header %d", fn, path,
                        (int)t->index[r], nf, (int)ncols);

@@ -47,10 +47,19 @@ static int channel_from_lua(lua_State *L, const dfle_channel_opts *o, int area_t
         if (o->length > 0) {
             n = (size_t)ceil(o->length / o->dx - 1e-9) + 1;
         } else {
-            /* The outlet is the first node whose area reaches A_max. */
-            for (n = 1; n <= AREA_SEARCH_MAX_NODES; n++)
-                if (call_number(L, area_idx, (double)(n - 1) * o->dx, "area(x)", "x") >= o->A_max)
+            /* The outlet is the first node whose area reaches A_max.  An
+             * area that is not a finite positive number stops the search
+             * at once: NaN or 0 never reaches A_max, and the search went
+             * on for a million calls before saying so wrongly. */
+            for (n = 1; n <= AREA_SEARCH_MAX_NODES; n++) {
+                const double x = (double)(n - 1) * o->dx;
+                const double a = call_number(L, area_idx, x, "area(x)", "x");
+                if (!(isfinite(a) && a > 0))
+                    luaL_error(L, "dfle.channel: A at node %d must be > 0 m^2 (got %s from "
+                                  "area(x) at x = %f m)", (int)n, dfle_lua_number_text(L, a), x);
+                if (a >= o->A_max)
                     break;
+            }
             if (n > AREA_SEARCH_MAX_NODES)
                 luaL_error(L, "dfle.channel: area(x) did not reach A_max = %f m^2 within %d "
                               "nodes; give length instead", o->A_max, AREA_SEARCH_MAX_NODES);

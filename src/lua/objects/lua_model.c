@@ -70,7 +70,7 @@ static int default_law(lua_State *L) { return call_module_ctor(L, "law", "power"
 
 static void *udata_ptr(lua_State *L, int idx)
 {
-    return lua_isnil(L, idx) ? NULL : *(void **)lua_touserdata(L, idx);
+    return lua_isnil(L, idx) ? NULL : dfle_lua_object_ptr(L, idx);
 }
 
 static int l_model_new(lua_State *L)
@@ -394,14 +394,16 @@ static int model_run(lua_State *L, int steady)
             luaL_error(L, "dfle.%s: parameter 'method' must be a string, got %s", fn,
                        dfle_lua_typename(L, -1));
         {
+            /* Not luaL_checkoption: the value is a field, not an
+             * argument ("bad argument #-2"), and the choices help. */
             const char *name = dfle_lua_check_string(L, -1, fn, "method");
-            o.method = -1;
-            for (int k = 0; methods[k] != NULL; k++)
-                if (strcmp(name, methods[k]) == 0)
-                    o.method = k;
-            if (o.method < 0)
-                luaL_error(L, "dfle.%s: method '%s' is not one of explicit, implicit, direct, auto "
-                              "(lower case)", fn, name);
+            int k = 0;
+            while (methods[k] != NULL && strcmp(methods[k], name) != 0)
+                k++;
+            if (methods[k] == NULL)
+                luaL_error(L, "dfle.%s: method must be 'explicit', 'implicit', 'direct' or "
+                              "'auto' (got '%s')", fn, dfle_lua_shown(L, name, strlen(name)));
+            o.method = k;
         }
         if (!steady && o.method == DFLE_METHOD_DIRECT)
             luaL_error(L, "dfle.model:run: method 'direct' finds steady states only; use "
