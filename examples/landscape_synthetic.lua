@@ -52,7 +52,7 @@ for _, rule in ipairs{ "any", "count" } do
           { title = ("Synthetic steady state, joined debris flows: %s"):format(rule) })
 end
 if #series > 0 then
-  dfle.plot.xy{ path = out("synthetic_slope_area.png"), series = series, logx = true, logy = true,
+  dfle.plot.xy{ path = out("synthetic_slope_area.png"), series = series, xlog = true, ylog = true,
                 title = "Steady-state slope-area (binned means) by combine rule",
-                xlabel = "Drainage area, {/:Italic A} (m^2)", ylabel = "Slope, {/:Italic S}" }
+                xlabel = dfle.plot.label("A"), ylabel = dfle.plot.label("S") }
 end
