@@ -173,7 +173,7 @@ typedef struct dfle_landscape_run_opts {
     int method;          /* solver.h: IMPLICIT (default), EXPLICIT, DIRECT */
     double years;        /* > 0: a transient of this length (no steady stop) */
     double tol;          /* steady: |dz/dt| <= tol U ...          (1e-3)   */
-    double quantile;     /* ... in this fraction of the cells     (0.99)   */
+    double quantile;     /* ... in this fraction of the cells     (0.95)   */
     size_t stable_steps; /* ... and the network stable this long (5)       */
     double rcv_tol;      /* a routing is stable when at most this fraction
                           * of the cells changed receiver     (0.005)   */
@@ -208,11 +208,12 @@ typedef struct dfle_landscape_result {
     int reason;          /* solver.h enum dfle_stop_reason               */
     int method;          /* the method that produced the result          */
     int fallback;        /* DIRECT did not settle: continued implicitly  */
+    size_t direct_rounds; /* with fallback: the direct rounds before      */
     dfle_landscape_status last;
     double dt_min, dt_max;
     size_t routings;
     size_t n_recorded;   /* record times reached                         */
-    char note[256];      /* why it stopped, in words                     */
+    char note[512];      /* why it stopped, in words                     */
 } dfle_landscape_result;
 
 /* Run from the current state: a transient of opts->years, or to steady

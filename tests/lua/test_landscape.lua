@@ -255,6 +255,31 @@ tests["debris flows + fluvial: direct steady state meets the criterion"] = funct
   T.ok(s.q_ratio < 1e-2, "implicit steps from the direct steady state: q_ratio " .. s.q_ratio)
 end
 
+-- The direct rounds on a grid past the size where the old rounds kept
+-- flipping receivers (50 x 50): they settle, and the state meets the
+-- criterion on a fresh routing of its own surface.
+tests["direct steady state settles on a 150 x 150 grid"] = function()
+  local ls = dfle.landscape{ nx = 150, ny = 150, dx = 30, U = 5e-4, A0 = 1e4, router = false,
+                             fluvial = dfle.fluvial.stream_power{ K = 2e-5, m = 0.5, n = 1 },
+                             noise = { seed = 42 } }
+  local r = ls:run_to_steady{}
+  T.ok(r.converged and r.method == "direct" and not r.fallback, r.note)
+  T.ok(r.frac_above <= 0.05 and r.stable >= 5, "criterion: " .. r.frac_above)
+  T.ok(r.rcv_changes <= 0.005 * 150 * 150, "receivers changed: " .. r.rcv_changes)
+end
+
+-- A run that cannot meet the criterion says so on stderr, never silently.
+tests["a steady run that cannot meet the criterion warns with the reason"] = function()
+  local out, ok = T.run_dfle([[
+    local ls = dfle.landscape{ nx = 20, ny = 20, dx = 30, router = false, noise = {} }
+    local r = ls:run_to_steady{ method = "implicit", max_steps = 2, dt = 10 }
+    print("converged", r.converged, r.reason)
+  ]])
+  T.ok(ok, out)
+  T.has(out, "dfle: warning: ", ".lua:2: dfle.landscape:run_to_steady: not steady: ",
+        "of the cells have |dz/dt| > tol U", "converged\tfalse\tsteps")
+end
+
 tests["hillslopes: threshold caps slopes at S_c; diffusion is implicit and steady"] = function()
   local ls = dfle.landscape{ nx = 20, ny = 20, dx = 20, router = false, U = 1e-3, A0 = 8e3,
                              S_c = 0.6, noise = { seed = 3 } }

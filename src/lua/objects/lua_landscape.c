@@ -949,11 +949,14 @@ static int landscape_run(lua_State *L, int steady)
     if (res.reason == DFLE_STOP_INTERRUPTED)
         dfle_lua_set_interrupt_note(L, "%s stopped at t = %f yr and kept its state (reason "
                                        "\"interrupted\")", fn, dfle_landscape_time(u->ls));
-    lua_createtable(L, 0, 24);
+    else if (steady && !res.converged) /* never silently */
+        dfle_lua_warn(L, fn, res.note);
+    lua_createtable(L, 0, 25);
     lua_pushboolean(L, res.converged), lua_setfield(L, -2, "converged");
     lua_pushstring(L, dfle_stop_reason_name(res.reason)), lua_setfield(L, -2, "reason");
     lua_pushstring(L, dfle_method_name(res.method)), lua_setfield(L, -2, "method");
     lua_pushboolean(L, res.fallback), lua_setfield(L, -2, "fallback");
+    lua_pushinteger(L, (lua_Integer)res.direct_rounds), lua_setfield(L, -2, "direct_rounds");
     lua_pushnumber(L, res.last.time), lua_setfield(L, -2, "time");
     lua_pushinteger(L, (lua_Integer)res.last.steps), lua_setfield(L, -2, "steps");
     lua_pushinteger(L, (lua_Integer)res.routings), lua_setfield(L, -2, "routings");
