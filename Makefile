@@ -3,6 +3,8 @@
 #   make            library, CLI (build/dfle) and Lua module (build/dfle.so)
 #   make test       every test: cmocka binaries, Lua tests, example smoke runs
 #   make check      the same tests built with AddressSanitizer + UBSan
+#   make fuzz       the API fuzzer's long mode (50,000 calls) in that build
+#                   (tests/fuzz/; a short fixed-seed mode is part of test)
 #   make memcheck   the cmocka tests under valgrind
 #   make bench      benchmark figures (see bench/; C drivers go to build/bench/)
 #   make mpi        build/dfle-mpi, ensembles across MPI ranks (needs mpicc;
@@ -26,11 +28,12 @@ LUA_LIBS    ?= $(shell $(PKG_CONFIG) --libs $(LUA_PKG))
 GSL_CFLAGS  ?= $(shell $(PKG_CONFIG) --cflags gsl)
 GSL_LIBS    ?= $(shell $(PKG_CONFIG) --libs gsl)
 GDAL_CFLAGS ?= $(shell $(PKG_CONFIG) --cflags gdal)
-GDAL_LIBS   ?= $(shell $(PKG_CONFIG) --libs gdal)
 NETCDF_CFLAGS ?= $(shell $(PKG_CONFIG) --cflags netcdf)
 NETCDF_LIBS ?= $(shell $(PKG_CONFIG) --libs netcdf)
 CMOCKA_CFLAGS ?= $(shell $(PKG_CONFIG) --cflags cmocka)
 CMOCKA_LIBS ?= $(shell $(PKG_CONFIG) --libs cmocka)
+# dlopen: in libc since glibc 2.34 (Debian 12); -ldl on older systems.
+DL_LIBS   ?=
 
 OPT       ?= -O2
 WARN      := -Wall -Wextra -Werror -Wshadow -Wstrict-prototypes -Wmissing-prototypes
@@ -54,6 +57,12 @@ TEST_BIN  := $(TEST_SRC:tests/%.c=$(BUILD)/tests/%)
 BENCH_BIN := $(BENCH_SRC:bench/%.c=$(BUILD)/bench/%)
 
 LIB_CORE  := $(BUILD)/libdfle.a
+# GDAL and libnetcdf are not linked: the library loads them on first use
+# (src/base/extlib.h; doc/c-api.md, "Building and linking"), by the
+# sonames this header names, written for every build and replaced only
+# when they change (a new GDAL), so that only their loaders recompile.
+EXTLIB_H  := $(BUILD)/gen/extlib_names.h
+CORE_LIBS := $(GSL_LIBS) $(DL_LIBS) -lm
 # The shared C library: soname libdfle.so.$(SOMAJOR); the Lua binding and
 # the command link the static one, so neither needs it at run time.
 SOMAJOR   := 0
@@ -62,7 +71,7 @@ LIB_LUA   := $(BUILD)/libdfle_lua.a
 CLI       := $(BUILD)/dfle
 MODULE    := $(BUILD)/dfle.so
 
-.PHONY: all test check memcheck bench install uninstall clean mpi test-mpi
+.PHONY: all test check fuzz fuzz-long memcheck bench install uninstall clean mpi test-mpi FORCE
 # Keep test objects between builds (make would delete them as intermediates).
 .SECONDARY:
 all: $(CLI) $(MODULE) $(SHLIB)
@@ -79,7 +88,14 @@ $(BUILD)/obj/src/cli/%.o: src/cli/%.c
 
 $(BUILD)/obj/src/%.o: src/%.c
 	@mkdir -p $(dir $@)
-	$(CC) $(ALL_CFLAGS) -Isrc $(GSL_CFLAGS) $(GDAL_CFLAGS) $(NETCDF_CFLAGS) -MMD -MP -c $< -o $@
+	$(CC) $(ALL_CFLAGS) -Isrc -I$(BUILD)/gen $(GSL_CFLAGS) $(GDAL_CFLAGS) $(NETCDF_CFLAGS) -MMD -MP -c $< -o $@
+
+$(EXTLIB_H): FORCE
+	@mkdir -p $(dir $@)
+	@sh scripts/extlib-names.sh '$(CC)' '$(PKG_CONFIG)' > $@.tmp || { rm -f $@.tmp; exit 1; }
+	@cmp -s $@.tmp $@ || mv $@.tmp $@; rm -f $@.tmp
+
+$(BUILD)/obj/src/base/gdal_lib.o $(BUILD)/obj/src/base/netcdf_lib.o: $(EXTLIB_H)
 
 $(BUILD)/obj/tests/%.o: tests/%.c
 	@mkdir -p $(dir $@)
@@ -99,18 +115,25 @@ $(LIB_LUA): $(LUA_OBJ)
 	$(AR) rcs $@ $^
 
 $(CLI): $(CLI_OBJ) $(LIB_LUA) $(LIB_CORE)
-	$(CC) $(ALL_LDFLAGS) $^ $(LUA_LIBS) $(GSL_LIBS) $(GDAL_LIBS) $(NETCDF_LIBS) -lm -o $@
+	$(CC) $(ALL_LDFLAGS) $^ $(LUA_LIBS) $(CORE_LIBS) -o $@
 
+# --no-undefined: a GDAL or netCDF call that bypasses the tables of
+# src/base/*_lib.h fails here, not when a program loads the library
+# (sanitizer builds leave their runtime's symbols to the executable).
 $(SHLIB): $(CORE_OBJ)
-	$(CC) -shared -Wl,-soname,libdfle.so.$(SOMAJOR) $(ALL_LDFLAGS) $^ $(GSL_LIBS) $(GDAL_LIBS) $(NETCDF_LIBS) -lm -o $@
+	$(CC) -shared -Wl,-soname,libdfle.so.$(SOMAJOR) $(if $(SANITIZE),,-Wl,--no-undefined) \
+	    $(ALL_LDFLAGS) $^ $(CORE_LIBS) -o $@
 
 # The Lua module takes its Lua symbols from the host interpreter.
 $(MODULE): $(LUA_OBJ) $(CORE_OBJ)
-	$(CC) -shared $(ALL_LDFLAGS) $^ $(GSL_LIBS) $(GDAL_LIBS) $(NETCDF_LIBS) -lm -o $@
+	$(CC) -shared $(ALL_LDFLAGS) $^ $(CORE_LIBS) -o $@
+
+# Tests that read files back with libnetcdf link it themselves.
+$(BUILD)/tests/test_netcdf $(BUILD)/tests/test_landscape: TEST_LIBS = $(NETCDF_LIBS)
 
 $(BUILD)/tests/%: $(BUILD)/obj/tests/%.o $(LIB_LUA) $(LIB_CORE)
 	@mkdir -p $(dir $@)
-	$(CC) $(ALL_LDFLAGS) $^ $(CMOCKA_LIBS) $(LUA_LIBS) $(GSL_LIBS) $(GDAL_LIBS) $(NETCDF_LIBS) -lm -o $@
+	$(CC) $(ALL_LDFLAGS) $^ $(CMOCKA_LIBS) $(LUA_LIBS) $(TEST_LIBS) $(CORE_LIBS) -o $@
 
 # The CLI's progress bar (its ETA) is not in the library: link it in.
 $(BUILD)/tests/test_progress: $(BUILD)/obj/src/cli/progress.o
@@ -129,11 +152,28 @@ $(BUILD)/obj/gate/%.o: %.c
 $(GATE_TEST): $(BUILD)/obj/gate/tests/test_trace_release.o \
               $(BUILD)/obj/gate/src/lua/trace/lua_trace_release.o $(LIB_LUA) $(LIB_CORE)
 	@mkdir -p $(dir $@)
-	$(CC) $(ALL_LDFLAGS) $^ $(CMOCKA_LIBS) $(LUA_LIBS) $(GSL_LIBS) $(GDAL_LIBS) $(NETCDF_LIBS) -lm -o $@
+	$(CC) $(ALL_LDFLAGS) $^ $(CMOCKA_LIBS) $(LUA_LIBS) $(CORE_LIBS) -o $@
+
+# The library when GDAL and libnetcdf cannot be loaded (tests/test_extlib.c):
+# their loaders and the test compiled again for sonames no system has,
+# the loaders linked ahead of the library's own.
+MISSING_TEST := $(BUILD)/tests/test_extlib_missing
+MISSING_CFLAGS := -DDFLE_TEST_EXTLIB_MISSING \
+    -DDFLE_GDAL_SONAME='"libdfle-test-missing-gdal.so.0"' \
+    -DDFLE_NETCDF_SONAME='"libdfle-test-missing-netcdf.so.0"'
+
+$(BUILD)/obj/missing/%.o: %.c $(EXTLIB_H)
+	@mkdir -p $(dir $@)
+	$(CC) $(ALL_CFLAGS) $(MISSING_CFLAGS) -Isrc -I$(BUILD)/gen $(LUA_CFLAGS) $(GDAL_CFLAGS) $(NETCDF_CFLAGS) $(CMOCKA_CFLAGS) -MMD -MP -c $< -o $@
+
+$(MISSING_TEST): $(BUILD)/obj/missing/tests/test_extlib.o $(BUILD)/obj/missing/src/base/gdal_lib.o \
+                 $(BUILD)/obj/missing/src/base/netcdf_lib.o $(LIB_LUA) $(LIB_CORE)
+	@mkdir -p $(dir $@)
+	$(CC) $(ALL_LDFLAGS) $^ $(CMOCKA_LIBS) $(LUA_LIBS) $(CORE_LIBS) -o $@
 
 $(BUILD)/bench/%: $(BUILD)/obj/bench/%.o $(LIB_CORE)
 	@mkdir -p $(dir $@)
-	$(CC) $(ALL_LDFLAGS) $^ $(GSL_LIBS) $(GDAL_LIBS) $(NETCDF_LIBS) -lm -o $@
+	$(CC) $(ALL_LDFLAGS) $^ $(CORE_LIBS) -o $@
 
 # The MPI tests join `make test` wherever mpicc is installed (install-deps
 # installs it), except in sanitizer builds, where OpenMPI's own
@@ -141,17 +181,26 @@ $(BUILD)/bench/%: $(BUILD)/obj/bench/%.o $(LIB_CORE)
 HAVE_MPICC := $(if $(SANITIZE),,$(shell command -v $(MPICC) 2>/dev/null))
 
 # The benchmark drivers are built (not run) so they cannot rot.
-test: all $(TEST_BIN) $(GATE_TEST) $(BENCH_BIN)
+test: all $(TEST_BIN) $(GATE_TEST) $(MISSING_TEST) $(BENCH_BIN)
 	@BUILD=$(BUILD) SANITIZE='$(SANITIZE)' sh tests/run-tests.sh
 ifneq ($(HAVE_MPICC),)
 	@$(MAKE) --no-print-directory test-mpi
 endif
 
-check:
-	$(MAKE) BUILD=build/san OPT=-O1 \
-	    SANITIZE="-fsanitize=address,undefined -fno-omit-frame-pointer -fno-sanitize-recover=all" test
+# The sanitizer build, for `make check` and `make fuzz`.
+SAN_BUILD := BUILD=build/san OPT=-O1 \
+    SANITIZE="-fsanitize=address,undefined -fno-omit-frame-pointer -fno-sanitize-recover=all"
 
-memcheck: all $(TEST_BIN) $(GATE_TEST)
+check:
+	$(MAKE) $(SAN_BUILD) test
+
+fuzz:
+	$(MAKE) $(SAN_BUILD) fuzz-long
+
+fuzz-long: all
+	@sh tests/fuzz/run.sh long $(CLI)
+
+memcheck: all $(TEST_BIN) $(GATE_TEST) $(MISSING_TEST)
 	@BUILD=$(BUILD) MEMCHECK=1 sh tests/run-tests.sh
 
 bench: all $(BENCH_BIN)
@@ -167,7 +216,7 @@ $(BUILD)/obj-mpi/%.o: %.c
 	$(MPICC) $(ALL_CFLAGS) -DDFLE_MPI -Isrc $(LUA_CFLAGS) $(GSL_CFLAGS) -MMD -MP -c $< -o $@
 
 $(MPI_CLI): $(MPI_OBJ) $(BUILD)/obj/src/cli/progress.o $(LIB_LUA) $(LIB_CORE)
-	$(MPICC) $(ALL_LDFLAGS) $^ $(LUA_LIBS) $(GSL_LIBS) $(GDAL_LIBS) $(NETCDF_LIBS) -lm -o $@
+	$(MPICC) $(ALL_LDFLAGS) $^ $(LUA_LIBS) $(CORE_LIBS) -o $@
 
 mpi: $(MPI_CLI)
 
@@ -194,7 +243,7 @@ install: all $(INSTALL_MPI)
 	install -m 755 $(SHLIB) $(LIBDIR)/libdfle.so.$(VERSION)
 	ln -sf libdfle.so.$(VERSION) $(LIBDIR)/libdfle.so.$(SOMAJOR)
 	ln -sf libdfle.so.$(SOMAJOR) $(LIBDIR)/libdfle.so
-	printf 'prefix=%s\nincludedir=$${prefix}/include\nlibdir=$${prefix}/lib\n\nName: dfle\nDescription: debris-flow and fluvial channel-profile model (C library)\nVersion: %s\nRequires: gsl gdal netcdf\nLibs: -L$${libdir} -ldfle -lm -pthread\nCflags: -I$${includedir}\n' \
+	printf 'prefix=%s\nincludedir=$${prefix}/include\nlibdir=$${prefix}/lib\n\nName: dfle\nDescription: debris-flow and fluvial channel-profile model (C library)\nVersion: %s\nRequires: gsl\nLibs: -L$${libdir} -ldfle $(DL_LIBS) -lm -pthread\nCflags: -I$${includedir}\n' \
 	    '$(PREFIX)' '$(VERSION)' > $(LIBDIR)/pkgconfig/dfle.pc
 	install -m 644 include/dfle/*.h $(DESTDIR)$(PREFIX)/include/dfle/
 	install -m 644 doc/dfle.1 $(DESTDIR)$(PREFIX)/share/man/man1/dfle.1

@@ -24,12 +24,7 @@
 
 #include "dfle/landscape.h"
 
-static double cpu_seconds(void)
-{
-    struct timespec t;
-    clock_gettime(CLOCK_PROCESS_CPUTIME_ID, &t);
-    return (double)t.tv_sec + 1e-9 * (double)t.tv_nsec;
-}
+#include "bench.h"
 
 static double exponent(const double *n, const double *t, int k)
 {

@@ -10,12 +10,19 @@ if [ -z "${DFLE_DATA_DIR:-}" ]; then
 fi
 export DFLE_DATA_DIR
 echo "dfle benchmarks on $(uname -m), $(nproc) cores, $(date -u +%Y-%m-%d)"
+# Start-up, beside the same with GDAL and libnetcdf preloaded (as when
+# they were linked): their sonames as this build loads them.
+preload=$(sed -n 's/^#define DFLE_\(GDAL\|NETCDF\)_SONAME "\(.*\)"$/\2/p' \
+          "$BIN/../gen/extlib_names.h" 2> /dev/null | tr '\n' ' ')
+"$BIN/startup" "$DFLE" "$preload" "$(command -v lua5.4)"
 "$DFLE" -q "$here/steady_state.lua"
+"$BIN/process"
 "$DFLE" -q "$here/process.lua"
 "$DFLE" -q "$here/dem.lua"
 "$BIN/drainage"
 "$BIN/landscape"
-"$DFLE" -q "$here/landscape.lua"
+"$DFLE" -q "$here/fit.lua"
 "$DFLE" -q "$here/methods.lua"
 "$DFLE" -q "$here/ensemble.lua"
 "$DFLE" -q "$here/laws.lua"
+"$DFLE" -q "$here/invert.lua"

@@ -26,8 +26,7 @@ local gammas = { 0, 0.5 }
 local channel = dfle.channel{ dx = quick and 20 or 5, A_max = 8e6 }
 local fluvial = dfle.fluvial.stochastic_threshold{ k_e = 5e-14 }
 
-local csv = assert(io.open(outdir .. "/alpha_beta.csv", "w"))
-csv:write("gamma,alpha,beta,converged,time_yr,S_df,A_df_m2,a2,r2,S_max_minus_S_ch\n")
+local rows = {} -- of alpha_beta.csv
 print(("%5s %5s %5s %10s %8s %10s %6s %7s %9s"):format(
   "gamma", "alpha", "beta", "method", "S_df", "A_df (m2)", "a2", "R^2", "Smax-Sch"))
 local series = {}
@@ -45,12 +44,14 @@ for _, beta in ipairs(betas) do
     if fit then
       print(("%5g %5g %5g %10s %8.3f %10.3g %6.2f %7.4f %9.4f"):format(
         gamma, alpha, beta, run.method, fit.S_df, fit.A_df, fit.a2, fit.r2, fit.S_max_minus_S_ch))
-      csv:write(("%g,%g,%g,%s,%g,%g,%g,%g,%g,%g\n"):format(gamma, alpha, beta, tostring(run.converged),
-        run.time, fit.S_df, fit.A_df, fit.a2, fit.r2, fit.S_max_minus_S_ch))
+      rows[#rows + 1] = { gamma = gamma, alpha = alpha, beta = beta, converged = run.converged,
+        time = run.time, S_df = fit.S_df, A_df = fit.A_df, a2 = fit.a2, r2 = fit.r2,
+        S_max_minus_S_ch = fit.S_max_minus_S_ch }
       xs[#xs + 1], ys[#ys + 1] = alpha, fit.S_max_minus_S_ch
     else
       print(("%5g %5g %5g  no fit: %s"):format(gamma, alpha, beta, why))
-      csv:write(("%g,%g,%g,%s,%g,,,,,\n"):format(gamma, alpha, beta, tostring(run.converged), run.time))
+      rows[#rows + 1] = { gamma = gamma, alpha = alpha, beta = beta, converged = run.converged,
+        time = run.time }
     end
   end
   if #xs > 0 then
@@ -58,7 +59,16 @@ for _, beta in ipairs(betas) do
   end
 end
 end
-csv:close()
+dfle.write_csv(outdir .. "/alpha_beta.csv", {
+  about = "steady states for each alpha and beta of the power law (k_df = 1e-4) and gamma of "
+          .. "the empirical router (M0 = 3000, mu = 500, tau_y = 300), U = 5e-4 m/yr",
+  columns = { "gamma", "alpha", "beta", "converged", "time", "S_df", "A_df", "a2", "r2",
+              "S_max_minus_S_ch" },
+  units = { gamma = "-", alpha = "-", beta = "-", time = "yr", S_df = "-", A_df = "m^2", a2 = "-",
+            r2 = "-", S_max_minus_S_ch = "-" },
+  rows = rows,
+  params = { channel = channel:params(), fluvial = fluvial:params() },
+})
 dfle.plot.xy{
   path = outdir .. "/alpha_beta.png", series = series,
   title = "Steady-state profiles, empirical router",

@@ -89,8 +89,8 @@ for _, src in ipairs{ { "catchment (DEM network)", net }, { "model steady state"
   end
   print(("%-24s S_df = %.3f  A_df = %.3g m^2  a2 = %.2f  R^2 = %.3f  S_max - S_ch = %.3f")
         :format(src[1], fit.S_df, fit.A_df, fit.a2, fit.r2, fit.S_max_minus_S_ch))
-  rows[#rows + 1] = ("%s,%.6g,%.6g,%.6g,%.6g,%.6g"):format(src[1], fit.S_df, fit.A_df, fit.a2,
-                                                          fit.r2, fit.S_max_minus_S_ch)
+  rows[#rows + 1] = { source = src[1], S_df = fit.S_df, A_df = fit.A_df, a2 = fit.a2, r2 = fit.r2,
+                      S_max_minus_S_ch = fit.S_max_minus_S_ch }
   local A, S = curve(fit, fit.bins.A[1], fit.bins.A[#fit.bins.A])
   series[#series + 1] = { x = fit.bins.A, y = fit.bins.S, label = src[1] .. ", binned" }
   series[#series + 1] = { x = A, y = S, lines = true,
@@ -98,9 +98,13 @@ for _, src in ipairs{ { "catchment (DEM network)", net }, { "model steady state"
 end
 
 local csv = outdir .. "/compare_fits.csv"
-local f = assert(io.open(csv, "w"))
-f:write("source,S_df,A_df (m^2),a2,R2,S_max_minus_S_ch\n", table.concat(rows, "\n"), "\n")
-f:close()
+dfle.write_csv(csv, {
+  about = "Eq. (2) fitted to the DEM network of the catchment and to the model on its A(x)",
+  columns = { "source", "S_df", "A_df", "a2", "r2", "S_max_minus_S_ch" },
+  units = { S_df = "-", A_df = "m^2", a2 = "-", r2 = "-", S_max_minus_S_ch = "-" },
+  rows = rows,
+  params = { model = model, dem = { file = dem_file } },
+})
 model:write_csv(outdir .. "/compare_model.csv")
 main:write_csv(outdir .. "/compare_main_stem.csv")
 local png = outdir .. "/compare_dem_model.png"

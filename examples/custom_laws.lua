@@ -72,7 +72,7 @@ local laws = {
   { label = "Eq. (6) x frequency(A), Lua", law = rarer },
 }
 
-local series, rows = {}, { "law,A_m2,S" }
+local series, rows = {}, {}
 for _, L in ipairs(laws) do
   local m = dfle.model{
     channel = channel, U = 5e-4,
@@ -100,15 +100,16 @@ for _, L in ipairs(laws) do
   local a, s = {}, {}
   for i = 1, m.n - 1 do
     a[#a + 1], s[#s + 1] = A[i], S[i]
-    rows[#rows + 1] = ("%q,%.6g,%.6g"):format(L.label, A[i], S[i])
+    rows[#rows + 1] = { law = L.label, A = A[i], S = S[i] }
   end
   series[#series + 1] = { x = a, y = s, label = L.label, lines = true }
 end
 
 local csv = outdir .. "/custom_laws.csv"
-local f = assert(io.open(csv, "w"))
-f:write(table.concat(rows, "\n"), "\n")
-f:close()
+dfle.write_csv(csv, {
+  about = "steady-state slope and drainage area of every node above the outlet, for each law",
+  columns = { "law", "A", "S" }, units = { A = "m^2", S = "-" }, rows = rows,
+})
 local png = outdir .. "/custom_laws.png"
 dfle.plot.xy{ path = png, series = series, logx = true, logy = true,
               title = "Steady-state slope-area relations of custom incision laws",

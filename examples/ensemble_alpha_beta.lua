@@ -51,6 +51,17 @@ local experiments = {
   },
 }
 
+-- Units of the sampled parameters, for the file's "# units:" line (dfle
+-- knows those of its own outputs).
+local UNITS = { M0 = "m^(3-2 gamma)", gamma = "-", mu = "Pa s", tau_y = "Pa", U = "m/yr",
+                k_df = "m^(1-beta) s^-1 yr^-1", k_e = "m^2.5 s^2 kg^-1.5", mu2 = "-",
+                D = "m^2/s", eta = "Pa s", alpha = "-", beta = "-" }
+local function units_of(params)
+  local u = {}
+  for name in pairs(params) do u[name] = UNITS[name] end
+  return u
+end
+
 local results = {}
 for _, name in ipairs{ "empirical", "process" } do
   if only == nil or only == name then
@@ -58,6 +69,7 @@ for _, name in ipairs{ "empirical", "process" } do
     local ens = dfle.ensemble{
       params = e.params, n = e.n, seed = 1,
       out = outdir .. "/alpha_beta_" .. name .. ".csv",
+      units = units_of(e.params),
       build = function(p)
         return dfle.model{
           channel = dfle.channel{ dx = dx }, U = 5e-4,

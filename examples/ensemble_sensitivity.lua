@@ -56,6 +56,17 @@ local experiments = {
   },
 }
 
+-- Units of the sampled parameters, for the file's "# units:" line (dfle
+-- knows those of its own outputs).
+local UNITS = { M0 = "m^(3-2 gamma)", gamma = "-", mu = "Pa s", tau_y = "Pa", U = "m/yr",
+                k_df = "m^(1-beta) s^-1 yr^-1", k_e = "m^2.5 s^2 kg^-1.5", mu2 = "-",
+                D = "m^2/s", eta = "Pa s", alpha = "-", beta = "-" }
+local function units_of(params)
+  local u = {}
+  for name in pairs(params) do u[name] = UNITS[name] end
+  return u
+end
+
 local results = {}
 for _, name in ipairs{ "empirical", "process" } do
   if only == nil or only == name then
@@ -63,6 +74,7 @@ for _, name in ipairs{ "empirical", "process" } do
     results[name] = dfle.ensemble{
       params = e.params, n = e.n, seed = 1,
       out = outdir .. "/sensitivity_" .. name .. ".csv",
+      units = units_of(e.params),
       build = function(p)
         return dfle.model{
           channel = dfle.channel{ dx = dx }, U = p.U,
@@ -121,22 +133,28 @@ for _, name in ipairs{ "empirical", "process" } do
     if ens.ok >= 10 then
       local si = dfle.pawn(ens, { outputs = { "A_df", "S_df" }, S = 10,
                                   bootstrap = quick and 50 or 1000 })
-      local f = assert(io.open(outdir .. "/pawn_" .. name .. ".csv", "w"))
-      f:write("output,input," .. table.concat(STATS, ",") .. ",median_lo,median_hi\n")
+      local rows = {}
       print(("  PAWN median index (S = 10), %s router:"):format(name))
       print(("  %-8s %8s %8s"):format("input", "A_df", "S_df"))
       for _, x in ipairs(ens.inputs) do
         for _, o in ipairs{ "A_df", "S_df" } do
           local r = si[o][x]
-          local row = { o, x }
-          for _, st in ipairs(STATS) do row[#row + 1] = ("%.6g"):format(r[st]) end
-          row[#row + 1] = ("%.6g"):format(r.ci.median.lo)
-          row[#row + 1] = ("%.6g"):format(r.ci.median.hi)
-          f:write(table.concat(row, ","), "\n")
+          local row = { output = o, input = x, median_lo = r.ci.median.lo,
+                        median_hi = r.ci.median.hi }
+          for _, st in ipairs(STATS) do row[st] = r[st] end
+          rows[#rows + 1] = row
         end
         print(("  %-8s %8.3f %8.3f"):format(x, si.A_df[x].median, si.S_df[x].median))
       end
-      f:close()
+      local columns, units = { "output", "input" }, { median_lo = "-", median_hi = "-" }
+      for _, st in ipairs(STATS) do columns[#columns + 1], units[st] = st, "-" end
+      columns[#columns + 1], columns[#columns + 2] = "median_lo", "median_hi"
+      dfle.write_csv(outdir .. "/pawn_" .. name .. ".csv", {
+        about = ("PAWN indices (S = 10) of each input for A_df and S_df, %s router, from %s; "
+                 .. "median_lo, median_hi: 95 %% bootstrap interval of the median"):format(name, ens.file),
+        columns = columns, units = units, rows = rows,
+        params = { pawn = { S = 10, bootstrap = quick and 50 or 1000, ok_rows = ens.ok } },
+      })
       -- Parameter against A_df and S_df, colored by U (Figs. 5-8).
       for _, x in ipairs(ens.inputs) do
         if x ~= "U" then

@@ -119,17 +119,26 @@ end
 
 -- The fits as CSV.
 local csv = outdir .. "/fig1_fits.csv"
-local f = assert(io.open(csv, "w"))
-f:write("catchment,data,outlet_E (m),outlet_N (m),snapped_E (m),snapped_N (m),A_outlet (m^2)," ..
-        "cells,slope_interval (m),S_df,A_df (m^2),a2,R2,S_max_minus_S_ch,bins,empty_bins\n")
+local rows = {}
 for _, r in ipairs(fits) do
   local c, what, p, fit = r[1], r[2], r[3], r[4]
-  f:write(("%s,%s,%d,%d,%.3f,%.3f,%.6g,%d,%g,%.6g,%.6g,%.6g,%.6g,%.6g,%d,%d\n")
-          :format(c.name, what, c.E, c.N, p.outlet.E, p.outlet.N, p.A_max, p.n, p.ds,
-                  fit.S_df, fit.A_df, fit.a2, fit.r2, fit.S_max_minus_S_ch, fit.n_points,
-                  fit.bins.n_empty))
+  rows[#rows + 1] = { catchment = c.name, data = what, outlet_E = c.E, outlet_N = c.N,
+                      snapped_E = p.outlet.E, snapped_N = p.outlet.N, A_outlet = p.A_max,
+                      cells = p.n, slope_interval = p.ds, S_df = fit.S_df, A_df = fit.A_df,
+                      a2 = fit.a2, r2 = fit.r2, S_max_minus_S_ch = fit.S_max_minus_S_ch,
+                      bins = fit.n_points, empty_bins = fit.bins.n_empty }
 end
-f:close()
+dfle.write_csv(csv, {
+  about = "Eq. (2) fitted to the channel network and to the main stem of each catchment",
+  columns = { "catchment", "data", "outlet_E", "outlet_N", "snapped_E", "snapped_N", "A_outlet",
+              "cells", "slope_interval", "S_df", "A_df", "a2", "r2", "S_max_minus_S_ch", "bins",
+              "empty_bins" },
+  units = { outlet_E = "m", outlet_N = "m", snapped_E = "m", snapped_N = "m", A_outlet = "m^2",
+            slope_interval = "m", S_df = "-", A_df = "m^2", a2 = "-", r2 = "-",
+            S_max_minus_S_ch = "-" },
+  rows = rows,
+  params = { dem = { file = dem_file, dx = dem.dx, dy = dem.dy, crs = dem.crs } },
+})
 
 local png = outdir .. "/fig1_slope_area.png"
 if #series > 0 then

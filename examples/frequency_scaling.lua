@@ -22,8 +22,7 @@ local quick, outdir = opts.quick, opts.output
 local gammas = quick and { 0, 0.5, 1 } or { 0, 0.25, 0.5, 0.75, 1 }
 local channel = dfle.channel{ dx = quick and 20 or 5 }
 local profiles, slopes = {}, {}
-local csv = assert(io.open(outdir .. "/frequency_scaling.csv", "w"))
-csv:write("gamma,converged,S_df,A_df,r2,S_max_minus_S_ch\n")
+local rows = {} -- of frequency_scaling.csv
 print(("%6s %10s %8s %10s %7s %9s"):format("gamma", "converged", "S_df", "A_df (m2)", "R^2", "Smax-Sch"))
 for _, g in ipairs(gammas) do
   local m = dfle.model{
@@ -38,13 +37,19 @@ for _, g in ipairs(gammas) do
   local f = fit or { S_df = nan, A_df = nan, r2 = nan, S_max_minus_S_ch = nan }
   print(("%6g %10s %8.3f %10.3g %7.4f %9.4f"):format(g, tostring(run.converged), f.S_df, f.A_df,
         f.r2, f.S_max_minus_S_ch))
-  csv:write(("%g,%s,%.17g,%.17g,%.17g,%.17g\n"):format(g, tostring(run.converged), f.S_df, f.A_df,
-            f.r2, f.S_max_minus_S_ch))
+  rows[#rows + 1] = { gamma = g, converged = run.converged, S_df = f.S_df, A_df = f.A_df,
+                      r2 = f.r2, S_max_minus_S_ch = f.S_max_minus_S_ch }
   local label = ("{/Symbol g} = %g"):format(g)
   profiles[#profiles + 1] = { x = m:get("x"), y = m:get("z"), label = label, lines = true }
   slopes[#slopes + 1] = { x = m:get("A"), y = m:get("S"), label = label, lines = true }
 end
-csv:close()
+dfle.write_csv(outdir .. "/frequency_scaling.csv", {
+  about = "steady states with the debris-flow frequency scaled with area (Appendix D): process "
+          .. "router, M0 = 200 m^3, k_df = 7.5e-5, alpha = 6, beta = 1, U = 5e-4 m/yr",
+  columns = { "gamma", "converged", "S_df", "A_df", "r2", "S_max_minus_S_ch" },
+  units = { gamma = "-", S_df = "-", A_df = "m^2", r2 = "-", S_max_minus_S_ch = "-" },
+  rows = rows, params = { channel = channel:params() },
+})
 dfle.plot.xy{
   path = outdir .. "/frequency_scaling_profiles.png", series = profiles,
   title = "Steady-state profiles, debris-flow frequency scaled with area (Appendix D)",

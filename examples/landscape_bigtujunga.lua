@@ -1,6 +1,6 @@
 -- landscape_bigtujunga.lua - the Big Tujunga catchment evolved to steady
 -- state by debris flows and rivers, and its slope-area against the real
--- network's (issue 12: the paper's Sect. 4.4 step to 2D landscapes).
+-- network's (the paper's Sect. 4.4 step to 2D landscapes).
 --
 -- The catchment above the black outlet of the paper's Fig. 1 (396887 E,
 -- 3799338 N, 10.2 km^2) is cut from the SRTM DEM (30 m, UTM 11N): cells
@@ -21,23 +21,27 @@
 --   dfle examples/landscape_bigtujunga.lua [--quick] [output-directory]
 --
 -- --quick (the test suite) coarsens the grid to 90 m and skips the
--- transient.  The DEM is found relative to this script
--- (../../shared/data/dem/) or in $DFLE_DATA_DIR/dem.
+-- transient.  The DEM is read from --data DIR or $DFLE_DATA_DIR (the
+-- directory holding dem/); without it the script says so and stops.
 
-local quick, outdir = false, "."
-for _, a in ipairs(arg) do
-  if a == "--quick" then quick = true else outdir = a end
+local opts = dfle.args{
+  usage = "dfle examples/landscape_bigtujunga.lua [options] [output-directory]",
+  about = "The Big Tujunga catchment evolved to steady state; its slope-area against the DEM's.",
+  flags = { quick = "a 90 m grid, no transient (for the test suite)" },
+  options = { data = { "DIR", "the data directory, holding dem/ (default: $DFLE_DATA_DIR)",
+                       default = os.getenv("DFLE_DATA_DIR") } },
+  output = true,
+}
+local quick, outdir = opts.quick, opts.output
+local path = (opts.data or "") .. "/dem/srtm_bigtujunga30m_utm11.tif"
+local probe = opts.data and io.open(path, "rb")
+if not probe then
+  io.stderr:write(("%s: needs the Big Tujunga DEM, dem/srtm_bigtujunga30m_utm11.tif: "
+                   .. "pass --data DIR or set DFLE_DATA_DIR to the directory holding dem/%s\n")
+                  :format(arg[0], opts.data and (" (not in " .. opts.data .. ")") or ""))
+  os.exit(2)
 end
-local here = arg[0]:match("^(.*)/[^/]*$") or "."
-local data = os.getenv("DFLE_DATA_DIR") or (here .. "/../../shared/data")
-local path = data .. "/dem/srtm_bigtujunga30m_utm11.tif"
-local f = io.open(path, "rb")
-if not f then
-  print(("landscape_bigtujunga: the DEM %s is missing; set DFLE_DATA_DIR to the folder "
-         .. "holding dem/srtm_bigtujunga30m_utm11.tif (the project's shared data). Skipped."):format(path))
-  return
-end
-f:close()
+probe:close()
 local function out(name) return outdir .. "/" .. name end
 
 local outlet = { 396887, 3799338 }

@@ -12,10 +12,13 @@
 --
 --   dfle examples/landscape_synthetic.lua [--quick] [output-directory]
 
-local quick, outdir = false, "."
-for _, a in ipairs(arg) do
-  if a == "--quick" then quick = true else outdir = a end
-end
+local opts = dfle.args{
+  usage = "dfle examples/landscape_synthetic.lua [options] [output-directory]",
+  about = "A synthetic landscape carved by debris flows and rivers from a random start.",
+  flags = { quick = "a 3 x 2.25 km block (for the test suite)" },
+  output = true,
+}
+local quick, outdir = opts.quick, opts.output
 local function out(name) return outdir .. "/" .. name end
 local nx, ny = quick and 100 or 200, quick and 75 or 150
 local series = {}

@@ -2,7 +2,8 @@
 # check-layers.sh - the tree's architecture as a test (doc/c-api.md, "The
 # house"): every #include of a public header goes to a layer at or below
 # the including file's own, no file includes another folder's private
-# (*_internal.h) header, and the C library's sources never include Lua.
+# (*_internal.h) header or any header of a folder above its own, and the
+# C library's sources never include Lua.
 # Includes stand for calls: a file can only call what it can see.
 cd "$(dirname "$0")/.." || exit 2
 fail=0
@@ -18,12 +19,13 @@ rank() {
 }
 header_layer() {
     case $1 in
-    error.h | param.h | file.h | plausible.h) echo base ;; channel.h | network.h) echo domain ;;
+    error.h | param.h | file.h | plausible.h | record.h) echo base ;; channel.h | network.h) echo domain ;;
     flow.h | flow1d.h | router*.h) echo routers ;; drainage.h) echo drainage ;;
     lua.h) echo lua ;; fluvial.h | law*.h) echo laws ;; model.h) echo model ;;
     solver.h) echo solvers ;; dem.h) echo dem ;; landscape.h) echo landscape ;;
     analysis.h | analytical.h | sampling.h | sensitivity.h) echo analysis ;;
-    csv.h | ensemble.h | plot.h | raster.h) echo io ;; *) echo unknown ;;
+    stream.h | prior.h | mcmc.h | mcmc_diag.h | lsq.h | likelihood.h) echo analysis ;;
+    csv.h | ensemble.h | plot.h | raster.h | netcdf.h) echo io ;; *) echo unknown ;;
     esac
 }
 
@@ -43,6 +45,14 @@ for f in $(find src -name '*.[ch]' | sort); do
     for h in $(sed -n 's|^#include "\([a-z]*\)/[a-z0-9_/]*_internal\.h".*|\1|p' "$f"); do
         if [ "$h" != "$layer" ] && [ "$h" != lua ]; then
             echo "not ok - $f ($layer) includes a private header of $h/"
+            fail=1
+        fi
+    done
+    # The library's own private headers outside *_internal.h (base/'s
+    # loaders of GDAL and netCDF) serve the layers above theirs only.
+    for h in $(sed -n 's|^#include "\([a-z]*\)/[a-z0-9_/]*\.h".*|\1|p' "$f"); do
+        if [ "$h" != dfle ] && [ "$(rank "$h")" -gt "$r" ]; then
+            echo "not ok - $f ($layer) includes a header of $h/: a call up the layers"
             fail=1
         fi
     done

@@ -2,8 +2,9 @@
 # The installed tree works as a user meets it: `make install` into a
 # staging directory, then the command (its --help points at the installed
 # docs), the man page, an example that needs data it does not have, the
-# Lua module in a stock lua5.4, and a C program built against the
-# installed headers and shared library.
+# Lua module in a stock lua5.4, C programs built against the installed
+# headers and the shared and static libraries, and GDAL and netCDF found
+# at run time by each of them, none of which links them.
 # BUILD=dir selects the build.  Exit status is non-zero on any failure.
 set -u
 BUILD=${BUILD:-build}
@@ -60,6 +61,57 @@ if command -v lua5.4 > /dev/null 2>&1; then
         assert(fit.S_df > 0 and fit.A_df > 0, 'a fit')
         print(dfle.version)"
 fi
+
+# GDAL and libnetcdf are loaded on first use, not linked (doc/c-api.md,
+# "Building and linking"): nothing installed needs them, and every part
+# that reads or writes their formats finds them at run time.
+check "nothing installed links GDAL or netCDF" sh -c "
+    for f in bin/dfle lib/libdfle.so.0 lib/lua/5.4/dfle.so; do
+        if readelf -d '$root/'\$f | grep NEEDED | grep -E 'gdal|netcdf|hdf5'; then
+            echo \"\$f links them\"; exit 1
+        fi
+    done"
+
+printf 'ncols 3\nnrows 3\nxllcorner 0\nyllcorner 0\ncellsize 10\n3 2 1\n3 2 1\n3 2 1\n' \
+    > "$tmp/dem.asc"
+cat > "$tmp/io.lua" <<LUA
+local d = dfle.dem.read("$tmp/dem.asc")
+assert(d.nx == 3 and d.ny == 3)
+d:write_geotiff("$tmp/io.tif")
+assert(dfle.dem.read("$tmp/io.tif").nx == 3)
+local m = dfle.model{ channel = dfle.channel{ dx = 20 } }
+m:run{ years = 200, record = { 100, 200 }, netcdf = "$tmp/io.nc" }
+assert(io.open("$tmp/io.nc"), "no NetCDF file")
+LUA
+check "the installed command reads a DEM, writes GeoTIFF and NetCDF" \
+    sh -c "rm -f '$tmp'/io.tif '$tmp'/io.nc && '$root/bin/dfle' -q '$tmp/io.lua'"
+if command -v lua5.4 > /dev/null 2>&1; then
+    check "so does the module in a stock lua5.4" sh -c "
+        rm -f '$tmp'/io.tif '$tmp'/io.nc &&
+        lua5.4 -e \"package.cpath = '$root/lib/lua/5.4/?.so'; dfle = require 'dfle'\" '$tmp/io.lua'"
+fi
+
+cat > "$tmp/dem.c" <<'PROG'
+/* A DEM read through the static library, linked without GDAL. */
+#include <stdio.h>
+#include <dfle/dem.h>
+int main(int argc, char **argv)
+{
+    dfle_dem *d;
+    dfle_error err;
+    if (argc < 2 || dfle_dem_read(argv[1], NULL, &d, &err) != DFLE_OK) {
+        fprintf(stderr, "%s\n", argc < 2 ? "no path" : err.msg);
+        return 1;
+    }
+    printf("%zu x %zu\n", dfle_dem_nx(d), dfle_dem_ny(d));
+    dfle_dem_free(d);
+    return 0;
+}
+PROG
+check "a C program on the static library and GSL alone reads a DEM" sh -c "
+    ${CC:-cc} -std=c11 -I'$root/include' '$tmp/dem.c' '$root/lib/libdfle.a' \
+        \$(pkg-config --libs gsl) -lm -pthread -o '$tmp/dem' &&
+    '$tmp/dem' '$tmp/dem.asc' | grep -qx '3 x 3'"
 
 cat > "$tmp/prog.c" <<'PROG'
 /* Eq. (26) from the installed library: S = (U/K)^(1/n) A^(-m/n). */

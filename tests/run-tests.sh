@@ -45,6 +45,10 @@ run lua-tests $vg "$DFLE" -q tests/lua/run.lua "$DFLE"
 if [ -z "${SANITIZE:-}" ] && [ "${MEMCHECK:-0}" != 1 ]; then
     run install sh tests/install.sh
 fi
+# The API fuzzer, its short fixed-seed mode (ends with "fuzz: N calls ...";
+# `make fuzz` runs the long one).  Not under valgrind: it is slow there,
+# and `make check` runs it under the sanitizers.
+run fuzz sh tests/fuzz/run.sh short "$DFLE"
 
 # Every example in its quick mode, in a scratch directory.
 tmp=$(mktemp -d)

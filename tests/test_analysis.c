@@ -303,22 +303,28 @@ static const double eq2_cases[][3] = {
 };
 #define N_CASES (sizeof eq2_cases / sizeof eq2_cases[0])
 
+/* Exact Eq. (2) data: both fits, residuals in S and in log S, recover
+ * the parameters, with R^2 = 1 in both spaces. */
 static void test_fit_recovers_noise_free(void **state)
 {
     (void)state;
     enum { N = 61 };
     double A[N], S[N];
-    for (size_t c = 0; c < N_CASES; c++) {
-        const double *p = eq2_cases[c];
+    for (size_t c = 0; c < 2 * N_CASES; c++) {
+        const double *p = eq2_cases[c % N_CASES];
+        dfle_residuals res = c < N_CASES ? DFLE_RESIDUALS_LINEAR : DFLE_RESIDUALS_LOG;
         dfle_eq2_fit fit;
         dfle_error err = { 0, "" };
         make_eq2_data(N, 1e2, 1e8, p[0], p[1], p[2], 0.0, A, S);
-        assert_ok(dfle_fit_eq2(N, A, S, &fit, &err), &err);
+        assert_ok(dfle_fit_eq2_residuals(N, A, S, res, &fit, &err), &err);
+        assert_int_equal(fit.residuals, res);
         assert_close(fit.S_df, p[0], 1e-6, 0);
         assert_close(fit.A_df, p[1], 1e-6, 0);
         assert_close(fit.a2, p[2], 1e-6, 0);
         assert_close(fit.r2, 1.0, 0, 1e-12);
+        assert_close(fit.r2_log, 1.0, 0, 1e-12);
         assert_close(fit.rmse, 0.0, 0, 1e-9 * p[0]);
+        assert_close(fit.rmse_log, 0.0, 0, 1e-9);
         assert_int_equal(fit.n_points, N);
         /* The data-driven start should land close: a handful of steps. */
         assert_true(fit.iterations > 0 && fit.iterations <= 10);
@@ -510,7 +516,7 @@ static void test_fit_errors(void **state)
     assert_msg_contains(err.msg, "point 3 has slope -0.05");
     assert_msg_contains(err.msg, "positive");
     assert_int_equal(dfle_fit_eq2(5, A_bad, S, &fit, &err), DFLE_EINVAL);
-    assert_msg_contains(err.msg, "point 2 has area nan");
+    assert_msg_contains(err.msg, "point 2 has area NaN");
     assert_int_equal(dfle_fit_eq2(5, A_two, S, &fit, &err), DFLE_EINVAL);
     assert_msg_contains(err.msg, "fewer than 3 distinct areas");
     assert_int_equal(dfle_fit_eq2(5, A, NULL, &fit, &err), DFLE_EINVAL);
@@ -646,6 +652,119 @@ static void test_eq2_eval(void **state)
     assert_close(dfle_eq2_eval(0.7, 1e4, 1.5, 1e12), 0.7 * pow(1e8, -1.5), 1e-10, 0);
 }
 
+/* ---------------------------------------------------------------- */
+/* Residuals in log S                                               */
+/* ---------------------------------------------------------------- */
+
+/* A standard normal deviate (Box-Muller on the LCG). */
+static double lcg_normal(void)
+{
+    double u1 = 1.0 - lcg_uniform(), u2 = lcg_uniform();
+    return sqrt(-2.0 * log(u1)) * cos(2.0 * 3.14159265358979323846 * u2);
+}
+
+/* Multiplicative log-normal noise, S = S_eq2 exp(sigma e), as DEM
+ * slopes have: the log fit is unbiased; the linear fit on bin means
+ * follows E[S] = S_eq2 exp(sigma^2 / 2), so its S_df comes out high by
+ * that factor, and its misfit is dominated by the steep bins. */
+static void test_log_fit_unbiased_with_lognormal_noise(void **state)
+{
+    (void)state;
+    enum { N = 40000 };
+    const double S_df = 0.8, A_df = 3e4, a2 = 0.9, sigma = 0.5;
+    double *A = malloc(N * sizeof *A), *S = malloc(N * sizeof *S);
+    dfle_eq2_fit lin, lg;
+    dfle_error err = { 0, "" };
+    assert_non_null(A);
+    assert_non_null(S);
+    lcg_state = 12345;
+    for (size_t i = 0; i < N; i++) {
+        A[i] = 1e3 * pow(1e4, lcg_uniform()); /* log-uniform over 1e3 .. 1e7 m^2 */
+        S[i] = dfle_eq2_eval(S_df, A_df, a2, A[i]) * exp(sigma * lcg_normal());
+    }
+    assert_ok(dfle_slope_area_fit_residuals(N, A, S, 40, DFLE_RESIDUALS_LOG, NULL, &lg, &err),
+              &err);
+    assert_ok(dfle_slope_area_fit_residuals(N, A, S, 40, DFLE_RESIDUALS_LINEAR, NULL, &lin, &err),
+              &err);
+    assert_int_equal(lg.residuals, DFLE_RESIDUALS_LOG);
+    assert_int_equal(lin.residuals, DFLE_RESIDUALS_LINEAR);
+    /* The log fit: each within a few percent. */
+    assert_close(lg.S_df, S_df, 0.03, 0);
+    assert_close(lg.A_df, A_df, 0.10, 0);
+    assert_close(lg.a2, a2, 0.03, 0);
+    /* The linear fit: S_df high by about exp(sigma^2 / 2) = 1.133. */
+    assert_close(lin.S_df / S_df, exp(sigma * sigma / 2), 0.04, 0);
+    assert_true(fabs(log(lg.S_df / S_df)) < 0.25 * fabs(log(lin.S_df / S_df)));
+    /* Each fit is the better one in its own space. */
+    assert_true(lg.r2_log >= lin.r2_log);
+    assert_true(lin.r2 >= lg.r2);
+    assert_true(lg.r2_log > 0.99 && lin.r2 > 0.99);
+    free(A);
+    free(S);
+}
+
+/* R^2 by hand on three points, with S_df = 1, A_df = 1, a2 = 1, so
+ * S_model = 1 / (1 + A) = 0.5, 0.25, 0.125 at A = 1, 3, 7, and data
+ * S = 0.6, 0.2, 0.125:
+ *   linear: residuals 0.1, -0.05, 0 -> SS_res = 0.0125; mean S = 0.925/3,
+ *     SS_tot = (0.6 - m)^2 + (0.2 - m)^2 + (0.125 - m)^2 = 0.130416667;
+ *   log10: residuals log10(1.2), log10(0.8), 0; SS_tot about the mean of
+ *     log10 0.6, log10 0.2, log10 0.125. */
+static void test_r2_by_hand(void **state)
+{
+    (void)state;
+    const double A[3] = { 1, 3, 7 }, S[3] = { 0.6, 0.2, 0.125 };
+    double m = (log10(0.6) + log10(0.2) + log10(0.125)) / 3;
+    double ss_tot_log = (log10(0.6) - m) * (log10(0.6) - m) + (log10(0.2) - m) * (log10(0.2) - m) +
+                        (log10(0.125) - m) * (log10(0.125) - m);
+    double ss_res_log = log10(1.2) * log10(1.2) + log10(0.8) * log10(0.8);
+    assert_close(dfle_eq2_r2(1, 1, 1, 3, A, S, DFLE_RESIDUALS_LINEAR),
+                 1.0 - 0.0125 / 0.13041666666666667, 1e-12, 0);
+    assert_close(dfle_eq2_r2(1, 1, 1, 3, A, S, DFLE_RESIDUALS_LOG),
+                 1.0 - ss_res_log / ss_tot_log, 1e-12, 0);
+    /* the hand numbers themselves: 0.904153 and 0.935937 */
+    assert_close(dfle_eq2_r2(1, 1, 1, 3, A, S, DFLE_RESIDUALS_LINEAR), 0.904153, 1e-6, 0);
+    assert_close(dfle_eq2_r2(1, 1, 1, 3, A, S, DFLE_RESIDUALS_LOG), 0.935937, 1e-6, 0);
+    /* undefined for fewer than two points or equal values */
+    assert_true(isnan(dfle_eq2_r2(1, 1, 1, 1, A, S, DFLE_RESIDUALS_LINEAR)));
+    assert_true(isnan(dfle_eq2_r2(1, 1, 1, 2, A, (const double[]){ 0.3, 0.3 },
+                                  DFLE_RESIDUALS_LOG)));
+}
+
+/* Bins: the geometric mean is over the positive slopes; a bin with none
+ * has 0, and is left out of a log fit but not of a linear one. */
+static void test_bins_geometric_mean(void **state)
+{
+    (void)state;
+    const double A[6] = { 1, 1.1, 1.2, 10, 10.5, 11 };
+    const double S[6] = { 0.1, 0.4, 0.0, -0.1, 0.0, 0.2 };
+    dfle_bins b;
+    dfle_error err = { 0, "" };
+    assert_ok(dfle_bins_compute(6, A, S, 2, &b, &err), &err);
+    assert_int_equal(b.n, 2);
+    assert_close(b.S_geomean[0], 0.2, 1e-12, 0); /* sqrt(0.1 * 0.4); the flat left out */
+    assert_close(b.S_geomean[1], 0.2, 1e-12, 0);
+    dfle_bins_release(&b);
+    const double S2[6] = { 0.1, 0.4, 0.0, -0.1, 0.0, -0.2 };
+    assert_ok(dfle_bins_compute(6, A, S2, 2, &b, &err), &err);
+    assert_true(b.S_geomean[1] == 0.0);
+    dfle_bins_release(&b);
+}
+
+/* A bad residuals value is refused, naming it. */
+static void test_residuals_checked(void **state)
+{
+    (void)state;
+    enum { N = 61 };
+    double A[N], S[N];
+    dfle_eq2_fit fit;
+    dfle_error err = { 0, "" };
+    make_eq2_data(N, 1e2, 1e8, 0.8, 3e4, 0.9, 0.0, A, S);
+    assert_int_equal(dfle_slope_area_fit_residuals(N, A, S, 10, (dfle_residuals)7, NULL, &fit,
+                                                   &err), DFLE_EINVAL);
+    assert_msg_contains(err.msg, "residuals 7");
+}
+
 int main(void)
 {
     const struct CMUnitTest tests[] = {
@@ -670,6 +789,10 @@ int main(void)
         cmocka_unit_test(test_slope_area_fit_skips_nonpositive_bins),
         cmocka_unit_test(test_slope_area_fit_errors),
         cmocka_unit_test(test_eq2_eval),
+        cmocka_unit_test(test_log_fit_unbiased_with_lognormal_noise),
+        cmocka_unit_test(test_r2_by_hand),
+        cmocka_unit_test(test_bins_geometric_mean),
+        cmocka_unit_test(test_residuals_checked),
     };
     return cmocka_run_group_tests(tests, NULL, NULL);
 }

@@ -118,6 +118,46 @@ static void ids_are_unique(void **state)
     dfle_channel_free(NULL);
 }
 
+/* A Hack channel lists the options as given (A_max as asked), and they
+ * rebuild the same channel; a channel from arrays lists dx only. */
+static void params_list_the_options_given(void **state)
+{
+    dfle_channel_opts o;
+    dfle_channel *ch = NULL, *again = NULL, *arr = NULL;
+    dfle_param p[16];
+    dfle_error err;
+    const double A[3] = {1e3, 2e3, 3e3}, w[3] = {1, 1, 1};
+    (void)state;
+    dfle_channel_opts_default(&o);
+    o.dx = 10;
+    o.A_max = 3e6;
+    o.b = 0.4;
+    assert_ok(dfle_channel_new(&o, &ch, &err), &err);
+    assert_int_equal(dfle_channel_params(ch, NULL, 0), 8);
+    assert_int_equal(dfle_channel_params(ch, p, 2), 8); /* writes 2, says 8 */
+    assert_int_equal(dfle_channel_params(ch, p, 16), 8);
+    assert_string_equal(p[0].name, "dx");
+    assert_close(p[0].value, 10, 0, 0);
+    assert_string_equal(p[0].unit, "m");
+    assert_string_equal(p[6].name, "A_max");
+    assert_close(p[6].value, 3e6, 0, 0);
+    assert_true(dfle_channel_A(ch)[dfle_channel_size(ch) - 1] > 3e6);
+    assert_string_equal(dfle_channel_kind(ch), "hack");
+    dfle_channel_opts_default(&o);
+    o.dx = p[0].value, o.A0 = p[1].value, o.hack_coef = p[2].value, o.hack_exp = p[3].value;
+    o.k_w = p[4].value, o.b = p[5].value, o.A_max = p[6].value, o.length = p[7].value;
+    assert_ok(dfle_channel_new(&o, &again, &err), &err);
+    assert_int_equal(dfle_channel_size(again), dfle_channel_size(ch));
+    assert_close(dfle_channel_w(again)[5], dfle_channel_w(ch)[5], 0, 0);
+    assert_ok(dfle_channel_new_from_arrays(3, 7, A, w, &arr, &err), &err);
+    assert_string_equal(dfle_channel_kind(arr), "arrays");
+    assert_int_equal(dfle_channel_params(arr, p, 16), 1);
+    assert_close(p[0].value, 7, 0, 0);
+    dfle_channel_free(ch);
+    dfle_channel_free(again);
+    dfle_channel_free(arr);
+}
+
 int main(void)
 {
     const struct CMUnitTest tests[] = {
@@ -126,6 +166,7 @@ int main(void)
         cmocka_unit_test(bad_parameters_are_named),
         cmocka_unit_test(arrays_are_validated_and_copied),
         cmocka_unit_test(ids_are_unique),
+        cmocka_unit_test(params_list_the_options_given),
     };
     return cmocka_run_group_tests(tests, NULL, NULL);
 }

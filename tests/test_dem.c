@@ -11,6 +11,7 @@
 #include <math.h>
 #include <stdlib.h>
 #include <string.h>
+#include <sys/stat.h>
 #include <unistd.h>
 
 #include "dfle/dem.h"
@@ -425,6 +426,18 @@ static void test_read_errors(void **state)
     assert_msg_contains(err.msg, "directory");
 
     assert_int_equal(dfle_dem_read("", NULL, &d, &err), DFLE_EINVAL);
+
+    /* A FIFO: GDAL's open waited for a writer for ever (found by the
+     * fuzzer); SIGALRM ends such a hang here. */
+    {
+        char fifo[300];
+        snprintf(fifo, sizeof fifo, "%s/pipe.asc", tmpdir);
+        assert_int_equal(mkfifo(fifo, 0600), 0);
+        alarm(20);
+        assert_int_equal(dfle_dem_read(fifo, NULL, &d, &err), DFLE_EIO);
+        alarm(0);
+        assert_msg_contains(err.msg, "not a regular file");
+    }
 
     /* A band that does not exist. */
     {

@@ -6,9 +6,11 @@
  *
  * The test runner (tests/run-tests.sh) sets DFLE_DATA_DIR.
  */
+#include <errno.h>
 #include <math.h>
 #include <stdlib.h>
 #include <string.h>
+#include <sys/stat.h>
 #include <unistd.h>
 
 #include "dfle/analysis.h"
@@ -199,6 +201,26 @@ static void test_valley_network_and_channel(void **state)
     assert_close(dfle_profile_field(net, DFLE_PROFILE_D)[0], 390.0, 0, 1e-9);
     assert_int_equal(dfle_profile_channel(net, 5, 0.05, 0.3, &ch, &err), DFLE_EINVAL);
     assert_msg_contains(err.msg, "network");
+    {
+        /* Its main stem: the axis from the west edge to the outlet, head
+         * first, x from the head, areas growing by 700 m^2 a cell; a
+         * model channel runs on it. */
+        dfle_profile *stem;
+        assert_ok(dfle_profile_main_stem(net, &stem, &err), &err);
+        assert_false(dfle_profile_is_network(stem));
+        assert_int_equal(dfle_profile_size(stem), 40);
+        for (size_t i = 0; i < 40; i++) {
+            assert_close(dfle_profile_field(stem, DFLE_PROFILE_A)[i], 700.0 * (double)(i + 1),
+                         1e-12, 0);
+            assert_close(dfle_profile_field(stem, DFLE_PROFILE_X)[i], 10.0 * (double)i, 0, 1e-9);
+            assert_close(dfle_profile_field(stem, DFLE_PROFILE_E)[i], valley_E((int)i), 0, 1e-9);
+            assert_int_equal(dfle_profile_receiver(stem)[i], i + 1 < 40 ? i + 2 : 0);
+        }
+        assert_ok(dfle_profile_channel(stem, 5, 0.05, 0.3, &ch, &err), &err);
+        assert_int_equal(dfle_channel_size(ch), 79);
+        dfle_channel_free(ch);
+        dfle_profile_free(stem);
+    }
     dfle_profile_free(net);
 
     no.A_min = 1e9;
@@ -462,18 +484,56 @@ static void test_write_csv(void **state)
     fd = mkstemp(path);
     assert_true(fd >= 0);
     close(fd);
-    assert_ok(dfle_profile_write_csv(p, path, &err), &err);
+    assert_ok(dfle_profile_write_csv(p, path, NULL, &err), &err);
     f = fopen(path, "r");
     assert_non_null(f);
     assert_non_null(fgets(line, sizeof line, f));
-    assert_string_equal(line, "E (m),N (m),x (m),d (m),z (m),A (m^2),S (-),receiver\n");
+    assert_string_equal(line, "# units: E=m, N=m, x=m, d=m, z=m, A=m^2, S=-\n");
+    assert_non_null(fgets(line, sizeof line, f));
+    assert_string_equal(line, "E,N,x,d,z,A,S,receiver\n");
     while (fgets(line, sizeof line, f) != NULL)
         lines++;
     fclose(f);
     remove(path);
     assert_int_equal(lines, (int)dfle_profile_size(p));
-    assert_int_equal(dfle_profile_write_csv(p, "/no/such/dir/p.csv", &err), DFLE_EIO);
+    {
+        /* With its provenance: the DEM, the point given and snapped. */
+        dfle_record *rec;
+        char first[512];
+        assert_ok(dfle_record_new(&rec, &err), &err);
+        dfle_profile_describe(p, rec);
+        assert_ok(dfle_profile_write_csv(p, path, rec, &err), &err);
+        dfle_record_free(rec);
+        f = fopen(path, "r");
+        assert_non_null(f);
+        assert_non_null(fgets(first, sizeof first, f));
+        fclose(f);
+        remove(path);
+        assert_true(strncmp(first, "# profile profile: dem=", 23) == 0);
+        assert_msg_contains(first, dfle_dem_path(tif));
+        assert_msg_contains(first, ", from=outlet, given_E=");
+        assert_msg_contains(first, " m, snapped_E=");
+        assert_msg_contains(first, ", radius=");
+        assert_msg_contains(first, ", ds=");
+    }
+    assert_int_equal(dfle_profile_write_csv(p, "/no/such/dir/p.csv", NULL, &err), DFLE_EIO);
     assert_msg_contains(err.msg, "/no/such/dir/p.csv");
+    assert_msg_contains(err.msg, strerror(ENOENT)); /* the system's reason */
+    /* Written through dfle_file like every output (found by the fuzzer:
+     * a plain fopen waited for ever on a FIFO nobody read, which an
+     * alarm ends here, and left half a file on a full disk). */
+    {
+        char dir[] = "/tmp/dfle_test_profile_XXXXXX", fifo[64];
+        assert_non_null(mkdtemp(dir));
+        snprintf(fifo, sizeof fifo, "%s/pipe", dir);
+        assert_int_equal(mkfifo(fifo, 0600), 0);
+        alarm(20);
+        assert_int_equal(dfle_profile_write_csv(p, fifo, NULL, &err), DFLE_EIO);
+        alarm(0);
+        assert_msg_contains(err.msg, "no process is reading");
+        remove(fifo);
+        rmdir(dir);
+    }
     dfle_profile_free(p);
 }
 

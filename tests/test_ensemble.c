@@ -3,11 +3,14 @@
  * rows, resume over a truncated last line, the sorted rewrite, gather of
  * shards, and the index queue (shards, done samples, limit, threads).
  */
+#define _XOPEN_SOURCE 700 /* mknod */
 #include "dfle_test.h"
 
 #include <pthread.h>
 #include <stdlib.h>
 #include <string.h>
+#include <sys/stat.h>
+#include <sys/sysmacros.h> /* makedev */
 #include <unistd.h>
 
 #include "dfle/ensemble.h"
@@ -72,7 +75,7 @@ static void test_stream_sort_resume(void **state)
     (void)state;
 
     path(p, sizeof p, "a.csv");
-    assert_ok(dfle_ens_file_open(p, META, HEADER, 6, 1, &f, &err), &err);
+    assert_ok(dfle_ens_file_open(p, META, NULL, HEADER, 6, 1, &f, &err), &err);
     for (size_t k = 0; k < 3; k++) {
         row(r, sizeof r, order[k]);
         assert_ok(dfle_ens_file_append(f, order[k], r, &err), &err);
@@ -92,7 +95,7 @@ static void test_stream_sort_resume(void **state)
     fp = fopen(p, "ab");
     fputs("5,2.", fp);
     fclose(fp);
-    assert_ok(dfle_ens_file_open(p, META, HEADER, 6, 1, &f, &err), &err);
+    assert_ok(dfle_ens_file_open(p, META, NULL, HEADER, 6, 1, &f, &err), &err);
     assert_int_equal(dfle_ens_file_ndone(f), 3);
     assert_true(dfle_ens_file_done(f, 2));
     assert_false(dfle_ens_file_done(f, 5));
@@ -107,14 +110,69 @@ static void test_stream_sort_resume(void **state)
     free(text);
 
     /* another ensemble's file is refused; resume = 0 replaces it */
-    assert_int_equal(dfle_ens_file_open(p, "# other", HEADER, 6, 1, &f, &err), DFLE_EINVAL);
+    assert_int_equal(dfle_ens_file_open(p, "# other", NULL, HEADER, 6, 1, &f, &err), DFLE_EINVAL);
     assert_non_null(strstr(err.msg, "different ensemble"));
-    assert_ok(dfle_ens_file_open(p, "# other", HEADER, 6, 0, &f, &err), &err);
+    assert_ok(dfle_ens_file_open(p, "# other", NULL, HEADER, 6, 0, &f, &err), &err);
     assert_int_equal(dfle_ens_file_ndone(f), 0);
     assert_ok(dfle_ens_file_close(f, 1, &err), &err);
     text = slurp(p);
     assert_string_equal(text, "# other\n" HEADER "\n");
     free(text);
+}
+
+/* Comment lines between meta and header: written with a new file,
+ * kept by resume (not compared: they describe, meta and header
+ * identify), by the sorted rewrite and by gather (the first file's);
+ * CSV readers skip them. */
+static void test_comment_lines(void **state)
+{
+    char p[128], q[128], out[128], r[64];
+    const char *files[2];
+    dfle_ens_file *f;
+    dfle_ens_table *t;
+    dfle_error err;
+    char *text;
+    (void)state;
+
+    path(p, sizeof p, "c.csv");
+    path(q, sizeof q, "d.csv");
+    path(out, sizeof out, "cd.csv");
+    assert_int_equal(dfle_ens_file_open(p, META, "# ok\nnot a comment", HEADER, 6, 1, &f, &err),
+                     DFLE_EINVAL);
+    assert_ok(dfle_ens_file_open(p, META, "# dfle: 9\n# units: x=m", HEADER, 6, 1, &f, &err), &err);
+    row(r, sizeof r, 3);
+    assert_ok(dfle_ens_file_append(f, 3, r, &err), &err);
+    assert_ok(dfle_ens_file_close(f, 0, &err), &err);
+    /* resumed by another version: its rows count, the lines stay */
+    assert_ok(dfle_ens_file_open(p, META, "# dfle: 10", HEADER, 6, 1, &f, &err), &err);
+    assert_int_equal(dfle_ens_file_ndone(f), 1);
+    row(r, sizeof r, 1);
+    assert_ok(dfle_ens_file_append(f, 1, r, &err), &err);
+    assert_ok(dfle_ens_file_close(f, 1, &err), &err);
+    text = slurp(p);
+    assert_string_equal(text, META "\n# dfle: 9\n# units: x=m\n" HEADER
+                              "\n1,0.5,ok,\"\"\n3,1.5,ok,\"\"\n");
+    free(text);
+    assert_ok(dfle_ens_table_read(p, &t, &err), &err);
+    assert_string_equal(t->comments, "# dfle: 9\n# units: x=m");
+    assert_string_equal(t->header, HEADER);
+    assert_int_equal(t->nrows, 2);
+    dfle_ens_table_free(t);
+    /* gather: the first file's lines */
+    assert_ok(dfle_ens_file_open(q, META, NULL, HEADER, 6, 1, &f, &err), &err);
+    row(r, sizeof r, 2);
+    assert_ok(dfle_ens_file_append(f, 2, r, &err), &err);
+    assert_ok(dfle_ens_file_close(f, 1, &err), &err);
+    files[0] = p;
+    files[1] = q;
+    assert_ok(dfle_ens_gather(files, 2, out, NULL, &err), &err);
+    text = slurp(out);
+    assert_string_equal(text, META "\n# dfle: 9\n# units: x=m\n" HEADER
+                              "\n1,0.5,ok,\"\"\n2,1,ok,\"\"\n3,1.5,ok,\"\"\n");
+    free(text);
+    remove(p);
+    remove(q);
+    remove(out);
 }
 
 static void test_gather_shards(void **state)
@@ -133,7 +191,7 @@ static void test_gather_shards(void **state)
         snprintf(name, sizeof name, "s%zu.csv", s);
         path(p[s - 1], sizeof p[s - 1], name);
         files[3 - s] = p[s - 1];
-        assert_ok(dfle_ens_file_open(p[s - 1], META, HEADER, 6, 1, &f, &err), &err);
+        assert_ok(dfle_ens_file_open(p[s - 1], META, NULL, HEADER, 6, 1, &f, &err), &err);
         assert_ok(dfle_ens_queue_new(6, s, 3, f, 0, &q, &err), &err);
         assert_int_equal(dfle_ens_queue_total(q), 2);
         while (dfle_ens_queue_next(q, &i)) {
@@ -242,7 +300,8 @@ static void test_malformed_files(void **state)
 /* Two runs with one `out` once interleaved their rows (duplicates, a
  * torn line): the second must stop at once, saying why, and the first
  * must write on unharmed.  A device as `out` must be refused, never read
- * without end (/dev/zero) nor written into (/dev/full). */
+ * without end (a zero device) nor written into (a full one): nodes made
+ * here, never /dev's own (an earlier bug replaced /dev/null). */
 static void test_one_writer_per_file(void **state)
 {
     char p[128], r[64];
@@ -250,24 +309,29 @@ static void test_one_writer_per_file(void **state)
     dfle_error err;
     (void)state;
     path(p, sizeof p, "locked.csv");
-    assert_ok(dfle_ens_file_open(p, META, HEADER, 6, 1, &a, &err), &err);
+    assert_ok(dfle_ens_file_open(p, META, NULL, HEADER, 6, 1, &a, &err), &err);
     row(r, sizeof r, 1);
     assert_ok(dfle_ens_file_append(a, 1, r, &err), &err);
-    assert_int_equal(dfle_ens_file_open(p, META, HEADER, 6, 1, &b, &err), DFLE_EIO);
+    assert_int_equal(dfle_ens_file_open(p, META, NULL, HEADER, 6, 1, &b, &err), DFLE_EIO);
     assert_null(b);
     assert_msg_contains(err.msg, "being written by another run");
     row(r, sizeof r, 2);
     assert_ok(dfle_ens_file_append(a, 2, r, &err), &err);
     assert_ok(dfle_ens_file_close(a, 0, &err), &err);
     /* Once the first has finished, the file is free again and resumes. */
-    assert_ok(dfle_ens_file_open(p, META, HEADER, 6, 1, &b, &err), &err);
+    assert_ok(dfle_ens_file_open(p, META, NULL, HEADER, 6, 1, &b, &err), &err);
     assert_int_equal(dfle_ens_file_ndone(b), 2);
     assert_ok(dfle_ens_file_close(b, 0, &err), &err);
-    for (int k = 0; k < 2; k++) {
-        const char *dev = k ? "/dev/full" : "/dev/zero";
-        assert_int_equal(dfle_ens_file_open(dev, META, HEADER, 6, 1, &b, &err), DFLE_EINVAL);
-        assert_msg_contains(err.msg, "regular file");
+    for (int k = 0; k < 3; k++) {
+        char dev[128];
         dfle_ens_table *t;
+        path(dev, sizeof dev, k == 0 ? "fifo" : k == 1 ? "zero" : "full");
+        if (k == 0)
+            assert_int_equal(mkfifo(dev, 0600), 0);
+        else if (mknod(dev, S_IFCHR | 0600, makedev(1, k == 1 ? 5 : 7)) != 0)
+            continue; /* not root: the FIFO alone */
+        assert_int_equal(dfle_ens_file_open(dev, META, NULL, HEADER, 6, 1, &b, &err), DFLE_EINVAL);
+        assert_msg_contains(err.msg, "regular file");
         assert_int_equal(dfle_ens_table_read(dev, &t, &err), DFLE_EIO);
         assert_msg_contains(err.msg, "not a regular file");
     }
@@ -277,6 +341,7 @@ int main(void)
 {
     const struct CMUnitTest tests[] = {
         cmocka_unit_test(test_stream_sort_resume),
+        cmocka_unit_test(test_comment_lines),
         cmocka_unit_test(test_gather_shards),
         cmocka_unit_test(test_queue_threads_limit),
         cmocka_unit_test(test_malformed_files),

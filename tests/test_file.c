@@ -70,7 +70,7 @@ static void assert_contents(const char *path, const char *text)
 /* Entries of the directory other than the names given (NULL-ended). */
 static int stray_entries(const char *dirpath, const char *const *keep)
 {
-    char cmd[512], line[256];
+    char cmd[512], line[512];
     int n = 0;
     snprintf(cmd, sizeof cmd, "ls -A '%s'", dirpath);
     FILE *p = popen(cmd, "r");
@@ -200,6 +200,48 @@ static void a_fifo_stays_a_fifo(void **state)
     assert_true(S_ISFIFO(st.st_mode));
 }
 
+/* A FIFO no process reads is an error at once: the open used to wait for
+ * a reader for ever (found by the fuzzer).  SIGALRM ends a hang here. */
+static void a_fifo_without_a_reader_is_an_error(void **state)
+{
+    dir *d = *state;
+    char path[300];
+    dfle_file f;
+    dfle_error err;
+    struct stat st;
+    snprintf(path, sizeof path, "%s/pipe", d->path);
+    assert_int_equal(mkfifo(path, 0600), 0);
+    alarm(20);
+    assert_int_equal(dfle_file_begin(&f, path, "test", &err), DFLE_EIO);
+    alarm(0);
+    assert_msg_contains(err.msg, "test: cannot write");
+    assert_msg_contains(err.msg, "it is a FIFO that no process is reading");
+    assert_int_equal(stat(path, &st), 0);
+    assert_true(S_ISFIFO(st.st_mode));
+}
+
+/* A name of NAME_MAX bytes is written like any other: the temporary
+ * name beside it is shortened (it was too long for the file system). */
+static void the_longest_names_are_written(void **state)
+{
+    dir *d = *state;
+    char name[256], path[600];
+    dfle_file f;
+    dfle_error err;
+    const char *const keep[] = {name, NULL};
+    memset(name, 'n', 255);
+    name[255] = '\0';
+    memcpy(name + 251, ".csv", 4);
+    snprintf(path, sizeof path, "%s/%s", d->path, name);
+    for (int round = 0; round < 2; round++) {
+        assert_ok(dfle_file_begin(&f, path, "test", &err), &err);
+        fputs(round ? "new\n" : "old\n", f.fp);
+        assert_ok(dfle_file_commit(&f, &err), &err);
+    }
+    assert_contents(path, "new\n");
+    assert_int_equal(stray_entries(d->path, keep), 0);
+}
+
 /* A symbolic link stays a link; the file it points at is replaced. */
 static void a_link_stays_a_link(void **state)
 {
@@ -242,6 +284,8 @@ int main(void)
         cmocka_unit_test_setup_teardown(file_size_limit_keeps_the_old_file, setup, teardown),
         cmocka_unit_test_setup_teardown(dead_writers_leftovers_are_cleaned, setup, teardown),
         cmocka_unit_test_setup_teardown(a_fifo_stays_a_fifo, setup, teardown),
+        cmocka_unit_test_setup_teardown(a_fifo_without_a_reader_is_an_error, setup, teardown),
+        cmocka_unit_test_setup_teardown(the_longest_names_are_written, setup, teardown),
         cmocka_unit_test_setup_teardown(a_link_stays_a_link, setup, teardown),
         cmocka_unit_test_setup_teardown(bad_targets_say_why, setup, teardown),
     };

@@ -104,6 +104,45 @@ static void bad_parameters_are_named(void **state)
     assert_msg_contains(err.msg, "rho_s");
 }
 
+static double param_value(const dfle_param *p, size_t n, const char *name)
+{
+    for (size_t i = 0; i < n; i++)
+        if (strcmp(p[i].name, name) == 0)
+            return p[i].value;
+    fail_msg("no parameter %s", name);
+    return NAN;
+}
+
+/* Table G1 and the derived K, m_s, n_s; stream power's K, m, n. */
+static void params_rebuild_the_same_law(void **state)
+{
+    dfle_stochastic_threshold_opts o;
+    dfle_fluvial *fl = NULL, *sp = NULL;
+    dfle_param p[32];
+    dfle_error err;
+    size_t n;
+    (void)state;
+    dfle_stochastic_threshold_opts_default(&o);
+    o.k_e = 7e-14;
+    o.n_override = 2.0;
+    assert_ok(dfle_fluvial_new_stochastic_threshold(&o, &fl, &err), &err);
+    n = dfle_fluvial_params(fl, p, 32);
+    assert_int_equal(n, 19);
+    assert_close(param_value(p, n, "k_e"), 7e-14, 0, 0);
+    assert_close(param_value(p, n, "rho_s"), 2600, 0, 0);
+    assert_close(param_value(p, n, "K"), dfle_fluvial_K(fl), 0, 0);
+    assert_close(param_value(p, n, "m_s"), dfle_fluvial_m(fl), 0, 0);
+    assert_close(param_value(p, n, "n_s"), 2.0, 0, 0);
+    assert_ok(dfle_fluvial_new_stream_power(1e-6, 0.5, 1, &sp, &err), &err);
+    n = dfle_fluvial_params(sp, p, 32);
+    assert_int_equal(n, 3);
+    assert_close(param_value(p, n, "K"), 1e-6, 0, 0);
+    assert_close(param_value(p, n, "m"), 0.5, 0, 0);
+    assert_close(param_value(p, n, "n"), 1, 0, 0);
+    dfle_fluvial_free(fl);
+    dfle_fluvial_free(sp);
+}
+
 int main(void)
 {
     const struct CMUnitTest tests[] = {
@@ -112,6 +151,7 @@ int main(void)
         cmocka_unit_test(overrides_replace_derived_values),
         cmocka_unit_test(stream_power_rate_and_reverse_slopes),
         cmocka_unit_test(bad_parameters_are_named),
+        cmocka_unit_test(params_rebuild_the_same_law),
     };
     return cmocka_run_group_tests(tests, NULL, NULL);
 }

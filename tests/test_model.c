@@ -8,6 +8,7 @@
 #include "dfle/analytical.h"
 #include "dfle/law_power.h"
 #include "dfle/model.h"
+#include "dfle/record.h"
 #include "dfle/solver.h"
 #include "dfle/router_empirical.h"
 
@@ -403,19 +404,74 @@ static void fields_and_csv(void **state)
     m = r.m;
     fd = mkstemp(path);
     assert_true(fd >= 0);
-    assert_ok(dfle_model_write_csv(m, path, &err), &err);
+    assert_ok(dfle_model_write_csv(m, path, NULL, &err), &err);
     f = fopen(path, "r");
     assert_non_null(f);
+    /* units above plain column names */
     assert_non_null(fgets(line, sizeof line, f));
-    assert_msg_contains(line, "x (m),A (m^2),w (m),z (m),S (-)");
-    assert_msg_contains(line, "tau (Pa)");
+    assert_msg_contains(line, "# units: x=m, A=m^2, w=m, z=m, S=-, E_f=m/yr");
+    assert_msg_contains(line, "tau=Pa, Theta=-");
+    assert_non_null(fgets(line, sizeof line, f));
+    assert_string_equal(line, "x,A,w,z,S,E_f,E_df,dzdt,M,Q,h,v,t_p,tau,Theta\n");
     while (fgets(line, sizeof line, f) != NULL)
         lines++;
     fclose(f);
     assert_int_equal(lines, 403);
     remove(path);
-    assert_int_equal(dfle_model_write_csv(m, "/nonexistent/dir/x.csv", &err), DFLE_EIO);
+    assert_int_equal(dfle_model_write_csv(m, "/nonexistent/dir/x.csv", NULL, &err), DFLE_EIO);
     assert_msg_contains(err.msg, "/nonexistent/dir/x.csv");
+    rig_free(&r);
+}
+
+/* The model's own parameters: U as it is now, cfl, dt_max. */
+static void params_are_U_cfl_dt_max(void **state)
+{
+    rig r = {0};
+    dfle_param p[8];
+    dfle_error err;
+    (void)state;
+    rig_build(&r, 5e-4, 0);
+    assert_ok(dfle_model_set_U(r.m, 7e-4, &err), &err);
+    assert_int_equal(dfle_model_params(r.m, p, 8), 3);
+    assert_string_equal(p[0].name, "U");
+    assert_close(p[0].value, 7e-4, 0, 0);
+    assert_string_equal(p[0].unit, "m/yr");
+    assert_string_equal(p[1].name, "cfl");
+    assert_close(p[1].value, dfle_model_cfl(r.m), 0, 0);
+    assert_string_equal(p[2].name, "dt_max");
+    assert_close(p[2].value, dfle_model_dt_max(r.m), 0, 0);
+    rig_free(&r);
+}
+
+/* The record of a model: each component with its kind and params, a
+ * process that is off as "off", the model's own parameters and time. */
+static void describe_lists_every_component(void **state)
+{
+    rig r = {0};
+    dfle_record *rec;
+    dfle_error err;
+    char *text = NULL;
+    size_t len = 0;
+    FILE *fp;
+    (void)state;
+    rig_debris_flows(&r, 300);
+    rig_build(&r, 5e-4, 0);
+    assert_ok(dfle_record_new(&rec, &err), &err);
+    dfle_model_describe(r.m, rec);
+    assert_ok(dfle_record_status(rec, &err), &err);
+    fp = open_memstream(&text, &len);
+    assert_non_null(fp);
+    dfle_record_write_comments(rec, fp);
+    fclose(fp);
+    assert_msg_contains(text, "# channel hack: dx=5 m, A0=1000 m^2,");
+    assert_msg_contains(text, ", n=403, x_outlet=2010 m, A_head=1000 m^2,");
+    assert_msg_contains(text, "\n# fluvial off\n");
+    assert_msg_contains(text, "\n# router empirical: M0=3000 m^(3-2 gamma), gamma=0.5,");
+    assert_msg_contains(text, "tau_y=300 Pa");
+    assert_msg_contains(text, "\n# law power: k_df=0.0001, alpha=6, beta=1\n");
+    assert_msg_contains(text, "\n# model: U=0.0005 m/yr, cfl=0.5, dt_max=1000 yr, time=0 yr\n");
+    free(text);
+    dfle_record_free(rec);
     rig_free(&r);
 }
 
@@ -433,6 +489,8 @@ int main(void)
         cmocka_unit_test(limits_and_cancellation),
         cmocka_unit_test(bad_options_are_named),
         cmocka_unit_test(fields_and_csv),
+        cmocka_unit_test(params_are_U_cfl_dt_max),
+        cmocka_unit_test(describe_lists_every_component),
     };
     return cmocka_run_group_tests(tests, NULL, NULL);
 }

@@ -138,7 +138,7 @@ static void make_slope_area(dfle_bins *bins, dfle_eq2_fit *fit)
     }
     b_q25[3] = NAN; /* a bin without quartiles must not break the plot */
     *bins = (dfle_bins){NBINS, NBINS, 0, b_A, b_lo, b_hi, b_S, b_S,
-                        b_q25, b_q75, b_cnt};
+                        b_q25, b_q75, b_S, b_cnt};
     *fit = (dfle_eq2_fit){0};
     fit->S_df = 0.7;
     fit->A_df = 2e4;
@@ -156,7 +156,8 @@ static void test_xy_png(void **state)
         y2[i] = 0.1 * i;
     }
     y1[10] = NAN; /* a gap, not a failure */
-    dfle_plot_series s[2] = {{"sqrt", 50, x, y1, 1, NULL}, {NULL, 50, x, y2, 0, NULL}};
+    dfle_plot_series s[2] = {{"sqrt", 50, x, y1, 1, NULL, NULL, NULL, NULL, 0},
+                             {NULL, 50, x, y2, 0, NULL, NULL, NULL, NULL, 0}};
     dfle_plot_opts o = {"Title", "x (m)", "y", 0, 0, 640, 480, NULL, 0};
     dfle_error err = {0};
     assert_ok(dfle_plot_xy(in_dir(fx, "xy.png"), &o, s, 2, &err), &err);
@@ -178,7 +179,7 @@ static void test_xy_colour(void **state)
         c[i] = 1.0 + i;
     }
     c[3] = NAN; /* left out, not a failure */
-    dfle_plot_series s = {"coloured", 40, x, y, 0, c};
+    dfle_plot_series s = {"coloured", 40, x, y, 0, c, NULL, NULL, NULL, 0};
     dfle_plot_opts o = {"colour", "x", "y", 0, 0, 0, 0, "U (m/yr)", 1};
     dfle_error err = {0};
     assert_ok(dfle_plot_xy(in_dir(fx, "colour.png"), &o, &s, 1, &err), &err);
@@ -194,12 +195,71 @@ static void test_xy_log_svg(void **state)
 {
     fixture *fx = *state;
     double x[5] = {-1, 1, 10, 100, 1000}, y[5] = {1, 0, 2, 3, 4};
-    dfle_plot_series s = {"log", 5, x, y, 1, NULL};
+    dfle_plot_series s = {"log", 5, x, y, 1, NULL, NULL, NULL, NULL, 0};
     dfle_plot_opts o = {NULL, NULL, NULL, 1, 1, 0, 0, NULL, 0};
     dfle_error err = {0};
     /* The points with x <= 0 or y <= 0 are dropped from the log plot. */
     assert_ok(dfle_plot_xy(in_dir(fx, "xy.svg"), &o, &s, 1, &err), &err);
     assert_svg(fx->path);
+}
+
+/* A band between lo and hi (filled, translucent) with a dashed line of
+ * its own colour; lo without hi is refused. */
+static void test_xy_band(void **state)
+{
+    fixture *fx = *state;
+    double x[20], lo[20], hi[20], y[20];
+    for (int i = 0; i < 20; i++) {
+        x[i] = 1e3 * pow(10, i / 5.0);
+        y[i] = 0.5 * pow(x[i] / 1e3, -0.3);
+        lo[i] = 0.8 * y[i];
+        hi[i] = 1.25 * y[i];
+    }
+    dfle_plot_series s[2] = {{"band", 20, x, NULL, 0, NULL, lo, hi, "#9ecae1", 0},
+                             {"median", 20, x, y, 1, NULL, NULL, NULL, "#08306b", 1}};
+    dfle_plot_opts o = {"Bands", "A", "S", 1, 1, 640, 480, NULL, 0};
+    dfle_error err = {0};
+    assert_ok(dfle_plot_xy(in_dir(fx, "band.png"), &o, s, 2, &err), &err);
+    assert_png(fx->path);
+    s[0].hi = NULL;
+    assert_int_equal(dfle_plot_xy(in_dir(fx, "band2.png"), &o, s, 2, &err), DFLE_EINVAL);
+    assert_msg_contains(err.msg, "only one of lo, hi");
+}
+
+/* The corner plot of correlated samples, one axis logarithmic; too few
+ * parameters or samples are refused before gnuplot starts. */
+static void test_corner(void **state)
+{
+    fixture *fx = *state;
+    enum { N = 3000 };
+    static double x[N * 3];
+    const char *labels[3] = {"{/:Italic U}", "{/Symbol g}", "k_{df}"};
+    int logs[3] = {1, 0, 1};
+    double truth[3] = {3e-4, 0.5, NAN};
+    dfle_corner_opts o = {"Corner", labels, logs, truth, 120, 20};
+    dfle_error err = {0};
+    uint64_t st = 88172645463325252ULL;
+    for (int i = 0; i < N; i++) {
+        double u[3];
+        for (int k = 0; k < 3; k++) { /* xorshift, then a sum of 4: roughly normal */
+            double v = 0;
+            for (int r = 0; r < 4; r++) {
+                st ^= st << 13, st ^= st >> 7, st ^= st << 17;
+                v += (double)(st >> 11) / 9007199254740992.0 - 0.5;
+            }
+            u[k] = v;
+        }
+        x[3 * i] = 3e-4 * exp(0.3 * u[0]);
+        x[3 * i + 1] = 0.5 + 0.2 * (0.8 * u[0] + 0.6 * u[1]);
+        x[3 * i + 2] = 1e-4 * exp(u[2] + u[1]);
+    }
+    assert_ok(dfle_plot_corner(in_dir(fx, "corner.png"), &o, 3, N, x, &err), &err);
+    assert_png(fx->path);
+    assert_ok(dfle_plot_corner(in_dir(fx, "corner.svg"), NULL, 2, N, x, &err), &err);
+    assert_int_equal(dfle_plot_corner(in_dir(fx, "c0.png"), &o, 0, N, x, &err), DFLE_EINVAL);
+    assert_int_equal(dfle_plot_corner(in_dir(fx, "c1.png"), &o, 3, 1, x, &err), DFLE_EINVAL);
+    assert_msg_contains(err.msg, "at least 2 samples");
+    assert_int_equal(dfle_plot_corner(in_dir(fx, "c.jpg"), &o, 3, N, x, &err), DFLE_EINVAL);
 }
 
 static void test_slope_area_png(void **state)
@@ -257,7 +317,7 @@ static void test_hostile_path(void **state)
         "|touch INJ2.png", "~x.svg"};
     double x[3] = {1, 2, 3}, y[3] = {3, 1, 2};
     dfle_plot_series s = {"a 'label' with `touch INJ3`\nand a new line", 3,
-                          x, y, 1, NULL};
+                          x, y, 1, NULL, NULL, NULL, NULL, 0};
     dfle_plot_opts o = {"it's \"fine\"", "x\\", "`touch INJ4`", 0, 0, 0, 0, NULL, 0};
     dfle_error err = {0};
     char cwd[4096];
@@ -281,7 +341,7 @@ static void test_bad_extension(void **state)
     static const char *const bad[] = {"plot.pdf", "plot", "dir.png/plot",
                                       "plot.png.txt"};
     double x[2] = {1, 2}, y[2] = {1, 2};
-    dfle_plot_series s = {NULL, 2, x, y, 1, NULL};
+    dfle_plot_series s = {NULL, 2, x, y, 1, NULL, NULL, NULL, NULL, 0};
     dfle_error err = {0};
     for (size_t k = 0; k < 4; k++) {
         assert_int_equal(dfle_plot_xy(in_dir(fx, bad[k]), NULL, &s, 1, &err),
@@ -302,8 +362,9 @@ static void test_bad_arguments(void **state)
 {
     fixture *fx = *state;
     double x[2] = {1, 2}, y[2] = {1, 2};
-    dfle_plot_series s = {NULL, 2, x, y, 1, NULL}, empty = {NULL, 0, NULL, NULL, 1, NULL};
-    dfle_plot_series nox = {NULL, 2, NULL, y, 1, NULL};
+    dfle_plot_series s = {NULL, 2, x, y, 1, NULL, NULL, NULL, NULL, 0},
+                     empty = {NULL, 0, NULL, NULL, 1, NULL, NULL, NULL, NULL, 0};
+    dfle_plot_series nox = {NULL, 2, NULL, y, 1, NULL, NULL, NULL, NULL, 0};
     dfle_plot_opts tiny = {NULL, NULL, NULL, 0, 0, 10, 10, NULL, 0};
     dfle_eq2_fit fit = {0};
     dfle_error err = {0};
@@ -336,7 +397,8 @@ static void test_nothing_finite(void **state)
 {
     fixture *fx = *state;
     double nan3[3] = {NAN, NAN, NAN}, x[3] = {1, 2, 3}, neg[3] = {-1, 0, -2};
-    dfle_plot_series s = {"nan", 3, x, nan3, 1, NULL}, sn = {"neg", 3, x, neg, 0, NULL};
+    dfle_plot_series s = {"nan", 3, x, nan3, 1, NULL, NULL, NULL, NULL, 0},
+                     sn = {"neg", 3, x, neg, 0, NULL, NULL, NULL, NULL, 0};
     dfle_plot_opts logy = {NULL, NULL, NULL, 0, 1, 0, 0, NULL, 0};
     dfle_error err = {0};
     const char *p = in_dir(fx, "a.png");
@@ -358,7 +420,7 @@ static void test_unwritable(void **state)
 {
     fixture *fx = *state;
     double x[2] = {1, 2}, y[2] = {1, 2};
-    dfle_plot_series s = {NULL, 2, x, y, 1, NULL};
+    dfle_plot_series s = {NULL, 2, x, y, 1, NULL, NULL, NULL, NULL, 0};
     dfle_error err = {0};
     /* A regular file as a directory fails even for root. */
     int fd = open(in_dir(fx, "file"), O_WRONLY | O_CREAT, 0644);
@@ -442,7 +504,7 @@ static void test_gnuplot_missing(void **state)
 static int plot_small(fixture *fx, dfle_error *err)
 {
     double x[3] = {1, 2, 3};
-    dfle_plot_series s = {"s", 3, x, x, 1, NULL};
+    dfle_plot_series s = {"s", 3, x, x, 1, NULL, NULL, NULL, NULL, 0};
     return dfle_plot_xy(in_dir(fx, "small.png"), NULL, &s, 1, err);
 }
 
@@ -542,6 +604,8 @@ int main(void)
         cmocka_unit_test_setup_teardown(test_xy_png, setup, teardown),
         cmocka_unit_test_setup_teardown(test_xy_colour, setup, teardown),
         cmocka_unit_test_setup_teardown(test_xy_log_svg, setup, teardown),
+        cmocka_unit_test_setup_teardown(test_xy_band, setup, teardown),
+        cmocka_unit_test_setup_teardown(test_corner, setup, teardown),
         cmocka_unit_test_setup_teardown(test_slope_area_png, setup, teardown),
         cmocka_unit_test_setup_teardown(test_profile_png, setup, teardown),
         cmocka_unit_test_setup_teardown(test_hostile_path, setup, teardown),

@@ -293,31 +293,55 @@ static void table_g2_g4_corners_route_cleanly(void **state)
             }
 }
 
-static void fig6_steady_state_converges_and_fits(void **state)
-{
-    dfle_channel *ch = channel(10.0);
-    dfle_stochastic_threshold_opts so;
-    dfle_process_opts po;
-    dfle_power_law_opts lo;
+/* A model with the Fig. 6 defaults on a 10 m channel, routing with a
+ * process router of these options (its parts freed by fig6_free). */
+typedef struct fig6 {
+    dfle_channel *ch;
     dfle_fluvial *fl;
     dfle_router *rt;
     dfle_law *law;
-    dfle_model_opts mo;
     dfle_model *m;
+} fig6;
+
+static void fig6_new(fig6 *x, const dfle_process_opts *po)
+{
+    dfle_stochastic_threshold_opts so;
+    dfle_power_law_opts lo;
+    dfle_model_opts mo;
+    dfle_error err;
+    x->ch = channel(10.0);
+    dfle_stochastic_threshold_opts_default(&so);
+    dfle_power_law_opts_default(&lo);
+    assert_int_equal(dfle_fluvial_new_stochastic_threshold(&so, &x->fl, NULL), DFLE_OK);
+    assert_int_equal(dfle_router_new_process(po, &x->rt, NULL), DFLE_OK);
+    assert_int_equal(dfle_law_new_power(&lo, &x->law, NULL), DFLE_OK);
+    dfle_model_opts_default(&mo);
+    mo.channel = x->ch, mo.fluvial = x->fl, mo.router = x->rt, mo.law = x->law;
+    assert_ok(dfle_model_new(&mo, &x->m, &err), &err);
+}
+
+static void fig6_free(fig6 *x)
+{
+    dfle_model_free(x->m);
+    dfle_law_free(x->law);
+    dfle_router_free(x->rt);
+    dfle_fluvial_free(x->fl);
+    dfle_channel_free(x->ch);
+}
+
+static void fig6_steady_state_converges_and_fits(void **state)
+{
+    dfle_process_opts po;
     dfle_run_opts ro;
     dfle_run_result res;
     dfle_eq2_fit fit;
     dfle_error err;
+    fig6 x;
+    dfle_model *m;
     (void)state;
-    dfle_stochastic_threshold_opts_default(&so);
     dfle_process_opts_default(&po);
-    dfle_power_law_opts_default(&lo);
-    assert_int_equal(dfle_fluvial_new_stochastic_threshold(&so, &fl, NULL), DFLE_OK);
-    assert_int_equal(dfle_router_new_process(&po, &rt, NULL), DFLE_OK);
-    assert_int_equal(dfle_law_new_power(&lo, &law, NULL), DFLE_OK);
-    dfle_model_opts_default(&mo);
-    mo.channel = ch, mo.fluvial = fl, mo.router = rt, mo.law = law;
-    assert_ok(dfle_model_new(&mo, &m, &err), &err);
+    fig6_new(&x, &po);
+    m = x.m;
     dfle_run_opts_default(&ro);
     assert_ok(dfle_solver_run(m, &ro, &res, &err), &err);
     assert_true(res.converged);
@@ -334,11 +358,199 @@ static void fig6_steady_state_converges_and_fits(void **state)
     assert_true(fit.S_df > 0.3 && fit.S_df < 3);
     assert_true(fit.A_df > 1e3 && fit.A_df < 8e6);
     assert_true(fit.r2 > 0.9);
-    dfle_model_free(m);
-    dfle_law_free(law);
-    dfle_router_free(rt);
-    dfle_fluvial_free(fl);
-    dfle_channel_free(ch);
+    fig6_free(&x);
+}
+
+/* --- The wet window (doc/process-router.md, Cost) --- */
+
+/* Route slopes of the Eq. (26) fluvial steady state on a channel of
+ * spacing dx [m] and head-to-outlet length `length` [m] (0: to A_max),
+ * with opts o, on the wet window ([0]) and on every cell ([1]). */
+static void route_twice(routed r[2], dfle_process_opts o, double dx, double length,
+                        size_t n_snap, const double *snap)
+{
+    dfle_channel_opts co;
+    dfle_error err;
+    dfle_channel_opts_default(&co);
+    co.dx = dx;
+    co.length = length;
+    for (int a = 0; a < 2; a++) {
+        assert_ok(dfle_channel_new(&co, &r[a].ch, &err), &err);
+        assert_int_equal(dfle_network_new_chain(r[a].ch, &r[a].net, NULL), DFLE_OK);
+        r[a].S = malloc(dfle_channel_size(r[a].ch) * sizeof *r[a].S);
+        fluvial_slopes(r[a].ch, r[a].S);
+        o.flow.full_domain = a;
+        assert_ok(dfle_router_new_process(&o, &r[a].rt, &err), &err);
+        if (n_snap > 0)
+            assert_ok(dfle_router_process_set_snapshots(r[a].rt, n_snap, snap, &err), &err);
+        assert_int_equal(dfle_flow_init(&r[a].flow, dfle_channel_size(r[a].ch), NULL), DFLE_OK);
+        r[a].flow.integrand = depth;
+        assert_ok(dfle_router_route(r[a].rt, r[a].net, r[a].S, &r[a].flow, &err), &err);
+    }
+}
+
+static void assert_same_double(double a, double b)
+{
+    if (isnan(b))
+        assert_true(isnan(a));
+    else
+        assert_close(a, b, 0, 0);
+}
+
+/* Every record and report of the two routings, to the bit. */
+static void assert_same_routing(const routed r[2])
+{
+    const dfle_process_report *a = dfle_router_process_report(r[0].rt),
+                              *b = dfle_router_process_report(r[1].rt);
+    const size_t n = dfle_channel_size(r[0].ch), N = n + 20;
+    const double *fa[] = {r[0].flow.M, r[0].flow.Q, r[0].flow.h, r[0].flow.v, r[0].flow.t_p,
+                          r[0].flow.tau, r[0].flow.Theta, r[0].flow.reach, r[0].flow.integral,
+                          a->arrival};
+    const double *fb[] = {r[1].flow.M, r[1].flow.Q, r[1].flow.h, r[1].flow.v, r[1].flow.t_p,
+                          r[1].flow.tau, r[1].flow.Theta, r[1].flow.reach, r[1].flow.integral,
+                          b->arrival};
+    for (size_t j = 0; j < sizeof fa / sizeof fa[0]; j++)
+        for (size_t i = 0; i < n; i++)
+            assert_same_double(fa[j][i], fb[j][i]);
+    assert_int_equal(r[0].flow.runout_end, r[1].flow.runout_end);
+    assert_int_equal(a->end, b->end);
+    assert_int_equal(a->steps, b->steps);
+    assert_close(a->duration, b->duration, 0, 0);
+    assert_close(a->volume_in, b->volume_in, 0, 0);
+    assert_close(a->volume_out, b->volume_out, 0, 0);
+    assert_close(a->volume_left, b->volume_left, 0, 0);
+    assert_int_equal(a->n_snapshots, b->n_snapshots);
+    for (size_t j = 0; j < a->n_snapshots; j++) {
+        assert_same_double(a->snapshot_t[j], b->snapshot_t[j]);
+        for (size_t i = 0; i < n; i++)
+            assert_close(a->snapshot_h[j * n + i], b->snapshot_h[j * n + i], 0, 0);
+    }
+    /* Volume in = out + left on both; the full domain works on every
+     * cell at every step, the window on fewer. */
+    assert_close(a->volume_out + a->volume_left, a->volume_in, 1e-12, 0);
+    assert_int_equal(b->cell_steps, b->steps * N);
+    assert_true(a->cell_steps < b->cell_steps);
+}
+
+static void wet_window_matches_full_domain(void **state)
+{
+    const double snap[] = {1.0, 5.0, 20.0, 60.0};
+    dfle_process_opts o;
+    routed r[2];
+    (void)state;
+
+    /* Fig. 6 defaults: the flow comes to rest part way down. */
+    dfle_process_opts_default(&o);
+    route_twice(r, o, 10.0, 0.0, 4, snap);
+    assert_same_routing(r);
+    assert_int_equal(dfle_router_process_report(r[0].rt)->end, DFLE_PROCESS_REST);
+    assert_true(r[0].flow.runout_end < dfle_channel_size(r[0].ch) / 2);
+    /* ... on that grid the window averages under half of it. */
+    assert_true(2 * dfle_router_process_report(r[0].rt)->cell_steps <
+                dfle_router_process_report(r[1].rt)->cell_steps);
+    for (int a = 0; a < 2; a++)
+        unroute(&r[a]);
+
+    /* Little friction, no drag, a short channel: the flow leaves. */
+    o.flow.mu_s = o.flow.mu_2 = 0.1;
+    o.flow.eta = 0.0;
+    route_twice(r, o, 5.0, 300.0, 0, NULL);
+    assert_same_routing(r);
+    assert_int_equal(dfle_router_process_report(r[0].rt)->end, DFLE_PROCESS_LEFT);
+    assert_true(dfle_router_process_report(r[0].rt)->volume_out > 199.9);
+    for (int a = 0; a < 2; a++)
+        unroute(&r[a]);
+
+    /* Table G2/G4 corner with slow pore-pressure diffusion: ends on t_max. */
+    dfle_process_opts_default(&o);
+    o.flow.eta = 90.0;
+    o.flow.D = 1e-6;
+    o.t_max = 900.0;
+    route_twice(r, o, 10.0, 0.0, 0, NULL);
+    assert_same_routing(r);
+    assert_int_equal(dfle_router_process_report(r[0].rt)->end, DFLE_PROCESS_TIME);
+    for (int a = 0; a < 2; a++)
+        unroute(&r[a]);
+}
+
+/* A model run that re-routes several times as its profile evolves: the
+ * same profile to the bit on either path. */
+static void model_run_matches_full_domain(void **state)
+{
+    dfle_process_opts po;
+    dfle_run_result res[2];
+    dfle_error err;
+    fig6 x[2];
+    (void)state;
+    for (int a = 0; a < 2; a++) {
+        dfle_run_opts ro;
+        dfle_process_opts_default(&po);
+        po.flow.full_domain = a;
+        fig6_new(&x[a], &po);
+        dfle_run_opts_default(&ro);
+        ro.tol = 0.0; /* a transient of fixed length */
+        ro.max_time = 3e4;
+        assert_ok(dfle_solver_run(x[a].m, &ro, &res[a], &err), &err);
+    }
+    assert_true(res[0].routings >= 3);
+    assert_int_equal(res[0].routings, res[1].routings);
+    assert_int_equal(res[0].steps, res[1].steps);
+    for (size_t i = 0; i < dfle_model_size(x[0].m); i++)
+        assert_close(dfle_model_z(x[0].m)[i], dfle_model_z(x[1].m)[i], 0, 0);
+    for (int a = 0; a < 2; a++)
+        fig6_free(&x[a]);
+}
+
+/* What the router gave before the work on its speed (commit bca4821,
+ * printed with %.17g): no speed-up may move a result. */
+static void results_match_the_solver_before_the_window(void **state)
+{
+    const struct {
+        size_t i;
+        double sum, t_p, h, v, Q, tau, M, arrival;
+    } stop[] = {
+        {0, 18.286514519121003, 127.43321016979812, 2.2334107681215625, 68.562619777048937,
+         53.591799861282993, 294.08578778763439, 197.133913819112, 2.8592327686358976},
+        {20, 3.1208708676846513, 19.741417383802752, 1.0267836279896916, 65.395998157928915,
+         104.06957354493326, 1027.4719058676073, 175.73522826938029, 7.4084934547117731},
+        {60, 1.2369284116675474, 5.492298215671557, 0.68601972284177815, 29.382666100816277,
+         64.295995778623919, 724.85718360145052, 76.1378370996526, 16.061730197627494},
+    }, leave[] = {
+        {5, 7.5118525789125998, 4.5667047844450801, 2.8053747888191012, 75.939249481744866,
+         87.401341337612607, 175.15838529384993, 199.99995868528492, 1.8652384497907448},
+        {60, 1.3822077186906747, 3.1358826572739322, 1.3102002614490669, 81.389633556762945,
+         190.90266186827796, 224.76542337734324, 199.98501472645412, 7.4800255115152288},
+    };
+    dfle_process_opts o;
+    routed r[2];
+    (void)state;
+    for (int c = 0; c < 2; c++) {
+        const size_t k = c == 0 ? sizeof stop / sizeof stop[0] : sizeof leave / sizeof leave[0];
+        const dfle_process_report *rep;
+        dfle_process_opts_default(&o);
+        if (c == 1) {
+            o.flow.mu_s = o.flow.mu_2 = 0.1;
+            o.flow.eta = 0.0;
+        }
+        route_twice(r, o, c == 0 ? 10.0 : 5.0, c == 0 ? 0.0 : 300.0, 0, NULL);
+        rep = dfle_router_process_report(r[0].rt);
+        assert_int_equal(rep->steps, c == 0 ? 251 : 244);
+        assert_int_equal(r[0].flow.runout_end, c == 0 ? 76 : 61);
+        assert_close(rep->duration, c == 0 ? 304.85182877810865 : 10.586362166148975, 1e-12, 0);
+        assert_close(rep->volume_left, c == 0 ? 199.99999999999997 : 0.014985273545682512, 1e-12,
+                     0);
+        for (size_t j = 0; j < k; j++) {
+            const size_t i = c == 0 ? stop[j].i : leave[j].i;
+            const double *want = c == 0 ? &stop[j].sum : &leave[j].sum;
+            const double got[] = {r[0].flow.integral[i], r[0].flow.t_p[i], r[0].flow.h[i],
+                                  r[0].flow.v[i], r[0].flow.Q[i], r[0].flow.tau[i],
+                                  r[0].flow.M[i], rep->arrival[i]};
+            for (size_t f = 0; f < sizeof got / sizeof got[0]; f++)
+                assert_close(got[f], want[f], 1e-12, 0);
+        }
+        for (int a = 0; a < 2; a++)
+            unroute(&r[a]);
+    }
 }
 
 static void bad_parameters_and_missing_integrand(void **state)
@@ -386,6 +598,9 @@ int main(void)
         cmocka_unit_test(routing_work_is_bounded),
         cmocka_unit_test(table_g2_g4_corners_route_cleanly),
         cmocka_unit_test(fig6_steady_state_converges_and_fits),
+        cmocka_unit_test(wet_window_matches_full_domain),
+        cmocka_unit_test(model_run_matches_full_domain),
+        cmocka_unit_test(results_match_the_solver_before_the_window),
         cmocka_unit_test(bad_parameters_and_missing_integrand),
     };
     return cmocka_run_group_tests(tests, NULL, NULL);

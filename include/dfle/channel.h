@@ -18,6 +18,7 @@
 
 #include <stddef.h>
 #include "dfle/error.h"
+#include "dfle/param.h"
 
 #ifdef __cplusplus
 extern "C" {
@@ -62,6 +63,17 @@ double dfle_channel_dx(const dfle_channel *ch);    /* [m]               */
 const double *dfle_channel_x(const dfle_channel *ch); /* [m], n values  */
 const double *dfle_channel_A(const dfle_channel *ch); /* [m^2]          */
 const double *dfle_channel_w(const dfle_channel *ch); /* [m]            */
+
+/* How the channel was built: "hack" (dfle_channel_new, A(x) by Hack's
+ * law) or "arrays" (dfle_channel_new_from_arrays). */
+const char *dfle_channel_kind(const dfle_channel *ch);
+
+/* The parameters (param.h), up to cap of them; returns how many there
+ * are.  A "hack" channel lists the options it was built from (dx, A0,
+ * hack_coef, hack_exp, k_w, b, A_max, length: A_max and length as asked,
+ * so the list rebuilds the same channel); an "arrays" channel only dx,
+ * its geometry being the arrays themselves. */
+size_t dfle_channel_params(const dfle_channel *ch, dfle_param *out, size_t cap);
 
 #ifdef __cplusplus
 }

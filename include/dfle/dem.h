@@ -42,6 +42,7 @@
 
 #include "dfle/channel.h"
 #include "dfle/error.h"
+#include "dfle/record.h"
 
 #ifdef __cplusplus
 extern "C" {
@@ -70,7 +71,9 @@ typedef struct dfle_dem_read_opts {
  * does not read, read error) or DFLE_EINVAL (no georeferencing, a
  * rotated or south-up grid, a band that does not exist, no data at
  * all), the message naming the path.  A geographic (degree) grid is
- * read; routing and profiles then refuse it (dfle_dem_check_metric). */
+ * read; routing and profiles then refuse it (dfle_dem_check_metric).
+ * GDAL is loaded by the first call (it is not linked); DFLE_EEXTERNAL,
+ * saying what to install, where it cannot be. */
 int dfle_dem_read(const char *path, const dfle_dem_read_opts *opts, dfle_dem **out,
                   dfle_error *err);
 
@@ -228,8 +231,26 @@ const size_t *dfle_profile_receiver(const dfle_profile *p);
 void dfle_profile_point(const dfle_profile *p, double given[2], double snapped[2]);
 dfle_slope_opts dfle_profile_slope(const dfle_profile *p);
 
-/* CSV: E, N, x, d, z, A, S, receiver, one row per cell. */
-int dfle_profile_write_csv(const dfle_profile *p, const char *path, dfle_error *err);
+/* The main stem of a network as a profile: from its outlet (the cell
+ * without a receiver of largest area) upstream along the donor of
+ * largest area (ties: the first in the network's order) to a cell without
+ * donors, stored head first with x from the head, d to the outlet and
+ * each cell's z, A and S as in the network.  For a profile, a copy.
+ * This is the channel a model of the network's catchment runs on. */
+int dfle_profile_main_stem(const dfle_profile *p, dfle_profile **out, dfle_error *err);
+
+/* CSV (dfle_table_write): `rec` as comment lines (may be NULL), the
+ * units line, then E, N, x, d, z, A, S, receiver, one row per cell,
+ * numbers with 10 significant digits. */
+int dfle_profile_write_csv(const dfle_profile *p, const char *path, const dfle_record *rec,
+                           dfle_error *err);
+
+/* Where the profile comes from, into a record (record.h): section
+ * "profile" (kind "profile" or "network") with the DEM's file, the
+ * direction traced, the point given and snapped [m], the radius, A_min
+ * or A_max [m^2], the slope interval ds or dz [m], the cells and the
+ * longest flow distance [m]. */
+void dfle_profile_describe(const dfle_profile *p, dfle_record *rec);
 
 /* A model channel on the profile's geometry: nodes every dx [m] from
  * the head (x = 0) to the last whole dx before the outlet's x, A [m^2]

@@ -6,6 +6,7 @@
  * dfle.pawn) laid out as
  *
  *     # <meta line: what ensemble this is, e.g. "# dfle.ensemble n=64 seed=1">
+ *     # <more comment lines, e.g. "# dfle: 0.1.0", "# units: A_df=m^2">
  *     index,<columns...>
  *     17,<fields...>
  *     3,<fields...>
@@ -19,8 +20,14 @@
  * byte for byte, whatever the number of workers, ranks or shards.
  *
  * The row text itself is the caller's (the Lua binding formats it);
- * this layer only knows the index field, the two header lines and
- * lines.  Appending is thread-safe.
+ * this layer only knows the index field, the lines above the rows and
+ * lines.  Appending is thread-safe.  The meta and header lines identify
+ * the ensemble (resume and gather compare them); the comment lines
+ * between them only describe it (the version that started the file,
+ * units, options), are written when a file is created and kept as they
+ * are by resume, rewrite and gather (which takes the first file's), so
+ * they must be the same for every run of the ensemble (no date) for the
+ * byte-for-byte guarantees to hold.
  */
 #ifndef DFLE_ENSEMBLE_H
 #define DFLE_ENSEMBLE_H
@@ -36,6 +43,7 @@ extern "C" {
 /* The rows of an ensemble file, sorted by index. */
 typedef struct dfle_ens_table {
     char *meta;      /* first line, starting with '#'               */
+    char *comments;  /* the '#' lines after it, joined by '\n', or NULL */
     char *header;    /* column line, starting with "index,"         */
     size_t nrows;
     size_t *index;   /* nrows 1-based sample indices, increasing    */
@@ -58,15 +66,17 @@ int dfle_ens_table_write(const dfle_ens_table *t, const char *path, dfle_error *
 typedef struct dfle_ens_file dfle_ens_file;
 
 /* Open `path` for the samples 1..n of the ensemble described by `meta`
- * and `header` (single lines, no newline; meta starts with '#').
- * A missing file is created with the two lines.  An existing file is
- * resumed when `resume` is set: its meta and header must equal the
+ * and `header` (single lines, no newline; meta starts with '#'), with
+ * the comment lines `comments` (each starting with '#', joined by '\n';
+ * may be NULL).  A missing file is created with those lines.  An
+ * existing file is resumed when `resume` is set: its meta and header must equal the
  * given ones (else DFLE_EINVAL: the file belongs to another ensemble),
  * its indices must lie in 1..n, a truncated last line is cut off, and
  * its rows count as done.  Without `resume` an existing file is
  * replaced. */
-int dfle_ens_file_open(const char *path, const char *meta, const char *header, size_t n,
-                       int resume, dfle_ens_file **out, dfle_error *err);
+int dfle_ens_file_open(const char *path, const char *meta, const char *comments,
+                       const char *header, size_t n, int resume, dfle_ens_file **out,
+                       dfle_error *err);
 
 /* Whether sample `index` (1-based) already has a row; rows done. */
 int dfle_ens_file_done(const dfle_ens_file *f, size_t index);

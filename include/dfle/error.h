@@ -24,7 +24,8 @@ enum dfle_status {
     DFLE_ESTATE = -6,    /* the object is not in a state for this call   */
     DFLE_EFIT = -7,      /* a fit did not converge or had too few points */
     DFLE_ECANCELED = -8, /* a progress callback asked the run to stop    */
-    DFLE_EEXTERNAL = -9  /* an external program (gnuplot) failed         */
+    DFLE_EEXTERNAL = -9  /* an external program (gnuplot) failed, or a   */
+                         /* library (GDAL, netCDF) could not be loaded   */
 };
 
 #define DFLE_ERROR_MSG_MAX 512
@@ -35,7 +36,8 @@ typedef struct dfle_error {
 } dfle_error;
 
 /* Record `code` and a printf-style message in `err` (which may be NULL).
- * Returns `code` so callers can write `return dfle_error_set(...)`. */
+ * A NaN formatted by %g, %f or %e reads "NaN" (printf says "nan" or
+ * "-nan").  Returns `code` so callers can write `return dfle_error_set(...)`. */
 int dfle_error_set(dfle_error *err, int code, const char *fmt, ...)
 #if defined(__GNUC__) || defined(__clang__)
     __attribute__((format(printf, 3, 4)))

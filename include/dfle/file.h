@@ -8,9 +8,12 @@
  * torn one; a full disk or a file-size limit leaves the old file as it
  * was and the error says what the system said.
  *
- * The temporary file is `.<name>.<pid>.XXXXXX` in the target's directory.
- * One left by a process that was killed (kill -9, power loss) is removed
- * by the next write of the same target, once its process is gone.
+ * The temporary file is `.<name>.<pid>.XXXXXX` in the target's directory
+ * (<name> cut to 200 bytes, so that the longest legal name still leaves
+ * room).  One left by a process that was killed (kill -9, power loss) is
+ * removed by the next write of the same target, once its process is
+ * gone.  A device or a FIFO is written in place; a FIFO that no process
+ * is reading is an error at once, not a wait for ever.
  *
  * A file-size limit (ulimit -f) is reported as EFBIG only if SIGXFSZ is
  * ignored; the dfle command ignores it, a host program should too

@@ -29,6 +29,12 @@
  *  - CFL-limited step; cells thinner than h_dry carry no momentum.
  * Boundaries: a wall at the upstream end; at the downstream end an open
  * outlet that lets material out but never in.
+ *
+ * Work per step follows the flow, not the grid: a step works only on the
+ * wet window, the cells from the first to the last that hold any volume
+ * plus one cell on each side (the stencil: a step moves volume by at most
+ * one cell).  Outside it depth, discharge and every face flux are exactly
+ * zero, so the window changes no result (doc/process-router.md).
  */
 #ifndef DFLE_FLOW1D_H
 #define DFLE_FLOW1D_H
@@ -55,6 +61,9 @@ typedef struct dfle_flow1d_params {
     double cfl;     /* Courant number, (0, 1]                    (0.5)   */
     double h_dry;   /* depth below which a cell is dry [m]       (1e-6)  */
     int outlet_wall; /* 1: wall at the downstream end (tests)   (0)      */
+    int full_domain; /* 1: step every cell, not just the wet window:
+                      * the same results, slower; kept to check the
+                      * window against (tests, make bench)      (0)      */
 } dfle_flow1d_params;
 
 void dfle_flow1d_params_default(dfle_flow1d_params *p);
@@ -71,16 +80,36 @@ int dfle_flow1d_new(size_t ncell, double dx, const double *w, const double *S,
                     dfle_error *err);
 void dfle_flow1d_free(dfle_flow1d *f);
 
-/* The state, writable: depth h [m] and unit discharge q [m^2/s]. */
+/* The state, writable: depth h [m] and unit discharge q [m^2/s].
+ * Asking for either opens the window to the whole grid (the next step
+ * works on every cell, then narrows it again), so write the state
+ * between this call and the next step; a pointer kept across steps is
+ * for reading (ask again to write again). */
 double *dfle_flow1d_h(dfle_flow1d *f);
 double *dfle_flow1d_q(dfle_flow1d *f);
+/* The same, to read: the window stays as it is. */
+const double *dfle_flow1d_depth(const dfle_flow1d *f);
+const double *dfle_flow1d_discharge(const dfle_flow1d *f);
 size_t dfle_flow1d_size(const dfle_flow1d *f);
+
+/* The wet window: cells [*k0, *k1) that the last step worked on (the
+ * whole grid before the first step and after dfle_flow1d_h/q).  Outside
+ * it h = q = 0, and no face outside faces k0..k1 moved volume. */
+void dfle_flow1d_window(const dfle_flow1d *f, size_t *k0, size_t *k1);
 
 /* Pore-pressure ratio at depth h, `t` seconds after the flow entered
  * the domain (t < 0: not yet entered, lambda0). */
 double dfle_flow1d_lambda(const dfle_flow1d *f, double h, double t);
+/* The same in two parts, for many depths at one time: the diffusion
+ * length L = sqrt(D t) [m] of Eq. (9) (0 when lambda stays lambda0: not
+ * yet entered, or D = 0), then lambda0 erf(h / L).  Bit for bit
+ * dfle_flow1d_lambda(f, h, t). */
+double dfle_flow1d_pore_length(const dfle_flow1d *f, double t);
+double dfle_flow1d_lambda_at(const dfle_flow1d *f, double h, double L);
 /* Friction coefficient phi(I) at depth h [m], speed |v| [m/s], cell k. */
 double dfle_flow1d_phi(const dfle_flow1d *f, size_t k, double h, double v);
+/* A bound no value of dfle_flow1d_phi exceeds (mu_2, rounded up). */
+double dfle_flow1d_phi_max(const dfle_flow1d *f);
 
 /* The CFL time step of the current state [s] (+Inf when all is dry). */
 double dfle_flow1d_stable_dt(const dfle_flow1d *f);
@@ -97,6 +126,9 @@ double dfle_flow1d_volume(const dfle_flow1d *f, size_t k0, size_t k1);
 /* Volume [m^3] that crossed the face between cells k-1 and k during the
  * last step (positive downstream); k in [1, ncell]. */
 double dfle_flow1d_face_volume(const dfle_flow1d *f, size_t k);
+/* All of them: ncell + 1 values, face k at [k] (face 0 the upstream
+ * wall, face ncell the outlet); valid until the next step. */
+const double *dfle_flow1d_face_volumes(const dfle_flow1d *f);
 
 #ifdef __cplusplus
 }

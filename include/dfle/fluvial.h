@@ -13,6 +13,7 @@
 
 #include <stddef.h>
 #include "dfle/error.h"
+#include "dfle/param.h"
 
 #ifdef __cplusplus
 extern "C" {
@@ -63,6 +64,12 @@ double dfle_fluvial_K(const dfle_fluvial *fl); /* [m^(1-2m)/yr] */
 double dfle_fluvial_m(const dfle_fluvial *fl); /* area exponent m_s  */
 double dfle_fluvial_n(const dfle_fluvial *fl); /* slope exponent n_s */
 const char *dfle_fluvial_name(const dfle_fluvial *fl);
+
+/* The parameters (param.h), up to cap of them; returns how many there
+ * are: for "stochastic_threshold" the Table G1 values followed by the
+ * K, m_s and n_s they give (overrides included), for "stream_power"
+ * K, m and n.  Either list rebuilds the same law. */
+size_t dfle_fluvial_params(const dfle_fluvial *fl, dfle_param *out, size_t cap);
 
 /* E_f [m/yr] at one node; zero where S <= 0 (no erosion up a reverse
  * slope: the pit fills by uplift). */

@@ -35,6 +35,8 @@
 #include "dfle/fluvial.h"
 #include "dfle/law.h"
 #include "dfle/network.h"
+#include "dfle/param.h"
+#include "dfle/record.h"
 #include "dfle/router.h"
 
 #ifdef __cplusplus
@@ -139,6 +141,12 @@ dfle_law *dfle_model_law(const dfle_model *m);
 double dfle_model_cfl(const dfle_model *m);    /* explicit Courant number  */
 double dfle_model_dt_max(const dfle_model *m); /* largest time step [yr]   */
 
+/* The model's own parameters (param.h): U (the current uplift rate,
+ * m/yr), cfl and dt_max [yr], up to cap of them; returns how many there
+ * are.  Its components list theirs (dfle_channel_params,
+ * dfle_fluvial_params, dfle_router_params, dfle_law_params). */
+size_t dfle_model_params(const dfle_model *m, dfle_param *out, size_t cap);
+
 /* --- For solvers (solver.h): topology, state, rates. ---------------- */
 
 /* Receiver of every node (a base-level node is its own), flow length to
@@ -165,8 +173,9 @@ void dfle_model_advance_time(dfle_model *m, double dt);
  * field and time.  dfle_model_is_evaluated says whether that is needed. */
 int dfle_model_evaluate(dfle_model *m, dfle_error *err);
 int dfle_model_is_evaluated(const dfle_model *m);
-/* From the last evaluation: max over non-base nodes of |dz/dt| / U,
- * the number of those with S <= 0, and routings since creation. */
+/* From the last evaluation: max over non-base nodes of |dz/dt| / U
+ * (DBL_MAX when that overflows, for a U near the smallest double), the
+ * number of those with S <= 0, and routings since creation. */
 double dfle_model_rate_ratio(const dfle_model *m);
 size_t dfle_model_nonpositive_slopes(const dfle_model *m);
 size_t dfle_model_routings(const dfle_model *m);
@@ -190,8 +199,19 @@ int dfle_model_celerity(dfle_model *m, const double **c, dfle_error *err);
 int dfle_model_node_erosion(dfle_model *m, size_t i, double S, double flows, double *E,
                             int *goes_on, dfle_error *err);
 
-/* CSV of every field, header row with units. */
-int dfle_model_write_csv(dfle_model *m, const char *path, dfle_error *err);
+/* What the model is, into a record (record.h): a section per component
+ * ("channel" with its kind, params and n, x_outlet [m], A_head and
+ * A_outlet [m^2]; or "network" with n), "fluvial", "router" and "law"
+ * (kind "off" for a process that is off; a component without a params
+ * op, one written in Lua, gets its kind only), and "model" (U, cfl,
+ * dt_max, and time [yr] so far). */
+void dfle_model_describe(const dfle_model *m, dfle_record *rec);
+
+/* CSV of every field (dfle_table_write): `rec` as comment lines (may be
+ * NULL), the units line, the field names, one row per node with 10
+ * significant digits. */
+int dfle_model_write_csv(dfle_model *m, const char *path, const dfle_record *rec,
+                         dfle_error *err);
 
 #ifdef __cplusplus
 }

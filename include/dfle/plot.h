@@ -27,6 +27,11 @@ typedef struct dfle_plot_series {
     int lines;         /* 1: lines, 0: points                 */
     const double *c;   /* optional: a value per point, drawn as a colour
                         * on a continuous scale with a colour box   */
+    const double *lo, *hi; /* optional: a band filled between lo and hi
+                        * (y is then unused), drawn translucent     */
+    const char *rgb;   /* optional colour "#rrggbb" instead of the
+                        * palette's                                 */
+    int dash;          /* lines: 1 dashed                           */
 } dfle_plot_series;
 
 typedef struct dfle_plot_opts {
@@ -72,6 +77,25 @@ typedef struct dfle_plot_map {
 } dfle_plot_map;
 
 int dfle_plot_hillshade(const char *path, const dfle_plot_map *map, dfle_error *err);
+
+/* Corner plot of posterior samples: the marginal of each parameter on
+ * the diagonal (a histogram with its median and central 68 % interval,
+ * given above it as median^{+}_{-}), and below it every pair as a
+ * scatter of the samples with the contours enclosing 68 % and 95 % of
+ * them.  x holds n samples of d parameters (n x d, sample-major); more
+ * than 5000 samples are thinned evenly for the scatter (not for the
+ * histograms and contours). */
+typedef struct dfle_corner_opts {
+    const char *title;          /* may be NULL                          */
+    const char *const *labels;  /* d axis labels (enhanced text), or NULL */
+    const int *logaxis;         /* d flags: logarithmic axis, or NULL   */
+    const double *truth;        /* d values marked in red (NaN: none), or NULL */
+    int panel;                  /* pixels per panel; 0 = 250            */
+    size_t nbins;               /* histogram bins; 0 = 30               */
+} dfle_corner_opts;
+
+int dfle_plot_corner(const char *path, const dfle_corner_opts *opts, size_t d, size_t n,
+                     const double *x, dfle_error *err);
 
 #ifdef __cplusplus
 }

@@ -6,7 +6,9 @@
  * in dfle (dem.h, drainage.h, landscape.h); a grid lies where its
  * dfle_raster_geo says.  Every file is written whole or not at all
  * (file.h): to a temporary file beside the target, renamed over it once
- * complete.
+ * complete.  GDAL and libnetcdf are not linked: the first GeoTIFF or
+ * NetCDF file loads its library, and where it cannot be loaded the
+ * call fails with DFLE_EEXTERNAL, saying what to install.
  */
 #ifndef DFLE_RASTER_H
 #define DFLE_RASTER_H

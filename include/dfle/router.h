@@ -64,8 +64,15 @@ int dfle_router_new(const dfle_router_ops *ops, void *state,
                     dfle_router **out, dfle_error *err);
 void dfle_router_free(dfle_router *rt);
 
+/* Route one flow.  A router routes one flow at a time: called again
+ * while it routes (a law's integrand, run in the middle of a routing,
+ * that runs a model or a routing with the same router) it returns
+ * DFLE_ECALLBACK at once, before anything of its state is touched; so
+ * does dfle_router_node_flow. */
 int dfle_router_route(dfle_router *rt, const dfle_network *net,
                       const double *S, dfle_flow *flow, dfle_error *err);
+/* 1 while a route or node_flow call of the router is running. */
+int dfle_router_is_routing(const dfle_router *rt);
 /* *reroute = 1 if the router must be routed again for slopes S, having
  * last been routed over S_routed (always 1 without the op). */
 int dfle_router_needs_reroute(dfle_router *rt, size_t n, const double *S_routed,

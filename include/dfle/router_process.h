@@ -79,6 +79,8 @@ typedef struct dfle_process_report {
     double volume_left;  /* still in the domain [m^3]             */
     double duration;     /* flow time [s]                         */
     size_t steps;        /* flow time steps                       */
+    size_t cell_steps;   /* cells the steps worked on, summed: the
+                          * wet window's mean length times steps  */
     size_t n;            /* channel nodes                         */
     const double *arrival; /* first time with Phi = 1 [s]; NaN if never */
     size_t n_snapshots;  /* snapshots requested                   */

@@ -9,6 +9,31 @@
 
 #include <stdarg.h>
 #include <stdio.h>
+#include <string.h>
+
+/* printf writes a NaN as "nan", or as "-nan" when its sign bit is set
+ * (0/0 on x86), which means nothing to a user: every message says "NaN",
+ * as the Lua binding does.  Only a number's word is rewritten (after a
+ * space, '(', '[', '=' or ',', before a space, ')', ']', ',', ';', ':'
+ * or the end), never "nan" inside a name, which messages quote
+ * ('nan.csv'). */
+static void nan_words(char *s)
+{
+    char *p = s;
+    while ((p = strstr(p, "nan")) != NULL) {
+        char *start = p > s && p[-1] == '-' ? p - 1 : p;
+        int before = start == s || strchr(" (=,[", start[-1]) != NULL;
+        int after = p[3] == '\0' || strchr(" ),;:]", p[3]) != NULL;
+        if (before && after) {
+            memcpy(start, "NaN", 3);
+            if (start != p)
+                memmove(start + 3, p + 3, strlen(p + 3) + 1);
+            p = start + 3;
+        } else {
+            p += 3;
+        }
+    }
+}
 
 int dfle_error_set(dfle_error *err, int code, const char *fmt, ...)
 {
@@ -18,6 +43,7 @@ int dfle_error_set(dfle_error *err, int code, const char *fmt, ...)
         va_start(ap, fmt);
         vsnprintf(err->msg, sizeof err->msg, fmt, ap);
         va_end(ap);
+        nan_words(err->msg);
     }
     return code;
 }

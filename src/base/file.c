@@ -32,6 +32,17 @@
 #include <sys/types.h>
 #include <unistd.h>
 
+/* Bytes of the target's name kept in a temporary file's name: the name
+ * may have up to NAME_MAX (255) bytes, and `.<name>.<pid>.NNNNNN` must
+ * fit as well (it once made every legal name over 238 bytes unwritable). */
+#define TMP_BASE_MAX 200
+
+static size_t tmp_base_len(const char *base)
+{
+    size_t n = strlen(base);
+    return n < TMP_BASE_MAX ? n : TMP_BASE_MAX;
+}
+
 /* Split path into a directory (with its '/', "" for the current one)
  * and a base name; returns the length of the directory part. */
 static size_t dir_part(const char *path)
@@ -45,7 +56,7 @@ static void remove_stale(const char *path)
 {
     const size_t dlen = dir_part(path);
     const char *base = path + dlen;
-    const size_t blen = strlen(base);
+    const size_t blen = tmp_base_len(base);
     char dir[4096];
     DIR *d;
     struct dirent *e;
@@ -89,11 +100,32 @@ static char *real_target(const char *path)
     return r;
 }
 
+/* Open a device or a FIFO for writing, in place.  Without O_NONBLOCK the
+ * open of a FIFO no process reads waits for a reader for ever (and a
+ * signal does not end the wait: the command's handler restarts it). */
+static FILE *open_in_place(const char *path, int *e)
+{
+    int fd = open(path, O_WRONLY | O_TRUNC | O_NOCTTY | O_NONBLOCK), fl;
+    FILE *fp;
+    if (fd < 0) {
+        *e = errno;
+        return NULL;
+    }
+    /* Blocking writes from here on: a slow reader is not an error. */
+    if ((fl = fcntl(fd, F_GETFL)) == -1 || fcntl(fd, F_SETFL, fl & ~O_NONBLOCK) == -1 ||
+        (fp = fdopen(fd, "w")) == NULL) {
+        *e = errno;
+        close(fd);
+        return NULL;
+    }
+    return fp;
+}
+
 int dfle_file_begin(dfle_file *f, const char *path, const char *who, dfle_error *err)
 {
     size_t dlen, len = strlen(path);
     struct stat st;
-    int fd;
+    int fd, e;
 
     memset(f, 0, sizeof *f);
     f->who = who;
@@ -104,9 +136,11 @@ int dfle_file_begin(dfle_file *f, const char *path, const char *who, dfle_error 
         if (S_ISDIR(st.st_mode))
             return dfle_error_set(err, DFLE_EIO, "%s: cannot write '%s': it is a directory",
                                   who, path);
-        if ((f->fp = fopen(path, "w")) == NULL)
+        if ((f->fp = open_in_place(path, &e)) == NULL)
             return dfle_error_set(err, DFLE_EIO, "%s: cannot write '%s': %s", who, path,
-                                  strerror(errno));
+                                  S_ISFIFO(st.st_mode) && e == ENXIO
+                                      ? "it is a FIFO that no process is reading"
+                                      : strerror(e));
         if ((f->path = real_target(path)) == NULL) {
             dfle_file_abort(f);
             return dfle_error_set(err, DFLE_ENOMEM, "%s: out of memory", who);
@@ -129,8 +163,8 @@ int dfle_file_begin(dfle_file *f, const char *path, const char *who, dfle_error 
          * the pid; O_EXCL settles any collision with a leftover. */
         static atomic_uint counter;
         unsigned k = atomic_fetch_add(&counter, 1u) * 2654435761u ^ (unsigned)tries;
-        snprintf(f->tmp, len + 40, "%.*s.%s.%ld.%06u", (int)dlen, path, path + dlen,
-                 (long)getpid(), k % 1000000u);
+        snprintf(f->tmp, len + 40, "%.*s.%.*s.%ld.%06u", (int)dlen, path,
+                 (int)tmp_base_len(path + dlen), path + dlen, (long)getpid(), k % 1000000u);
         fd = open(f->tmp, O_WRONLY | O_CREAT | O_EXCL, 0666);
         if (fd < 0 && errno != EEXIST)
             break;

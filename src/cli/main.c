@@ -365,6 +365,7 @@ static int pmain(lua_State *L)
     dfle_lua_set_interrupt(L, &interrupted);
     /* arg table: arg[-k] = options and program, arg[0] = script. */
     set_arg_table(L, c);
+    dfle_lua_set_command(L, c->argv, c->argc, c->script); /* for records */
 
     if (luaL_loadfile(L, strcmp(script, "-") == 0 ? NULL : script) != LUA_OK) {
         /* A missing file or a syntax error: the message says it all; a

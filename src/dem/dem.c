@@ -11,6 +11,8 @@
  * and profile code never asks where it came from.  GDAL's own error
  * printer is replaced by a quiet one for the duration of each call, so
  * the library prints nothing; GDAL's last message is folded into ours.
+ * GDAL itself is loaded by the first read (base/gdal_lib.h), so a
+ * process that never reads a DEM never loads it.
  */
 /* VSIStatL fills a struct stat64, which glibc declares only with this. */
 #define _LARGEFILE64_SOURCE 1
@@ -18,23 +20,10 @@
 #include "dem/dem_internal.h"
 
 #include <math.h>
-#include <pthread.h>
 #include <stdlib.h>
 #include <string.h>
 
-#include <cpl_conv.h>
-#include <cpl_error.h>
-#include <cpl_vsi.h>
-#include <gdal.h>
-#include <ogr_srs_api.h>
-
-/* GDALAllRegister is not safe to race with itself; once per process. */
-static pthread_once_t gdal_once = PTHREAD_ONCE_INIT;
-
-static void gdal_register(void)
-{
-    GDALAllRegister();
-}
+#include "base/gdal_lib.h" /* GDAL, loaded by the first dfle_dem_read */
 
 static char *dup_string(const char *s)
 {
@@ -434,13 +423,19 @@ int dfle_dem_read(const char *path, const dfle_dem_read_opts *opts, dfle_dem **o
     *out = NULL;
     if (path == NULL || path[0] == '\0')
         return dfle_error_set(err, DFLE_EINVAL, "dem: path must be a file name");
-    pthread_once(&gdal_once, gdal_register);
+    if ((st = dfle_gdal_load("dem.read", err)) != DFLE_OK)
+        return st;
     CPLPushErrorHandler(CPLQuietErrorHandler);
     CPLErrorReset();
     if (VSIStatL(path, &sb) != 0) {
         st = dfle_error_set(err, DFLE_EIO, "dem: cannot read '%s': no such file", path);
     } else if (VSI_ISDIR(sb.st_mode)) {
         st = dfle_error_set(err, DFLE_EIO, "dem: cannot read '%s': it is a directory", path);
+    } else if (!VSI_ISREG(sb.st_mode)) {
+        /* GDAL would open a FIFO and wait for a writer for ever, or read
+         * a device such as /dev/zero: rasters are files. */
+        st = dfle_error_set(err, DFLE_EIO, "dem: cannot read '%s': not a regular file (a "
+                            "device, pipe or socket)", path);
     } else if ((ds = GDALOpenEx(path, GDAL_OF_RASTER | GDAL_OF_READONLY, NULL, NULL, NULL)) ==
                NULL) {
         st = dfle_error_set(err, DFLE_EIO, "dem: cannot read '%s': %s", path,

@@ -19,6 +19,9 @@
  */
 #include "dem/dem_internal.h"
 
+#include "dfle/record.h"
+#include "dfle/file.h"
+
 #include <math.h>
 #include <stdio.h>
 #include <stdlib.h>
@@ -31,6 +34,11 @@ struct dfle_profile {
     size_t *receiver;       /* 1-based index of the receiver, 0 = none */
     double given[2], snapped[2];
     dfle_slope_opts slope;
+    /* Provenance (dfle_profile_describe): the DEM's file (NULL when it
+     * was made in memory) and the limits asked for. */
+    char *dem;
+    int from_head;
+    double A_min, A_max, radius;
 };
 
 void dfle_profile_opts_default(dfle_profile_opts *o)
@@ -52,6 +60,7 @@ void dfle_profile_free(dfle_profile *p)
     for (int k = 0; k < DFLE_PROFILE_NFIELDS; k++)
         free(p->f[k]);
     free(p->receiver);
+    free(p->dem);
     free(p);
 }
 
@@ -103,6 +112,12 @@ static int ready(dfle_dem *d, const char *what, dfle_error *err)
     return DFLE_OK;
 }
 
+/* The snapping radius [m]: as given, or two cell diagonals. */
+static double snap_radius(const dfle_dem *d, double radius)
+{
+    return radius < 0 ? 2.0 * sqrt(d->dx * d->dx + d->dy * d->dy) : radius;
+}
+
 /* The cell of largest drainage area whose centre is within `radius` of
  * (E, N), or the cell containing the point; ties go to the nearer. */
 static int snap_outlet(const dfle_dem *d, double E, double N, double radius, size_t *out,
@@ -115,8 +130,7 @@ static int snap_outlet(const dfle_dem *d, double E, double N, double radius, siz
 
     if ((st = dfle_dem_cell_at(d, E, N, "outlet", &home, err)) != DFLE_OK)
         return st;
-    if (radius < 0)
-        radius = 2.0 * sqrt(d->dx * d->dx + d->dy * d->dy);
+    radius = snap_radius(d, radius);
     r0 = (long long)floor((d->y0 - N - radius) / d->dy);
     r1 = (long long)floor((d->y0 - N + radius) / d->dy);
     c0 = (long long)floor((E - radius - d->x0) / d->dx);
@@ -292,6 +306,20 @@ static int slopes_along(const dfle_dem *d, const flowpath *core, const dfle_slop
     return 0;
 }
 
+/* The DEM's file name, for the profile's provenance. */
+static int keep_dem_path(dfle_profile *p, const dfle_dem *d, dfle_error *err)
+{
+    const char *path = dfle_dem_path(d);
+    if (path == NULL)
+        return DFLE_OK;
+    if ((p->dem = malloc(strlen(path) + 1)) == NULL) {
+        dfle_profile_free(p);
+        return dfle_error_set(err, DFLE_ENOMEM, "dem: out of memory for a profile");
+    }
+    strcpy(p->dem, path);
+    return DFLE_OK;
+}
+
 /* ---------------------------------------------------------------- */
 /* Profiles                                                         */
 /* ---------------------------------------------------------------- */
@@ -399,6 +427,11 @@ int dfle_dem_profile(dfle_dem *d, const dfle_profile_opts *opts, dfle_profile **
         (*out)->given[0] = o.E;
         (*out)->given[1] = o.N;
         dfle_dem_cell_centre(d, start, &(*out)->snapped[0], &(*out)->snapped[1]);
+        (*out)->from_head = o.from_head;
+        (*out)->A_min = o.from_head ? 0 : o.A_min;
+        (*out)->A_max = o.from_head ? o.A_max : 0;
+        (*out)->radius = o.from_head ? -1 : snap_radius(d, o.radius);
+        st = keep_dem_path(*out, d, err);
     }
     path_free(&pa);
     return st;
@@ -499,6 +532,10 @@ int dfle_dem_network(dfle_dem *d, const dfle_network_opts *opts, dfle_profile **
     } else {
         p->given[0] = p->given[1] = p->snapped[0] = p->snapped[1] = NAN;
     }
+    p->A_min = o.A_min;
+    p->radius = o.has_outlet ? snap_radius(d, o.radius) : -1;
+    if ((st = keep_dem_path(p, d, err)) != DFLE_OK)
+        goto done;
     *out = p;
     p = NULL;
     st = DFLE_OK;
@@ -537,26 +574,131 @@ void dfle_profile_point(const dfle_profile *p, double given[2], double snapped[2
     snapped[1] = p->snapped[1];
 }
 
-int dfle_profile_write_csv(const dfle_profile *p, const char *path, dfle_error *err)
+int dfle_profile_main_stem(const dfle_profile *p, dfle_profile **out, dfle_error *err)
 {
-    static const enum dfle_profile_field cols[] = {DFLE_PROFILE_E, DFLE_PROFILE_N, DFLE_PROFILE_X,
-                                                   DFLE_PROFILE_D, DFLE_PROFILE_Z, DFLE_PROFILE_A,
-                                                   DFLE_PROFILE_S};
-    FILE *f;
-    int bad;
+    const double *A = p->f[DFLE_PROFILE_A];
+    size_t *best = NULL, *path = NULL, outlet = 0, n = 0, c;
+    dfle_profile *q = NULL;
+    int have = 0;
 
-    if (path == NULL || (f = fopen(path, "w")) == NULL)
-        return dfle_error_set(err, DFLE_EIO, "profile: cannot open '%s' for writing",
-                              path != NULL ? path : "(null)");
-    bad = fprintf(f, "E (m),N (m),x (m),d (m),z (m),A (m^2),S (-),receiver\n") < 0;
-    for (size_t i = 0; i < p->n && !bad; i++) {
-        for (size_t k = 0; k < sizeof cols / sizeof cols[0]; k++)
-            bad |= fprintf(f, "%.10g,", p->f[cols[k]][i]) < 0;
-        bad |= fprintf(f, "%zu\n", p->receiver[i]) < 0;
+    *out = NULL;
+    /* best[c]: the donor of largest area of cell c, plus one (0: none). */
+    best = calloc(p->n, sizeof *best);
+    path = malloc(p->n * sizeof *path);
+    if (best == NULL || path == NULL)
+        goto nomem;
+    for (size_t i = 0; i < p->n; i++) {
+        size_t r = p->receiver[i];
+        if (r == 0) {
+            if (!have || A[i] > A[outlet])
+                outlet = i;
+            have = 1;
+        } else if (best[r - 1] == 0 || A[i] > A[best[r - 1] - 1]) {
+            best[r - 1] = i + 1;
+        }
     }
-    if (fclose(f) != 0 || bad)
-        return dfle_error_set(err, DFLE_EIO, "profile: error writing '%s'", path);
+    if (!have)
+        return dfle_error_set(err, DFLE_EINVAL, "profile: no outlet (every cell drains to "
+                              "another)");
+    for (c = outlet;; c = best[c] - 1) {
+        path[n++] = c;
+        if (best[c] == 0 || n == p->n)
+            break;
+    }
+    if (n < 2) {
+        free(best);
+        free(path);
+        return dfle_error_set(err, DFLE_EINVAL, "profile: the main stem is a single cell");
+    }
+    if ((q = profile_alloc(n)) == NULL)
+        goto nomem;
+    for (size_t i = 0; i < n; i++) {
+        size_t k = path[n - 1 - i]; /* head first */
+        for (int f = 0; f < DFLE_PROFILE_NFIELDS; f++)
+            q->f[f][i] = p->f[f][k];
+        q->f[DFLE_PROFILE_D][i] = p->f[DFLE_PROFILE_D][k] - p->f[DFLE_PROFILE_D][outlet];
+        q->receiver[i] = i + 1 < n ? i + 2 : 0;
+    }
+    for (size_t i = 0; i < n; i++)
+        q->f[DFLE_PROFILE_X][i] = q->f[DFLE_PROFILE_D][0] - q->f[DFLE_PROFILE_D][i];
+    memcpy(q->given, p->given, sizeof q->given);
+    memcpy(q->snapped, p->snapped, sizeof q->snapped);
+    q->slope = p->slope;
+    q->A_min = p->A_min, q->A_max = p->A_max, q->radius = p->radius;
+    if (p->dem != NULL) { /* provenance: the same DEM */
+        size_t len = strlen(p->dem) + 1;
+        if ((q->dem = malloc(len)) == NULL) {
+            dfle_profile_free(q);
+            goto nomem;
+        }
+        memcpy(q->dem, p->dem, len);
+    }
+    free(best);
+    free(path);
+    *out = q;
     return DFLE_OK;
+nomem:
+    free(best);
+    free(path);
+    return dfle_error_set(err, DFLE_ENOMEM, "profile: out of memory for a main stem");
+}
+
+int dfle_profile_write_csv(const dfle_profile *p, const char *path, const dfle_record *rec,
+                           dfle_error *err)
+{
+    static const struct { enum dfle_profile_field f; const char *name, *unit; } fields[] = {
+        {DFLE_PROFILE_E, "E", "m"}, {DFLE_PROFILE_N, "N", "m"}, {DFLE_PROFILE_X, "x", "m"},
+        {DFLE_PROFILE_D, "d", "m"}, {DFLE_PROFILE_Z, "z", "m"}, {DFLE_PROFILE_A, "A", "m^2"},
+        {DFLE_PROFILE_S, "S", "-"}};
+    enum { NF = sizeof fields / sizeof fields[0] };
+    dfle_column cols[NF + 1];
+    double *receiver;
+    int st;
+
+    if (path == NULL)
+        return dfle_error_set(err, DFLE_EINVAL, "profile: no file name given");
+    /* Receivers are whole numbers far below 2^53: exact as doubles. */
+    if ((receiver = malloc(p->n * sizeof *receiver)) == NULL)
+        return dfle_error_set(err, DFLE_ENOMEM, "profile: out of memory");
+    for (size_t i = 0; i < p->n; i++)
+        receiver[i] = (double)p->receiver[i];
+    for (size_t k = 0; k < NF; k++)
+        cols[k] = (dfle_column){fields[k].name, fields[k].unit, p->f[fields[k].f], NULL};
+    cols[NF] = (dfle_column){"receiver", NULL, receiver, NULL};
+    st = dfle_table_write(path, "profile", rec, cols, NF + 1, p->n, 10, err);
+    free(receiver);
+    return st;
+}
+
+void dfle_profile_describe(const dfle_profile *p, dfle_record *rec)
+{
+    const double *D = p->f[DFLE_PROFILE_D];
+    double length = 0;
+    for (size_t i = 0; i < p->n; i++)
+        length = D[i] > length ? D[i] : length;
+    dfle_record_section(rec, "profile", p->network ? "network" : "profile");
+    if (p->dem != NULL)
+        dfle_record_text(rec, "dem", p->dem);
+    if (!p->network)
+        dfle_record_text(rec, "from", p->from_head ? "head" : "outlet");
+    if (isfinite(p->given[0])) {
+        dfle_record_number(rec, "given_E", p->given[0], "m");
+        dfle_record_number(rec, "given_N", p->given[1], "m");
+        dfle_record_number(rec, "snapped_E", p->snapped[0], "m");
+        dfle_record_number(rec, "snapped_N", p->snapped[1], "m");
+    }
+    if (p->radius >= 0)
+        dfle_record_number(rec, "radius", p->radius, "m");
+    if (p->A_min > 0)
+        dfle_record_number(rec, "A_min", p->A_min, "m^2");
+    if (p->A_max > 0)
+        dfle_record_number(rec, "A_max", p->A_max, "m^2");
+    if (p->slope.ds > 0)
+        dfle_record_number(rec, "ds", p->slope.ds, "m");
+    else
+        dfle_record_number(rec, "dz", p->slope.dz, "m");
+    dfle_record_number(rec, "n", (double)p->n, NULL);
+    dfle_record_number(rec, "length", length, "m");
 }
 
 int dfle_profile_channel(const dfle_profile *p, double dx, double k_w, double b,

@@ -8,6 +8,8 @@
  */
 #include "dfle/channel.h"
 
+#include "dfle/param.h"
+
 #include <math.h>
 #include <stdatomic.h>
 #include <stdlib.h>
@@ -19,6 +21,8 @@ struct dfle_channel {
     double *x; /* [m], one block holding x, A and w */
     double *A; /* [m^2] */
     double *w; /* [m] */
+    int hack;  /* built by dfle_channel_new: opts holds what was asked */
+    dfle_channel_opts opts;
 };
 
 /* Far more nodes than any 1D profile needs; stops a typo such as
@@ -43,15 +47,23 @@ void dfle_channel_opts_default(dfle_channel_opts *o)
 static int channel_alloc(size_t n, double dx, dfle_channel **out,
                          dfle_error *err)
 {
-    dfle_channel *ch = malloc(sizeof *ch);
-    double *block = calloc(3 * n, sizeof *block);
+    dfle_channel *ch;
+    double *block;
 
+    /* dx is finite, but (n - 1) dx need not be (dx = 1e308): x would be
+     * inf beyond some node, and every distance after it. */
+    if (!isfinite((double)(n - 1) * dx))
+        return dfle_error_set(err, DFLE_EINVAL, "channel: %zu nodes of dx = %g m reach beyond "
+                              "the largest number (x at the outlet is not finite)", n, dx);
+    ch = malloc(sizeof *ch);
+    block = calloc(3 * n, sizeof *block);
     if (ch == NULL || block == NULL) {
         free(ch);
         free(block);
         return dfle_error_set(err, DFLE_ENOMEM, "channel: out of memory for %zu nodes", n);
     }
     ch->id = atomic_fetch_add(&next_channel_id, 1);
+    ch->hack = 0;
     ch->n = n;
     ch->dx = dx;
     ch->x = block;
@@ -112,6 +124,8 @@ int dfle_channel_new(const dfle_channel_opts *o, dfle_channel **out,
     st = channel_alloc(n, o->dx, out, err);
     if (st != DFLE_OK)
         return st;
+    (*out)->hack = 1;
+    (*out)->opts = *o;
     for (size_t i = 0; i < n; i++) {
         dfle_channel *ch = *out;
         ch->A[i] = o->A0 + o->hack_coef * pow(ch->x[i], o->hack_exp);
@@ -174,3 +188,24 @@ double dfle_channel_dx(const dfle_channel *ch) { return ch->dx; }
 const double *dfle_channel_x(const dfle_channel *ch) { return ch->x; }
 const double *dfle_channel_A(const dfle_channel *ch) { return ch->A; }
 const double *dfle_channel_w(const dfle_channel *ch) { return ch->w; }
+
+const char *dfle_channel_kind(const dfle_channel *ch) { return ch->hack ? "hack" : "arrays"; }
+
+size_t dfle_channel_params(const dfle_channel *ch, dfle_param *out, size_t cap)
+{
+    const dfle_channel_opts *o = &ch->opts;
+    /* The options as given (A_max is the area asked for; the outlet's is
+     * dfle_channel_A at n - 1), so they rebuild the same channel. */
+    const dfle_param p[] = {
+        {"dx", ch->dx, "m", 0},
+        {"A0", o->A0, "m^2", 0},
+        {"hack_coef", o->hack_coef, "m^(2-hack_exp)", 0},
+        {"hack_exp", o->hack_exp, "", 0},
+        {"k_w", o->k_w, "m^(1-2 b)", 0},
+        {"b", o->b, "", 0},
+        {"A_max", o->A_max, "m^2", 0},
+        {"length", o->length, "m", 0},
+    };
+    /* A channel from node arrays has no formula behind it: only dx. */
+    return dfle_param_copy(p, ch->hack ? sizeof p / sizeof p[0] : 1, out, cap);
+}

@@ -55,6 +55,7 @@ void dfle_ens_table_free(dfle_ens_table *t)
     free(t->rows);
     free(t->index);
     free(t->meta);
+    free(t->comments);
     free(t->header);
     free(t);
 }
@@ -120,20 +121,33 @@ int dfle_ens_table_read(const char *path, dfle_ens_table **out, dfle_error *err)
         if (ll > 0 && text[pos + ll - 1] == '\r')
             ll--;
         text[pos + ll] = '\0';
-        if (line == 1 || line == 2) {
-            char **dst = line == 1 ? &t->meta : &t->header;
-            if (line == 1 && text[pos] != '#') {
+        if (line == 1) {
+            if (text[pos] != '#') {
                 st = dfle_error_set(err, DFLE_EINVAL,
                                     "%s:1: not an ensemble file (no '# dfle.ensemble' line)", path);
                 goto fail;
             }
-            if (line == 2 && strncmp(text + pos, "index,", 6) != 0) {
+            if ((t->meta = dup_range(text + pos, ll)) == NULL)
+                goto nomem;
+        } else if (t->header == NULL && text[pos] == '#') {
+            /* More comment lines (version, units) before the header. */
+            size_t have = t->comments != NULL ? strlen(t->comments) : 0;
+            char *c = realloc(t->comments, have + ll + 2);
+            if (c == NULL)
+                goto nomem;
+            if (have > 0)
+                c[have++] = '\n';
+            memcpy(c + have, text + pos, ll);
+            c[have + ll] = '\0';
+            t->comments = c;
+        } else if (t->header == NULL) {
+            if (strncmp(text + pos, "index,", 6) != 0) {
                 st = dfle_error_set(err, DFLE_EINVAL,
-                                    "%s:2: not an ensemble file (header must start with 'index,')",
-                                    path);
+                                    "%s:%zu: not an ensemble file (header must start with "
+                                    "'index,')", path, line);
                 goto fail;
             }
-            if ((*dst = dup_range(text + pos, ll)) == NULL)
+            if ((t->header = dup_range(text + pos, ll)) == NULL)
                 goto nomem;
         } else if (ll > 0) {
             size_t idx;
@@ -196,6 +210,14 @@ fail:
     return st;
 }
 
+/* The lines above the rows: meta, comments (if any), header. */
+static int write_head(FILE *fp, const char *meta, const char *comments, const char *header)
+{
+    if (comments != NULL && comments[0] != '\0')
+        return fprintf(fp, "%s\n%s\n%s\n", meta, comments, header);
+    return fprintf(fp, "%s\n%s\n", meta, header);
+}
+
 int dfle_ens_table_write(const dfle_ens_table *t, const char *path, dfle_error *err)
 {
     dfle_file out;
@@ -203,7 +225,7 @@ int dfle_ens_table_write(const dfle_ens_table *t, const char *path, dfle_error *
 
     if ((st = dfle_file_begin(&out, path, "ensemble", err)) != DFLE_OK)
         return st;
-    fprintf(out.fp, "%s\n%s\n", t->meta, t->header);
+    write_head(out.fp, t->meta, t->comments, t->header);
     for (size_t i = 0; i < t->nrows; i++) {
         fputs(t->rows[i], out.fp);
         fputc('\n', out.fp);
@@ -223,8 +245,9 @@ static void file_free(dfle_ens_file *f)
     free(f);
 }
 
-int dfle_ens_file_open(const char *path, const char *meta, const char *header, size_t n,
-                       int resume, dfle_ens_file **out, dfle_error *err)
+int dfle_ens_file_open(const char *path, const char *meta, const char *comments,
+                       const char *header, size_t n, int resume, dfle_ens_file **out,
+                       dfle_error *err)
 {
     dfle_ens_file *f;
     dfle_ens_table *t = NULL;
@@ -237,6 +260,12 @@ int dfle_ens_file_open(const char *path, const char *meta, const char *header, s
     if (meta[0] != '#' || strchr(meta, '\n') != NULL || strncmp(header, "index,", 6) != 0 ||
         strchr(header, '\n') != NULL)
         return dfle_error_set(err, DFLE_EINVAL, "ensemble: malformed meta or header line");
+    for (const char *c = comments; c != NULL && *c != '\0'; c = strchr(c, '\n') + 1) {
+        if (*c != '#')
+            return dfle_error_set(err, DFLE_EINVAL, "ensemble: a comment line must start with '#'");
+        if (strchr(c, '\n') == NULL)
+            break;
+    }
     f = calloc(1, sizeof *f);
     if (f == NULL || pthread_mutex_init(&f->lock, NULL) != 0) {
         free(f);
@@ -312,7 +341,7 @@ int dfle_ens_file_open(const char *path, const char *meta, const char *header, s
             goto fail;
         }
         fd = -1;
-        if (fprintf(f->fp, "%s\n%s\n", meta, header) < 0 || fflush(f->fp) != 0) {
+        if (write_head(f->fp, meta, comments, header) < 0 || fflush(f->fp) != 0) {
             st = dfle_error_set(err, DFLE_EIO, "%s: cannot write: %s", path, strerror(errno));
             goto fail;
         }
@@ -363,11 +392,17 @@ int dfle_ens_file_close(dfle_ens_file *f, int sort, dfle_error *err)
 
     if (f == NULL)
         return DFLE_OK;
-    if (fclose(f->fp) != 0)
+    /* The sorted rewrite happens while the lock is held (it goes with
+     * the descriptor fclose closes): a second run let in between would
+     * lock the old file, which the rename then unlinks, and append its
+     * rows where nobody reads them. */
+    if (fflush(f->fp) != 0)
         st = dfle_error_set(err, DFLE_EIO, "%s: cannot write: %s", f->path, strerror(errno));
-    f->fp = NULL;
     if (st == DFLE_OK && sort && (st = dfle_ens_table_read(f->path, &t, err)) == DFLE_OK)
         st = dfle_ens_table_write(t, f->path, err);
+    if (fclose(f->fp) != 0 && st == DFLE_OK)
+        st = dfle_error_set(err, DFLE_EIO, "%s: cannot write: %s", f->path, strerror(errno));
+    f->fp = NULL;
     dfle_ens_table_free(t);
     file_free(f);
     return st;
@@ -434,6 +469,7 @@ int dfle_ens_gather(const char *const *files, size_t nfiles, const char *out, si
     }
     if (st == DFLE_OK) {
         merged.meta = t[0]->meta;
+        merged.comments = t[0]->comments;
         merged.header = t[0]->header;
         merged.nrows = k;
         st = dfle_ens_table_write(&merged, out, err);

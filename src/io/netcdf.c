@@ -15,8 +15,7 @@
 #include <stdlib.h>
 #include <string.h>
 
-#include <netcdf.h>
-
+#include "base/netcdf_lib.h" /* libnetcdf, loaded by the first dfle_nc_create */
 #include "dfle/file.h"
 
 struct dfle_nc {
@@ -59,6 +58,8 @@ int dfle_nc_create(const char *path, size_t nx, size_t ny, const dfle_raster_geo
     if (nx == 0 || ny == 0 || nvars == 0)
         return dfle_error_set(err, DFLE_EINVAL, "netcdf: nothing to write (%zu x %zu, %zu "
                               "variables)", nx, ny, nvars);
+    if ((st = dfle_netcdf_load("netcdf", err)) != DFLE_OK)
+        return st;
     if ((nc = calloc(1, sizeof *nc)) == NULL || (nc->vid = calloc(nvars, sizeof(int))) == NULL) {
         if (nc != NULL)
             free(nc);

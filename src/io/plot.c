@@ -25,6 +25,7 @@
 #include "dfle/plot.h"
 
 #include "dfle/file.h"
+#include "io/plot_internal.h"
 
 #include <errno.h>
 #include <fcntl.h>
@@ -39,17 +40,17 @@
 #include <time.h>
 #include <unistd.h>
 
-enum { FMT_PNG, FMT_SVG, FIT_SAMPLES = 200 };
+enum { FIT_SAMPLES = 200 };
 
 /* Okabe-Ito colours: distinguishable with colour-blindness and in print. */
-static const char *const palette[] = {"#0072B2", "#D55E00", "#009E73",
+const char *const dfle_gp_palette[DFLE_GP_NPALETTE] = {"#0072B2", "#D55E00", "#009E73",
                                       "#CC79A7", "#E69F00", "#56B4E9",
                                       "#000000"};
 
 /* The image format named by the path's extension, or a negative status.
  * Control characters are refused: they cannot be written in a
  * single-quoted gnuplot string and no sane file name needs them. */
-static int out_format(const char *path, dfle_error *err)
+int dfle_gp_format(const char *path, dfle_error *err)
 {
     if (path == NULL || path[0] == '\0')
         return dfle_error_set(err, DFLE_EINVAL,
@@ -70,7 +71,7 @@ static int out_format(const char *path, dfle_error *err)
 /* s as a gnuplot single-quoted string (see the file comment).  A line
  * break is spliced in as a concatenated "\n" so multi-line titles work
  * without ending the command. */
-static void gp_str(FILE *f, const char *s)
+void dfle_gp_str(FILE *f, const char *s)
 {
     fputc('\'', f);
     for (; *s != '\0'; s++) {
@@ -94,20 +95,8 @@ static void sh_quote(char *dst, const char *s)
     strcpy(dst, "'");
 }
 
-/* One gnuplot run.  SIGPIPE is blocked for this thread while we write, so
- * a gnuplot that is missing or dies early gives EPIPE, not a dead caller. */
-typedef struct gp_run {
-    FILE *f;
-    const char *prog, *out;
-    const char *write_to; /* where gnuplot writes: a temporary file beside out */
-    dfle_file file;       /* renamed over out once the image is checked */
-    int fmt;
-    int errfd;            /* gnuplot's messages: an unlinked file */
-    sigset_t pipeset, oldmask;
-    int pipe_pending; /* SIGPIPE was pending before us: not ours to eat */
-} gp_run;
 
-static int gp_begin(gp_run *r, const char *path, int fmt, int w, int h,
+int dfle_gp_begin(dfle_gp_run *r, const char *path, int fmt, int w, int h,
                     dfle_error *err)
 {
     const char *tmp = getenv("TMPDIR");
@@ -162,7 +151,7 @@ static int gp_begin(gp_run *r, const char *path, int fmt, int w, int h,
             "linewidth 1.2 background '#ffffff'\nset encoding utf8\n"
             "set output %s", fmt == FMT_PNG ? "pngcairo" : "svg", w, h,
             path[0] == '/' ? "" : "'./'.");
-    gp_str(r->f, path);
+    dfle_gp_str(r->f, path);
     /* Light grid behind the data, thin black frame, small bar caps. */
     fputs("\nset style line 81 lt 1 lc rgb '#d0d0d0' lw 0.6\n"
           "set style line 82 lt 1 lc rgb '#ececec' lw 0.4\n"
@@ -225,7 +214,7 @@ static int image_complete(const char *path, int fmt)
     return ok;
 }
 
-static int gp_end(gp_run *r, dfle_error *err)
+int dfle_gp_end(dfle_gp_run *r, dfle_error *err)
 {
     char msg[300];
     struct stat sb;
@@ -298,6 +287,7 @@ typedef struct layer {
     size_t used;              /* usable rows, set by ext_scan */
     const double *c;          /* colour value per row, or NULL */
     int logc;                 /* colour scale is logarithmic */
+    int band;                 /* filled between lo and hi (columns 3, 4) */
 } layer;
 
 /* Extent of the layers in axis units (log10 on log axes) and how many
@@ -333,6 +323,8 @@ static void nice_log(double *lo, double *hi)
 /* A row is drawn when its x, y (and colour, if any) can be placed. */
 static int row_ok(const layer *l, size_t i, int logx, int logy)
 {
+    if (l->band)
+        return usable(l->x[i], l->lo[i], logx, logy) && usable(l->x[i], l->hi[i], logx, logy);
     if (!usable(l->x[i], l->y[i], logx, logy))
         return 0;
     return l->c == NULL || (isfinite(l->c[i]) && (!l->logc || l->c[i] > 0));
@@ -352,9 +344,13 @@ static void ext_scan(extent *e, layer *L, size_t nl, int logx, int logy,
         L[k].used = 0;
         for (size_t i = 0; i < L[k].n; i++) {
             if (!row_ok(&L[k], i, logx, logy)) continue;
-            double u = ax(L[k].x[i], logx), v = ax(L[k].y[i], logy);
+            double u = ax(L[k].x[i], logx), v = ax(L[k].band ? L[k].lo[i] : L[k].y[i], logy);
             e->x0 = fmin(e->x0, u); e->x1 = fmax(e->x1, u);
             e->y0 = fmin(e->y0, v); e->y1 = fmax(e->y1, v);
+            if (L[k].band) {
+                v = ax(L[k].hi[i], logy);
+                e->y0 = fmin(e->y0, v); e->y1 = fmax(e->y1, v);
+            }
             L[k].used++;
         }
         e->n += L[k].used;
@@ -380,7 +376,7 @@ static void put_blocks(FILE *f, const char *name, const layer *L, size_t nl,
         int gap = 0;
         fprintf(f, "$%s%zu << EOD\n", name, k);
         for (size_t i = 0; i < L[k].n; i++) {
-            double x = L[k].x[i], y = L[k].y[i];
+            double x = L[k].x[i], y = L[k].band ? L[k].hi[i] : L[k].y[i];
             if (!row_ok(&L[k], i, e->logx, e->logy)) {
                 if (gap) fputs("\n", f); /* a blank line breaks a line */
                 gap = 0;
@@ -409,35 +405,59 @@ static void put_blocks(FILE *f, const char *name, const layer *L, size_t nl,
     }
 }
 
-/* Log axes get the range the corner count assumed, labels 10^n when they
- * span two decades or more, and otherwise tics at 1, 2, 5 (and 3, 7
- * below one decade) times 10^n: gnuplot would label only the decades,
- * leaving a narrow axis with one number or none. */
-static void put_axes(FILE *f, const extent *e)
+/* Log axes get the range the corner count assumed (dfle_gp_log_axis). */
+void dfle_gp_log_axis(FILE *f, char c, double lo, double hi, int labels)
 {
     static const double mant[5] = {1, 2, 3, 5, 7};
-    const int lg[2] = {e->logx, e->logy};
-    const double lo[2] = {e->x0, e->y0}, hi[2] = {e->x1, e->y1};
-    for (int a = 0; a < 2; a++) {
-        char c = a == 0 ? 'x' : 'y';
-        double span = hi[a] - lo[a];
-        if (!lg[a]) continue;
-        fprintf(f, "set logscale %c 10\nset m%ctics 10\nset %crange [%.17g:"
-                "%.17g]\nset format %c '%s'\n", c, c, c, pow(10, lo[a]),
-                pow(10, hi[a]), c, span >= 2 ? "10^{%L}" : "%g");
-        if (span >= 2) continue;
-        const char *sep = "(";
-        fprintf(f, "set %ctics ", c);
-        for (double d = floor(lo[a]); d <= ceil(hi[a]); d++)
-            for (int m = 0; m < 5; m++) {
-                double v = log10(mant[m]) + d;
-                if ((span >= 1 && (m == 2 || m == 4)) || v < lo[a] - 1e-9 ||
-                    v > hi[a] + 1e-9) continue;
-                fprintf(f, "%s%.17g", sep, mant[m] * pow(10, d));
-                sep = ", ";
-            }
-        fputs(*sep == '(' ? "autofreq\n" : ")\n", f);
+    double span = hi - lo;
+    /* Tics of tiny or huge values read better as 2×10^{-4} than 0.0002. */
+    const char *small = hi < -2 || lo >= 4 ? "%.0t×10^{%T}" : "%g";
+    fprintf(f, "set logscale %c 10\nset m%ctics 10\nset %crange [%.17g:"
+            "%.17g]\nset format %c '%s'\n", c, c, c, pow(10, lo),
+            pow(10, hi), c, !labels ? "" : span >= 2 ? "10^{%L}" : small);
+    if (span >= 2) {
+        fprintf(f, "set %ctics autofreq\n", c);
+        return;
     }
+    if (span < 0.5) {
+        /* Under half a decade 1, 2, 5 x 10^n leave one tic or none: take
+         * 3 to 6 evenly spaced round values, 1, 2 or 5 times a power of 10. */
+        double v0 = pow(10, lo), v1 = pow(10, hi), raw = (v1 - v0) / 4;
+        double p10 = pow(10, floor(log10(raw))), step = raw / p10 < 1.5 ? p10
+                     : raw / p10 < 3.5 ? 2 * p10 : raw / p10 < 7.5 ? 5 * p10 : 10 * p10;
+        int dec = (int)floor(log10(v1)) - (int)floor(log10(step));
+        char fmt[32];
+        if (dec < 0)
+            dec = 0;
+        if (hi < -2 || lo >= 4)
+            snprintf(fmt, sizeof fmt, "%%.%dt×10^{%%T}", dec);
+        else
+            snprintf(fmt, sizeof fmt, "%%g");
+        fprintf(f, "set format %c '%s'\nset %ctics (", c, labels ? fmt : "", c);
+        for (double v = ceil(v0 / step) * step, k = 0; v <= v1 * (1 + 1e-12); v += step, k++)
+            fprintf(f, "%s%.17g", k > 0 ? ", " : "", v);
+        fputs(")\n", f);
+        return;
+    }
+    const char *sep = "(";
+    fprintf(f, "set %ctics ", c);
+    for (double d = floor(lo); d <= ceil(hi); d++)
+        for (int m = 0; m < 5; m++) {
+            double v = log10(mant[m]) + d;
+            if ((span >= 1 && (m == 2 || m == 4)) || v < lo - 1e-9 ||
+                v > hi + 1e-9) continue;
+            fprintf(f, "%s%.17g", sep, mant[m] * pow(10, d));
+            sep = ", ";
+        }
+    fputs(*sep == '(' ? "autofreq\n" : ")\n", f);
+}
+
+static void put_axes(FILE *f, const extent *e)
+{
+    if (e->logx)
+        dfle_gp_log_axis(f, 'x', e->x0, e->x1, 1);
+    if (e->logy)
+        dfle_gp_log_axis(f, 'y', e->y0, e->y1, 1);
     fprintf(f, "set grid xtics ytics%s%s back ls 81, ls 82\n",
             e->logx ? " mxtics" : "", e->logy ? " mytics" : "");
 }
@@ -446,7 +466,7 @@ static void put_label(FILE *f, const char *what, const char *text)
 {
     if (text == NULL) return;
     fprintf(f, "set %s ", what);
-    gp_str(f, text);
+    dfle_gp_str(f, text);
     fputs("\n", f);
 }
 
@@ -473,9 +493,10 @@ static void put_plot(FILE *f, const char *name, const layer *L, size_t nl,
             fprintf(f, "%s $%s%zu using 1:2:3 with %s lc palette", first ? "" : ",", name, k,
                     L[k].with);
         else
-            fprintf(f, "%s $%s%zu using 1:2%s with %s lc rgb '%s'", first ? "" :
-                    ",", name, k, L[k].lo ? ":3:4" : "", L[k].with, L[k].color);
-        if (L[k].title != NULL) { fputs(" title ", f); gp_str(f, L[k].title); }
+            fprintf(f, "%s $%s%zu using %s with %s lc rgb '%s'", first ? "" :
+                    ",", name, k, L[k].band ? "1:3:4" : L[k].lo ? "1:2:3:4" : "1:2",
+                    L[k].with, L[k].color);
+        if (L[k].title != NULL) { fputs(" title ", f); dfle_gp_str(f, L[k].title); }
         else fputs(" notitle", f);
         first = 0;
     }
@@ -505,8 +526,8 @@ static int figure(const char *path, int fmt, int w, int h, const char *title,
                   const layer *L, size_t nl, const char *extra,
                   dfle_error *err)
 {
-    gp_run r;
-    int rc = gp_begin(&r, path, fmt, w, h, err);
+    dfle_gp_run r;
+    int rc = dfle_gp_begin(&r, path, fmt, w, h, err);
     if (rc < 0) return rc;
     put_blocks(r.f, "d", L, nl, e);
     put_label(r.f, "title", title);
@@ -516,7 +537,7 @@ static int figure(const char *path, int fmt, int w, int h, const char *title,
     put_colour(r.f, L, nl, cl);
     if (extra != NULL) fputs(extra, r.f);
     put_plot(r.f, "d", L, nl, e);
-    return gp_end(&r, err);
+    return dfle_gp_end(&r, err);
 }
 
 int dfle_plot_xy(const char *path, const dfle_plot_opts *opts,
@@ -524,9 +545,9 @@ int dfle_plot_xy(const char *path, const dfle_plot_opts *opts,
                  dfle_error *err)
 {
     static const dfle_plot_opts none = {0};
-    enum { NPAL = sizeof palette / sizeof palette[0] };
+    enum { NPAL = DFLE_GP_NPALETTE };
     const dfle_plot_opts *o = opts != NULL ? opts : &none;
-    int fmt = out_format(path, err);
+    int fmt = dfle_gp_format(path, err);
     if (fmt < 0) return fmt;
     int w = o->width > 0 ? o->width : 900, h = o->height > 0 ? o->height : 600;
     if (w < 64 || h < 64 || w > 10000 || h > 10000)
@@ -534,18 +555,26 @@ int dfle_plot_xy(const char *path, const dfle_plot_opts *opts,
                               "outside 64..10000 pixels", w, h);
     if (series == NULL || nseries == 0)
         return dfle_error_set(err, DFLE_EINVAL, "plot: no series to plot");
-    for (size_t k = 0; k < nseries; k++)
-        if (series[k].n > 0 && (series[k].x == NULL || series[k].y == NULL))
+    for (size_t k = 0; k < nseries; k++) {
+        const dfle_plot_series *q = &series[k];
+        int band = q->lo != NULL || q->hi != NULL;
+        if (q->n > 0 && (q->x == NULL || (!band && q->y == NULL) ||
+                         (band && (q->lo == NULL || q->hi == NULL))))
             return dfle_error_set(err, DFLE_EINVAL, "plot: series %zu has "
-                                  "NULL x or y", k);
+                                  "NULL x or y (or only one of lo, hi)", k);
+    }
     layer *L = malloc(nseries * sizeof *L);
     if (L == NULL)
         return dfle_error_set(err, DFLE_ENOMEM, "plot: out of memory");
     for (size_t k = 0; k < nseries; k++) {
         const dfle_plot_series *s = &series[k];
-        L[k] = (layer){s->n, s->x, s->y, NULL, NULL, s->lines ? "lines lw 2" :
-                       "points pt 7 ps 0.6", palette[k % NPAL], s->label, 0, s->c,
-                       o->logc != 0};
+        int band = s->lo != NULL;
+        L[k] = (layer){s->n, s->x, band ? s->hi : s->y, s->lo, s->hi,
+                       band ? "filledcurves fs transparent solid 0.3 noborder"
+                       : s->lines ? (s->dash ? "lines lw 2 dt 2" : "lines lw 2")
+                       : "points pt 7 ps 0.6",
+                       s->rgb != NULL ? s->rgb : dfle_gp_palette[k % NPAL], s->label, 0,
+                       band ? NULL : s->c, o->logc != 0, band};
     }
     extent e;
     int rc;
@@ -570,7 +599,7 @@ static double eq2(const dfle_eq2_fit *fit, double A)
 
 /* v for a legend: 3 significant digits; large or small values as
  * "1.2×10^{4}" (enhanced text). */
-static void fmt_num(char *buf, size_t cap, double v)
+void dfle_gp_number(char *buf, size_t cap, double v)
 {
     double a = fabs(v);
     if (a == 0 || (a >= 1e-3 && a < 1e4)) {
@@ -591,7 +620,7 @@ int dfle_plot_slope_area(const char *path, const char *title, size_t n,
                          const dfle_bins *bins, const dfle_eq2_fit *fit,
                          dfle_error *err)
 {
-    int fmt = out_format(path, err);
+    int fmt = dfle_gp_format(path, err);
     if (fmt < 0) return fmt;
     if (n == 0 || A == NULL || S == NULL)
         return dfle_error_set(err, DFLE_EINVAL, "plot: slope-area data "
@@ -618,14 +647,14 @@ int dfle_plot_slope_area(const char *path, const char *title, size_t n,
     layer L[4];
     size_t nl = 0;
     L[nl++] = (layer){n, A, S, NULL, NULL, "points pt 7 ps 0.35", "#a8a8a8",
-                      "Data", 0, NULL, 0};
+                      "Data", 0, NULL, 0, 0};
     if (bins != NULL && bins->n > 0) {
         int bars = bins->S_q25 != NULL && bins->S_q75 != NULL;
         L[nl++] = (layer){bins->n, bins->A, bins->S_mean,
                           bars ? bins->S_q25 : NULL, bars ? bins->S_q75 : NULL,
                           bars ? "yerrorbars pt 7 ps 1 lw 1" : "points pt 7 ps 1",
                           "#000000", bars ? "Binned mean (quartiles)"
-                          : "Binned mean", 0, NULL, 0};
+                          : "Binned mean", 0, NULL, 0, 0};
     }
     /* The curve spans the data's areas; A_df is marked only inside it. */
     double fa[FIT_SAMPLES], fs[FIT_SAMPLES], mark_a = 0, mark_s = 0;
@@ -636,9 +665,9 @@ int dfle_plot_slope_area(const char *path, const char *title, size_t n,
             fa[i] = amin * pow(amax / amin, i / (FIT_SAMPLES - 1.0));
             fs[i] = eq2(fit, fa[i]);
         }
-        fmt_num(sdf, sizeof sdf, fit->S_df);
-        fmt_num(adf, sizeof adf, fit->A_df);
-        fmt_num(a2, sizeof a2, fit->a2);
+        dfle_gp_number(sdf, sizeof sdf, fit->S_df);
+        dfle_gp_number(adf, sizeof adf, fit->A_df);
+        dfle_gp_number(a2, sizeof a2, fit->a2);
         if (isfinite(fit->r2))
             snprintf(r2, sizeof r2, ", {/:Italic R}^2 = %.3f", fit->r2);
         int mark = fit->A_df >= amin && fit->A_df <= amax;
@@ -647,14 +676,14 @@ int dfle_plot_slope_area(const char *path, const char *title, size_t n,
                  mark ? "" : ", {/:Italic A}_{df} = ", mark ? "" : adf,
                  mark ? "" : " m^2");
         L[nl++] = (layer){FIT_SAMPLES, fa, fs, NULL, NULL, "lines lw 2.5",
-                          "#d01c1c", ftitle, 0, NULL, 0};
+                          "#d01c1c", ftitle, 0, NULL, 0, 0};
         if (mark) { /* as in the paper's Fig. 1: open circle at (A_df,
                      * S_df/2) on the curve and a dashed line at A_df */
             mark_a = fit->A_df;
             mark_s = eq2(fit, fit->A_df);
             snprintf(mtitle, sizeof mtitle, "{/:Italic A}_{df} = %s m^2", adf);
             L[nl++] = (layer){1, &mark_a, &mark_s, NULL, NULL,
-                              "points pt 6 ps 2.2 lw 2", "#d01c1c", mtitle, 0, NULL, 0};
+                              "points pt 6 ps 2.2 lw 2", "#d01c1c", mtitle, 0, NULL, 0, 0};
             snprintf(extra, sizeof extra, "set arrow from %.17g, graph 0 to "
                      "%.17g, graph 1 nohead dt 2 lw 1 lc rgb '#d01c1c' back\n",
                      mark_a, mark_a);
@@ -671,13 +700,13 @@ int dfle_plot_profile(const char *path, const char *title, size_t n,
                       const double *x, const double *z, const double *S,
                       dfle_error *err)
 {
-    int fmt = out_format(path, err);
+    int fmt = dfle_gp_format(path, err);
     if (fmt < 0) return fmt;
     if (n == 0 || x == NULL || z == NULL)
         return dfle_error_set(err, DFLE_EINVAL, "plot: profile data missing "
                               "(n = %zu, x or z NULL)", n);
-    layer top = {n, x, z, NULL, NULL, "lines lw 2", "#1f3b73", NULL, 0, NULL, 0};
-    layer bot = {n, x, S, NULL, NULL, "lines lw 1.6", "#D55E00", NULL, 0, NULL, 0};
+    layer top = {n, x, z, NULL, NULL, "lines lw 2", "#1f3b73", NULL, 0, NULL, 0, 0};
+    layer bot = {n, x, S, NULL, NULL, "lines lw 1.6", "#D55E00", NULL, 0, NULL, 0, 0};
     extent et, eb;
     ext_scan(&et, &top, 1, 0, 0, 0);
     if (et.n == 0)
@@ -696,8 +725,8 @@ int dfle_plot_profile(const char *path, const char *title, size_t n,
                               "with finite x and S for '%s'", path);
     /* Both panels share one fixed x range, so their frames line up. */
     double x0 = fmin(et.x0, eb.x0), x1 = fmax(et.x1, eb.x1);
-    gp_run r;
-    int rc = gp_begin(&r, path, fmt, 900, 750, err);
+    dfle_gp_run r;
+    int rc = dfle_gp_begin(&r, path, fmt, 900, 750, err);
     if (rc < 0) return rc;
     put_blocks(r.f, "z", &top, 1, &et);
     put_blocks(r.f, "s", &bot, 1, &eb);
@@ -721,7 +750,7 @@ int dfle_plot_profile(const char *path, const char *title, size_t n,
     put_axes(r.f, &eb);
     put_plot(r.f, "s", &bot, 1, &eb);
     fputs("unset multiplot\n", r.f);
-    return gp_end(&r, err);
+    return dfle_gp_end(&r, err);
 }
 
 /* ---------------------------------------------------------------- */
@@ -769,7 +798,7 @@ static double shade_at(const dfle_plot_map *m, size_t r, size_t c, size_t step)
 
 int dfle_plot_hillshade(const char *path, const dfle_plot_map *m, dfle_error *err)
 {
-    int fmt = out_format(path, err);
+    int fmt = dfle_gp_format(path, err);
     double zmin = HUGE_VAL, zmax = -HUGE_VAL;
     size_t step = 1, cols, rows;
     if (fmt < 0) return fmt;
@@ -800,8 +829,8 @@ int dfle_plot_hillshade(const char *path, const dfle_plot_map *m, dfle_error *er
     int w = 1000, h = (int)(80 + 820.0 * hkm / wkm);
     if (h > 1400) { h = 1400; w = (int)(150 + 1250.0 * wkm / hkm); }
     if (h < 400) h = 400;
-    gp_run r;
-    int rc = gp_begin(&r, path, fmt, w, h, err);
+    dfle_gp_run r;
+    int rc = dfle_gp_begin(&r, path, fmt, w, h, err);
     if (rc < 0) return rc;
     /* One packed RGB value per cell (0xRRGGBB), a matrix datablock. */
     fputs("$img << EOD\n", r.f);
@@ -852,12 +881,12 @@ int dfle_plot_hillshade(const char *path, const dfle_plot_map *m, dfle_error *er
     fputs("$cb using 1:2:3 with image notitle", r.f); /* the colour box's scale */
     if (m->channel != NULL) {
         fputs(", NaN with lines lw 6 lc rgb '#0072B2' title ", r.f);
-        gp_str(r.f, m->channel_label != NULL ? m->channel_label : "Channel network");
+        dfle_gp_str(r.f, m->channel_label != NULL ? m->channel_label : "Channel network");
     }
     if (m->reach != NULL) {
         fputs(", NaN with lines lw 6 lc rgb '#D55E00' title ", r.f);
-        gp_str(r.f, m->reach_label != NULL ? m->reach_label : "Debris-flow reach");
+        dfle_gp_str(r.f, m->reach_label != NULL ? m->reach_label : "Debris-flow reach");
     }
     fputs("\n", r.f);
-    return gp_end(&r, err);
+    return dfle_gp_end(&r, err);
 }

@@ -5,22 +5,16 @@
  * renamed over the target once GDALClose has flushed it, so a reader never
  * sees a half-written GeoTIFF.  GDAL's error printer is silenced for the
  * call and its last message folded into dfle's, as the DEM reader does.
+ * GDAL itself is loaded by the first write (base/gdal_lib.h).
  */
 #include "dfle/raster.h"
 
 #include <math.h>
-#include <pthread.h>
 #include <stdio.h>
 #include <string.h>
 
-#include <cpl_error.h>
-#include <gdal.h>
-#include <ogr_srs_api.h>
-
+#include "base/gdal_lib.h" /* GDAL, loaded by the first write */
 #include "dfle/file.h"
-
-static pthread_once_t gdal_once = PTHREAD_ONCE_INIT;
-static void gdal_register(void) { GDALAllRegister(); }
 
 int dfle_raster_write_geotiff(const char *path, size_t nx, size_t ny, const dfle_raster_geo *geo,
                               size_t nbands, const double *const *bands,
@@ -36,7 +30,8 @@ int dfle_raster_write_geotiff(const char *path, size_t nx, size_t ny, const dfle
     if (nx == 0 || ny == 0 || nbands == 0 || nx > 2147483647u || ny > 2147483647u)
         return dfle_error_set(err, DFLE_EINVAL, "raster: cannot write a %zu x %zu grid of %zu "
                               "bands", nx, ny, nbands);
-    pthread_once(&gdal_once, gdal_register);
+    if ((st = dfle_gdal_load("raster", err)) != DFLE_OK)
+        return st;
     if ((drv = GDALGetDriverByName("GTiff")) == NULL)
         return dfle_error_set(err, DFLE_EIO, "raster: GDAL has no GTiff driver");
     if ((st = dfle_file_begin_external(&f, path, "raster", &write_to, err)) != DFLE_OK)

@@ -8,6 +8,8 @@
  */
 #include "dfle/fluvial.h"
 
+#include "dfle/param.h"
+
 #include <math.h>
 #include <stdlib.h>
 
@@ -16,6 +18,8 @@ struct dfle_fluvial {
     double K; /* [m^(1 - 2 m) / yr] */
     double m; /* area exponent m_s  */
     double n; /* slope exponent n_s */
+    int derived; /* stochastic threshold: st holds the Table G1 values */
+    dfle_stochastic_threshold_opts st;
 };
 
 void dfle_stochastic_threshold_opts_default(dfle_stochastic_threshold_opts *o)
@@ -48,6 +52,7 @@ static int fluvial_alloc(const char *name, double K, double m, double n,
     if (fl == NULL)
         return dfle_error_set(err, DFLE_ENOMEM, "fluvial: out of memory");
     fl->name = name;
+    fl->derived = 0;
     fl->K = K;
     fl->m = m;
     fl->n = n;
@@ -115,7 +120,11 @@ int dfle_fluvial_new_stochastic_threshold(
         return dfle_error_set(err, DFLE_EINVAL,
                               "fluvial.stochastic_threshold: parameters give K = %g, "
                               "m_s = %g, n_s = %g", K, m_s, n_s);
-    return fluvial_alloc("stochastic_threshold", K, m_s, n_s, out, err);
+    if (fluvial_alloc("stochastic_threshold", K, m_s, n_s, out, err) != DFLE_OK)
+        return DFLE_ENOMEM;
+    (*out)->derived = 1;
+    (*out)->st = *o;
+    return DFLE_OK;
 }
 
 int dfle_fluvial_new_stream_power(double K, double m, double n,
@@ -150,4 +159,40 @@ double dfle_fluvial_steady_slope(const dfle_fluvial *fl, double U, double A)
     if (!(fl->K > 0))
         return INFINITY;
     return pow(U / fl->K, 1.0 / fl->n) * pow(A, -fl->m / fl->n);
+}
+
+size_t dfle_fluvial_params(const dfle_fluvial *fl, dfle_param *out, size_t cap)
+{
+    const dfle_stochastic_threshold_opts *o = &fl->st;
+    /* Table G1, then the law they give: K, m_s and n_s are what the model
+     * runs, and as overrides they rebuild the same law. */
+    const dfle_param st[] = {
+        {"k_e", o->k_e, "m^2.5 s^2 kg^-1.5", 0},
+        {"rho_w", o->rho_w, "kg/m^3", 0},
+        {"rho_s", o->rho_s, "kg/m^3", 0},
+        {"D_eff", o->D_eff, "m", 0},
+        {"b", o->b, "", 0},
+        {"k_w", o->k_w, "m^(1-2 b)", 0},
+        {"a", o->a, "", 0},
+        {"c", o->c, "", 0},
+        {"k", o->k, "", 0},
+        {"omega_s", o->omega_s, "", 0},
+        {"alpha_f", o->alpha_f, "", 0},
+        {"beta_f", o->beta_f, "", 0},
+        {"R_c", o->R_c, "m", 0},
+        {"n_manning", o->n_manning, "s m^-1/3", 0},
+        {"g", o->g, "m/s^2", 0},
+        {"tau_c_coef", o->tau_c_coef, "", 0},
+        {"K", fl->K, "m^(1-2 m_s)/yr", 0},
+        {"m_s", fl->m, "", 0},
+        {"n_s", fl->n, "", 0},
+    };
+    const dfle_param sp[] = {
+        {"K", fl->K, "m^(1-2 m)/yr", 0},
+        {"m", fl->m, "", 0},
+        {"n", fl->n, "", 0},
+    };
+    if (fl->derived)
+        return dfle_param_copy(st, sizeof st / sizeof st[0], out, cap);
+    return dfle_param_copy(sp, sizeof sp / sizeof sp[0], out, cap);
 }

@@ -21,6 +21,8 @@
 
 #include "dfle/file.h"
 #include "dfle/flow.h"
+#include "dfle/param.h"
+#include "dfle/record.h"
 #include "model/model_internal.h"
 
 void dfle_model_opts_default(dfle_model_opts *o)
@@ -221,6 +223,16 @@ double dfle_model_time(const dfle_model *m) { return m->time; }
 double dfle_model_U(const dfle_model *m) { return m->U; }
 double dfle_model_cfl(const dfle_model *m) { return m->cfl; }
 double dfle_model_dt_max(const dfle_model *m) { return m->dt_max; }
+
+size_t dfle_model_params(const dfle_model *m, dfle_param *out, size_t cap)
+{
+    const dfle_param p[] = {
+        {"U", m->U, "m/yr", 0},
+        {"cfl", m->cfl, "", 0},
+        {"dt_max", m->dt_max, "yr", 0},
+    };
+    return dfle_param_copy(p, sizeof p / sizeof p[0], out, cap);
+}
 const dfle_channel *dfle_model_channel(const dfle_model *m) { return m->ch; }
 const dfle_fluvial *dfle_model_fluvial(const dfle_model *m) { return m->fl; }
 dfle_router *dfle_model_router(const dfle_model *m) { return m->rt; }
@@ -371,24 +383,76 @@ const double *dfle_model_field(dfle_model *m, int field, dfle_error *err)
     }
 }
 
-int dfle_model_write_csv(dfle_model *m, const char *path, dfle_error *err)
+int dfle_model_write_csv(dfle_model *m, const char *path, const dfle_record *rec,
+                         dfle_error *err)
 {
-    const double *col[DFLE_FIELD_COUNT];
-    dfle_file out;
-    int st;
+    dfle_column cols[DFLE_FIELD_COUNT];
 
-    for (int k = 0; k < DFLE_FIELD_COUNT; k++)
-        if ((col[k] = dfle_model_field(m, k, err)) == NULL)
+    for (int k = 0; k < DFLE_FIELD_COUNT; k++) {
+        cols[k].name = field_info[k].name;
+        cols[k].unit = field_info[k].unit;
+        cols[k].text = NULL;
+        if ((cols[k].num = dfle_model_field(m, k, err)) == NULL)
             return err != NULL ? err->code : DFLE_ESTATE;
-    if ((st = dfle_file_begin(&out, path, "model", err)) != DFLE_OK)
-        return st;
-    for (int k = 0; k < DFLE_FIELD_COUNT; k++)
-        fprintf(out.fp, "%s%s (%s)", k ? "," : "", field_info[k].name, field_info[k].unit);
-    fputc('\n', out.fp);
-    for (size_t i = 0; i < m->n; i++) {
-        for (int k = 0; k < DFLE_FIELD_COUNT; k++)
-            fprintf(out.fp, "%s%.10g", k ? "," : "", col[k][i]);
-        fputc('\n', out.fp);
     }
-    return dfle_file_commit(&out, err);
+    /* 10 significant digits: far beyond what the model resolves, and
+     * short enough to read. */
+    return dfle_table_write(path, "model", rec, cols, DFLE_FIELD_COUNT, m->n, 10, err);
+}
+
+/* One component: its kind, and its params op's list when it has one. */
+static void describe_component(dfle_record *rec, const char *section, const char *kind,
+                               size_t (*params)(const void *, dfle_param *, size_t),
+                               const void *comp)
+{
+    dfle_param p[64];
+    size_t n;
+    dfle_record_section(rec, section, comp != NULL ? kind : "off");
+    if (comp == NULL || (n = params(comp, p, 64)) == (size_t)-1)
+        return;
+    dfle_record_params(rec, p, n < 64 ? n : 64);
+}
+
+static size_t channel_params(const void *c, dfle_param *p, size_t cap)
+{
+    return dfle_channel_params(c, p, cap);
+}
+static size_t fluvial_params(const void *c, dfle_param *p, size_t cap)
+{
+    return dfle_fluvial_params(c, p, cap);
+}
+static size_t router_params(const void *c, dfle_param *p, size_t cap)
+{
+    return dfle_router_params(c, p, cap);
+}
+static size_t law_params(const void *c, dfle_param *p, size_t cap)
+{
+    return dfle_law_params(c, p, cap);
+}
+static size_t model_params(const void *c, dfle_param *p, size_t cap)
+{
+    return dfle_model_params(c, p, cap);
+}
+
+void dfle_model_describe(const dfle_model *m, dfle_record *rec)
+{
+    const double *x = dfle_network_x(m->net), *A = dfle_network_A(m->net);
+    if (m->ch != NULL) {
+        describe_component(rec, "channel", dfle_channel_kind(m->ch), channel_params,
+                           m->ch);
+        dfle_record_number(rec, "n", (double)m->n, NULL);
+        dfle_record_number(rec, "x_outlet", x[m->n - 1], "m");
+        dfle_record_number(rec, "A_head", A[0], "m^2");
+        dfle_record_number(rec, "A_outlet", A[m->n - 1], "m^2");
+    } else {
+        dfle_record_section(rec, "network", NULL);
+        dfle_record_number(rec, "n", (double)m->n, NULL);
+    }
+    describe_component(rec, "fluvial", m->fl ? dfle_fluvial_name(m->fl) : NULL,
+                       fluvial_params, m->fl);
+    describe_component(rec, "router", m->rt ? dfle_router_name(m->rt) : NULL,
+                       router_params, m->rt);
+    describe_component(rec, "law", m->law ? dfle_law_name(m->law) : NULL, law_params, m->law);
+    describe_component(rec, "model", NULL, model_params, m);
+    dfle_record_number(rec, "time", m->time, "yr");
 }

@@ -19,6 +19,11 @@
  *    impulse friction can deliver in dt exceeds the momentum, the cell
  *    stops (q = 0) instead of the friction reversing it.  This is what
  *    lets a pile come to rest on a slope below its friction angle.
+ *  - A step works on the wet window only (the cells holding volume and
+ *    one more on each side: a first-order step moves volume no further),
+ *    and computes nothing twice; where a bound decides (friction), the
+ *    exact value is not computed.  Every number stays what the whole-grid
+ *    sweep computes, to the bit (doc/process-router.md, the wet window).
  */
 #include "dfle/flow1d.h"
 
@@ -30,11 +35,27 @@ struct dfle_flow1d {
     size_t n;
     double dx;
     dfle_flow1d_params p;
+    /* The wet window: cells [lo, hi) the last step worked on, and faces
+     * lo..hi its fluxes.  Outside, h = q = u = c = 0 and every face array
+     * is 0, which is what a step over the whole grid would compute there
+     * (two dry cells exchange nothing), so skipping them changes nothing. */
+    size_t lo, hi;
+    /* 1 after h or q was handed out for writing: the next step derives u,
+     * c, smax and the volume afresh over the whole grid. */
+    int stale;
+    double smax;   /* max |u| + c over wet cells [m/s]: the CFL speed     */
+    double volume; /* sum of w h dx over the grid, in cell order [m^3]    */
     /* One block; cell arrays have n values, face arrays n + 1 (face k lies
      * between cells k - 1 and k; face 0 is the upstream wall, face n the
-     * outlet). */
-    double *w, *gx, *gz, *h, *q, *limit, *held; /* cells */
-    double *wf, *Fh, *Fq, *face_vol;       /* faces */
+     * outlet).  Per cell, fixed: w, w dx, g_x, g_z, g_z / 2, rho g_z,
+     * w dx g_x and the width step wf[k+1] - wf[k], each computed as the
+     * expressions of Eqs. (8)-(10) would, so results are the same to the
+     * bit.  Per cell, the state and what a step derives from it once: the
+     * velocity u = q/h and wave speed c = sqrt(g_z h) of wet cells (0 in
+     * dry ones), used by both faces, the CFL step and friction. */
+    double *w, *wdx, *gx, *gz, *hg, *rgz, *wgx, *dwf; /* cells, geometry */
+    double *h, *q, *u, *c, *limit, *held;             /* cells, state    */
+    double *wf, *Fh, *Fq, *face_vol;                  /* faces           */
 };
 
 void dfle_flow1d_params_default(dfle_flow1d_params *p)
@@ -53,6 +74,7 @@ void dfle_flow1d_params_default(dfle_flow1d_params *p)
     p->cfl = 0.5;
     p->h_dry = 1e-6;
     p->outlet_wall = 0;
+    p->full_domain = 0;
 }
 
 int dfle_flow1d_params_check(const dfle_flow1d_params *p, const char *who,
@@ -87,14 +109,14 @@ int dfle_flow1d_params_check(const dfle_flow1d_params *p, const char *who,
     return DFLE_OK;
 }
 
-enum { CELL_ARRAYS = 7, FACE_ARRAYS = 4 };
+enum { CELL_ARRAYS = 14, FACE_ARRAYS = 4 };
 
 int dfle_flow1d_new(size_t n, double dx, const double *w, const double *S,
                     const dfle_flow1d_params *p, dfle_flow1d **out,
                     dfle_error *err)
 {
     dfle_flow1d *f;
-    double *block;
+    double *block, **cell[CELL_ARRAYS], **face[FACE_ARRAYS];
     int st;
 
     *out = NULL;
@@ -118,27 +140,35 @@ int dfle_flow1d_new(size_t n, double dx, const double *w, const double *S,
     f->n = n;
     f->dx = dx;
     f->p = *p;
-    f->w = block;
-    f->gx = block + n;
-    f->gz = block + 2 * n;
-    f->h = block + 3 * n;
-    f->q = block + 4 * n;
-    f->limit = block + 5 * n;
-    f->held = block + 6 * n;
-    f->wf = block + CELL_ARRAYS * n;
-    f->Fh = f->wf + (n + 1);
-    f->Fq = f->Fh + (n + 1);
-    f->face_vol = f->Fq + (n + 1);
-    for (size_t k = 0; k < n; k++) {
-        double theta = atan(S[k]);
-        f->w[k] = w[k];
-        f->gx[k] = p->g * sin(theta);
-        f->gz[k] = p->g * cos(theta);
-    }
+    f->lo = 0;
+    f->hi = n;
+    f->stale = 1;
+    f->smax = f->volume = 0.0;
+    cell[0] = &f->w; /* first: the block starts at w */
+    cell[1] = &f->wdx, cell[2] = &f->gx, cell[3] = &f->gz, cell[4] = &f->hg;
+    cell[5] = &f->rgz, cell[6] = &f->wgx, cell[7] = &f->dwf, cell[8] = &f->h;
+    cell[9] = &f->q, cell[10] = &f->u, cell[11] = &f->c, cell[12] = &f->limit;
+    cell[13] = &f->held;
+    face[0] = &f->wf, face[1] = &f->Fh, face[2] = &f->Fq, face[3] = &f->face_vol;
+    for (size_t a = 0; a < CELL_ARRAYS; a++)
+        *cell[a] = block + a * n;
+    for (size_t a = 0; a < FACE_ARRAYS; a++)
+        *face[a] = block + CELL_ARRAYS * n + a * (n + 1);
     f->wf[0] = w[0];
     f->wf[n] = w[n - 1];
     for (size_t k = 1; k < n; k++)
         f->wf[k] = 0.5 * (w[k - 1] + w[k]);
+    for (size_t k = 0; k < n; k++) {
+        double theta = atan(S[k]);
+        f->w[k] = w[k];
+        f->wdx[k] = w[k] * dx;
+        f->gx[k] = p->g * sin(theta);
+        f->gz[k] = p->g * cos(theta);
+        f->hg[k] = 0.5 * f->gz[k];
+        f->rgz[k] = p->rho * f->gz[k];
+        f->wgx[k] = f->wdx[k] * f->gx[k];
+        f->dwf[k] = f->wf[k + 1] - f->wf[k];
+    }
     *out = f;
     return DFLE_OK;
 }
@@ -151,38 +181,98 @@ void dfle_flow1d_free(dfle_flow1d *f)
     free(f);
 }
 
-double *dfle_flow1d_h(dfle_flow1d *f) { return f->h; }
-double *dfle_flow1d_q(dfle_flow1d *f) { return f->q; }
+/* Handing out the state for writing opens the window to the whole grid:
+ * the caller may put volume anywhere. */
+static double *open_state(dfle_flow1d *f, double *a)
+{
+    f->stale = 1;
+    f->lo = 0;
+    f->hi = f->n;
+    return a;
+}
+
+double *dfle_flow1d_h(dfle_flow1d *f) { return open_state(f, f->h); }
+double *dfle_flow1d_q(dfle_flow1d *f) { return open_state(f, f->q); }
+const double *dfle_flow1d_depth(const dfle_flow1d *f) { return f->h; }
+const double *dfle_flow1d_discharge(const dfle_flow1d *f) { return f->q; }
 size_t dfle_flow1d_size(const dfle_flow1d *f) { return f->n; }
+
+void dfle_flow1d_window(const dfle_flow1d *f, size_t *k0, size_t *k1)
+{
+    *k0 = f->lo;
+    *k1 = f->hi;
+}
+
+double dfle_flow1d_pore_length(const dfle_flow1d *f, double t)
+{
+    /* Eq. (9): lambda0 until the flow has entered (t <= 0) or without
+     * diffusion (D = 0); 0 says so. */
+    if (t <= 0 || f->p.D <= 0)
+        return 0.0;
+    return sqrt(f->p.D * t);
+}
+
+/* The helpers of a step take the parameters and the cell's geometry as
+ * values (a step passes a local copy): stores into the state arrays then
+ * cannot alias them, and the compiler keeps them in registers. */
+static inline double lambda_of(const dfle_flow1d_params *p, double h, double L)
+{
+    /* 1 - erfc(2h/sqrt(4Dt)) = erf(h/sqrt(Dt)) */
+    return L == 0.0 ? p->lambda0 : p->lambda0 * erf(h / L);
+}
+
+double dfle_flow1d_lambda_at(const dfle_flow1d *f, double h, double L)
+{
+    return lambda_of(&f->p, h, L);
+}
 
 double dfle_flow1d_lambda(const dfle_flow1d *f, double h, double t)
 {
-    /* Eq. (9): 1 - erfc(2h/sqrt(4Dt)) = erf(h/sqrt(Dt)); lambda0 until the
-     * flow has entered (t <= 0) or without diffusion (D = 0). */
-    if (t <= 0 || f->p.D <= 0)
-        return f->p.lambda0;
-    return f->p.lambda0 * erf(h / sqrt(f->p.D * t));
+    return dfle_flow1d_lambda_at(f, h, dfle_flow1d_pore_length(f, t));
+}
+
+/* Eq. (10) at depth h > h_dry in a cell with rho g_z = rgz. */
+static inline double phi_wet(const dfle_flow1d_params *p, double rgz, double h, double v)
+{
+    double P = rgz * h; /* basal normal stress rho g_z h [Pa] */
+    double I = (2.0 * fabs(v) / h) * p->D_eff / sqrt(P / p->rho_s);
+    /* Written as (mu_2 - mu_s) I / (I0 + I): no 1/0 at rest. */
+    return p->mu_s + (p->mu_2 - p->mu_s) * I / (p->I0 + I);
 }
 
 double dfle_flow1d_phi(const dfle_flow1d *f, size_t k, double h, double v)
 {
-    const dfle_flow1d_params *p = &f->p;
-    double P, I;
-    if (!(h > p->h_dry))
-        return p->mu_s;
-    P = p->rho * f->gz[k] * h; /* basal normal stress [Pa] */
-    I = (2.0 * fabs(v) / h) * p->D_eff / sqrt(P / p->rho_s);
-    /* Eq. (10) written as (mu_2 - mu_s) I / (I0 + I): no 1/0 at rest. */
-    return p->mu_s + (p->mu_2 - p->mu_s) * I / (p->I0 + I);
+    return h > f->p.h_dry ? phi_wet(&f->p, f->rgz[k], h, v) : f->p.mu_s;
+}
+
+double dfle_flow1d_phi_max(const dfle_flow1d *f)
+{
+    /* phi -> mu_2 as I -> inf; the operations of phi_wet round it up by a
+     * few units in the last place at most, far below this margin. */
+    return f->p.mu_2 * (1.0 + 1e-12);
+}
+
+/* Velocity and wave speed of cell k as the fluxes see it (0 if dry). */
+static inline void cell_speeds(const dfle_flow1d *f, size_t k, double *u, double *c)
+{
+    const double h = f->h[k];
+    if (h > f->p.h_dry) {
+        *u = f->q[k] / h;
+        *c = sqrt(f->gz[k] * h);
+    } else {
+        *u = *c = 0.0;
+    }
 }
 
 double dfle_flow1d_stable_dt(const dfle_flow1d *f)
 {
-    double smax = 0.0;
-    for (size_t k = 0; k < f->n; k++) {
-        double h = f->h[k];
-        if (h > f->p.h_dry) {
-            double s = fabs(f->q[k] / h) + sqrt(f->gz[k] * h);
+    double smax = f->smax;
+    if (f->stale) { /* the state was written: from scratch */
+        smax = 0.0;
+        for (size_t k = 0; k < f->n; k++) {
+            double u, c, s;
+            cell_speeds(f, k, &u, &c);
+            s = fabs(u) + c;
             if (s > smax)
                 smax = s;
         }
@@ -190,13 +280,15 @@ double dfle_flow1d_stable_dt(const dfle_flow1d *f)
     return smax > 0 ? f->p.cfl * f->dx / smax : INFINITY;
 }
 
-/* HLLC flux per unit width between states (hL, qL) and (hR, qR), with
- * each side's own g_z in its physical flux (Toro 2009, Ch. 10). */
-static void hllc(double hL, double qL, double gL, double hR, double qR, double gR,
-                 double h_dry, double *Fh, double *Fq)
+/* HLLC flux per unit width between states (h, q) with velocity u, wave
+ * speed c and g_z / 2 = hg each (u = c = 0 on a dry side), each side with
+ * its own g_z in its physical flux (Toro 2009, Ch. 10). */
+static inline void hllc(double hL, double qL, double uL, double cL, double hgL, double hR,
+                        double qR, double uR, double cR, double hgR, double h_dry, double *Fh,
+                        double *Fq)
 {
     int dryL = !(hL > h_dry), dryR = !(hR > h_dry);
-    double uL, uR, cL, cR, SL, SR, Ss, FhL, FqL, FhR, FqR;
+    double SL, SR, Ss, FhL, FqL, FhR, FqR;
 
     if (dryL && dryR) {
         *Fh = *Fq = 0.0;
@@ -206,24 +298,22 @@ static void hllc(double hL, double qL, double gL, double hR, double qR, double g
         hL = qL = 0.0;
     if (dryR)
         hR = qR = 0.0;
-    uL = dryL ? 0.0 : qL / hL;
-    uR = dryR ? 0.0 : qR / hR;
-    cL = sqrt(gL * hL);
-    cR = sqrt(gR * hR);
     if (dryL) { /* wet-dry front moving into the dry side */
         SL = uR - 2.0 * cR;
         SR = uR + cR;
     } else if (dryR) {
         SL = uL - cL;
         SR = uL + 2.0 * cL;
-    } else {
-        SL = fmin(uL - cL, uR - cR);
-        SR = fmax(uL + cL, uR + cR);
+    } else { /* min and max inline: fmin/fmax are library calls */
+        double a = uL - cL, b = uR - cR;
+        SL = a < b ? a : b;
+        a = uL + cL, b = uR + cR;
+        SR = a > b ? a : b;
     }
     FhL = hL * uL;
-    FqL = hL * uL * uL + 0.5 * gL * hL * hL;
+    FqL = hL * uL * uL + hgL * hL * hL;
     FhR = hR * uR;
-    FqR = hR * uR * uR + 0.5 * gR * hR * hR;
+    FqR = hR * uR * uR + hgR * hR * hR;
     if (SL >= 0) {
         *Fh = FhL, *Fq = FqL;
         return;
@@ -245,87 +335,114 @@ static void hllc(double hL, double qL, double gL, double hR, double qR, double g
 }
 
 /* Flux through a wall next to cell k: the mirror-state Riemann problem,
- * whose mass flux is zero by symmetry (set exactly). */
+ * whose mass flux is zero by symmetry (set exactly).  The mirror's
+ * velocity -u is (-q)/h to the bit. */
 static void wall_flux(const dfle_flow1d *f, size_t k, int right_side, double *Fh, double *Fq)
 {
-    double h = f->h[k], q = f->q[k];
+    const double h = f->h[k], q = f->q[k], u = f->u[k], c = f->c[k], hg = f->hg[k];
     if (right_side)
-        hllc(h, q, f->gz[k], h, -q, f->gz[k], f->p.h_dry, Fh, Fq);
+        hllc(h, q, u, c, hg, h, -q, -u, c, hg, f->p.h_dry, Fh, Fq);
     else
-        hllc(h, -q, f->gz[k], h, q, f->gz[k], f->p.h_dry, Fh, Fq);
+        hllc(h, -q, -u, c, hg, h, q, u, c, hg, f->p.h_dry, Fh, Fq);
     *Fh = 0.0;
 }
 
-static void compute_fluxes(dfle_flow1d *f)
+/* Fluxes at faces lo..hi of the window [lo, hi). */
+static void compute_fluxes(dfle_flow1d *f, size_t lo, size_t hi)
 {
     const size_t n = f->n;
-    for (size_t k = 1; k < n; k++)
-        hllc(f->h[k - 1], f->q[k - 1], f->gz[k - 1], f->h[k], f->q[k], f->gz[k], f->p.h_dry,
-             &f->Fh[k], &f->Fq[k]);
-    wall_flux(f, 0, 0, &f->Fh[0], &f->Fq[0]);
-    if (!f->p.outlet_wall && f->h[n - 1] > f->p.h_dry && f->q[n - 1] >= 0) {
+    const double h_dry = f->p.h_dry;
+    const double *h = f->h, *q = f->q, *u = f->u, *hg = f->hg;
+    {
+        /* restrict: the stores to Fh and Fq touch none of the states. */
+        const double *restrict hr = f->h, *restrict qr = f->q, *restrict ur = f->u,
+                     *restrict cr = f->c, *restrict hgr = f->hg;
+        double *restrict Fh = f->Fh, *restrict Fq = f->Fq;
+        for (size_t k = lo > 0 ? lo : 1; k <= hi && k < n; k++)
+            hllc(hr[k - 1], qr[k - 1], ur[k - 1], cr[k - 1], hgr[k - 1], hr[k], qr[k], ur[k],
+                 cr[k], hgr[k], h_dry, &Fh[k], &Fq[k]);
+    }
+    if (lo == 0)
+        wall_flux(f, 0, 0, &f->Fh[0], &f->Fq[0]);
+    if (hi < n)
+        return; /* the outlet is outside the window: dry, no flux */
+    if (!f->p.outlet_wall && h[n - 1] > h_dry && q[n - 1] >= 0) {
         /* Open outlet: the outside copies the last cell (no reflection). */
-        double h = f->h[n - 1], u = f->q[n - 1] / h;
-        f->Fh[n] = h * u;
-        f->Fq[n] = h * u * u + 0.5 * f->gz[n - 1] * h * h;
+        const double hn = h[n - 1], un = u[n - 1];
+        f->Fh[n] = hn * un;
+        f->Fq[n] = hn * un * un + hg[n - 1] * hn * hn;
     } else {
         /* Nothing flows back in through the outlet. */
         wall_flux(f, n - 1, 1, &f->Fh[n], &f->Fq[n]);
     }
 }
 
-/* Scale each cell's outgoing fluxes so that a step never takes more
- * volume than the cell holds; the scale of a face is its upwind cell's,
- * so the flux stays single-valued and volume conserved. */
-static void limit_outflow(dfle_flow1d *f, double dt)
+/* Momentum w q dx of cell k (depth h0, discharge q0) after the fluxes
+ * of one step (dF = wf Fq downstream minus upstream) and the explicit
+ * sources, before drag and friction: the wall pressure of the width
+ * change and gravity along the bed, g_x h. */
+static inline double momentum_after_fluxes(const dfle_flow1d *f, size_t k, double dt, double h0,
+                                           double q0, double dF)
 {
-    const size_t n = f->n;
-    for (size_t k = 0; k < n; k++) {
-        double out = dt * (fmax(0.0, f->wf[k + 1] * f->Fh[k + 1]) + fmax(0.0, -f->wf[k] * f->Fh[k]));
-        double vol = f->w[k] * f->h[k] * f->dx;
-        f->limit[k] = out > vol ? vol / out : 1.0;
-    }
-    for (size_t k = 0; k <= n; k++) {
-        double s;
-        if (f->Fh[k] > 0)
-            s = k > 0 ? f->limit[k - 1] : 1.0;
-        else if (f->Fh[k] < 0)
-            s = k < n ? f->limit[k] : 1.0;
-        else
-            continue;
-        f->Fh[k] *= s;
-        f->Fq[k] *= s;
-    }
+    const double mom = f->wdx[k] * q0 - dt * dF;
+    return mom + dt * (f->hg[k] * h0 * h0 * f->dwf[k] + f->wgx[k] * h0);
 }
 
-/* Momentum w q dx after the flux and explicit source terms of one step,
- * before drag and friction. */
-static double momentum_after_fluxes(const dfle_flow1d *f, size_t k, double dt)
+/* The Coulomb impulse dt (1 - lambda) g_z h mu at depth h per unit width
+ * [m^2/s], given 1 - lambda. */
+static inline double coulomb(double dt, double one_minus_lambda, double gz, double h, double mu)
 {
-    const double wdx = f->w[k] * f->dx, h0 = f->h[k];
-    double mom = wdx * f->q[k] - dt * (f->wf[k + 1] * f->Fq[k + 1] - f->wf[k] * f->Fq[k]);
-    /* Wall pressure of the width change and gravity along the bed, g_x h. */
-    return mom + dt * (0.5 * f->gz[k] * h0 * h0 * (f->wf[k + 1] - f->wf[k]) + wdx * f->gx[k] * h0);
+    return dt * one_minus_lambda * gz * h * mu;
+}
+
+/* Whether the Coulomb impulse at lambda = lambda0 erf(h / L) (Eq. 9)
+ * resists `push` [m^2/s].  The erf is the dearest part of a step, and
+ * often the answer does not need it: 0 <= lambda <= lambda0 bounds the
+ * impulse between its values at lambda0 and at 0, computed by the same
+ * operations in the same order, and rounding is monotone, so the bounds
+ * hold in floating point too and give the answer the exact impulse
+ * would. */
+static inline int coulomb_resists(const dfle_flow1d_params *p, double dt, double gz, double h,
+                                  double mu, double L, double push)
+{
+    if (push <= coulomb(dt, 1.0 - p->lambda0, gz, h, mu))
+        return 1;
+    if (push > coulomb(dt, 1.0, gz, h, mu))
+        return 0;
+    return push <= coulomb(dt, 1.0 - lambda_of(p, h, L), gz, h, mu);
 }
 
 /* A cell at rest stays at rest while friction can resist what pushes it
  * (a pile on a slope below its friction angle).  The Riemann fluxes know
  * nothing of friction and would still spill its edges into dry
  * neighbours, so no face may draw volume out of a held cell: there the
- * face is a wall.  Fluxes stay single-valued, volume stays conserved. */
-static void hold_resting_cells(dfle_flow1d *f, double dt, double t_entry)
+ * face is a wall.  Fluxes stay single-valued, volume stays conserved.
+ * L: the pore-pressure diffusion length of this step. */
+static void hold_resting_cells(dfle_flow1d *f, double dt, double L, size_t lo, size_t hi)
 {
     const size_t n = f->n;
-    for (size_t k = 0; k < n; k++) {
-        double h = f->h[k], push, resist;
-        f->held[k] = 0.0;
-        if (!(h > f->p.h_dry) || f->q[k] != 0.0)
-            continue;
-        push = fabs(momentum_after_fluxes(f, k, dt)) / (f->w[k] * f->dx);
-        resist = dt * (1.0 - dfle_flow1d_lambda(f, h, t_entry)) * f->gz[k] * h * f->p.mu_s;
-        f->held[k] = push <= resist;
+    const dfle_flow1d_params p = f->p;
+    int any = 0;
+    {
+        const double *restrict h = f->h, *restrict q = f->q, *restrict wf = f->wf,
+                     *restrict Fq = f->Fq;
+        double *restrict held = f->held;
+        for (size_t k = lo; k < hi; k++) {
+            double push;
+            held[k] = 0.0;
+            if (!(h[k] > p.h_dry) || q[k] != 0.0)
+                continue;
+            push = fabs(momentum_after_fluxes(f, k, dt, h[k], q[k],
+                                              wf[k + 1] * Fq[k + 1] - wf[k] * Fq[k])) /
+                   f->wdx[k];
+            held[k] = coulomb_resists(&p, dt, f->gz[k], h[k], p.mu_s, L, push);
+            any |= held[k] != 0.0;
+        }
     }
-    for (size_t k = 0; k <= n; k++) {
+    if (!any)
+        return;
+    /* Faces lo and hi (inside the grid) lie between dry cells: no flux. */
+    for (size_t k = lo; k <= hi; k++) {
         if (f->Fh[k] > 0 && k > 0 && f->held[k - 1])
             wall_flux(f, k - 1, 1, &f->Fh[k], &f->Fq[k]);
         else if (f->Fh[k] < 0 && k < n && f->held[k])
@@ -333,55 +450,195 @@ static void hold_resting_cells(dfle_flow1d *f, double dt, double t_entry)
     }
 }
 
+/* Scale each cell's outgoing fluxes so that a step never takes more
+ * volume than the cell holds; the scale of a face is its upwind cell's
+ * (finish_face), so the flux stays single-valued and volume conserved.
+ * Here: each cell's scale. */
+static void limit_outflow(dfle_flow1d *f, double dt, size_t lo, size_t hi)
+{
+    const double *restrict wf = f->wf, *restrict Fh = f->Fh, *restrict w = f->w,
+                 *restrict h = f->h;
+    double *restrict limit = f->limit;
+    for (size_t k = lo; k < hi; k++) {
+        const double down = wf[k + 1] * Fh[k + 1], up = -wf[k] * Fh[k];
+        /* max(0, .) inline: fmax is a library call (the same value here). */
+        double out = dt * ((down > 0 ? down : 0.0) + (up > 0 ? up : 0.0));
+        double vol = w[k] * h[k] * f->dx;
+        limit[k] = out > vol ? vol / out : 1.0;
+    }
+}
+
+/* Face k scaled by its upwind cell's limit: the volume it carries in this
+ * step (stored, and returned in *vol) and its momentum flux wf Fq. */
+static inline void finish_face(dfle_flow1d *f, size_t k, double dt, double *vol, double *mflux)
+{
+    double s = 1.0;
+    if (f->Fh[k] > 0)
+        s = k > 0 ? f->limit[k - 1] : 1.0;
+    else if (f->Fh[k] < 0)
+        s = k < f->n ? f->limit[k] : 1.0;
+    if (s != 1.0) {
+        f->Fh[k] *= s;
+        f->Fq[k] *= s;
+    }
+    *vol = f->face_vol[k] = dt * f->wf[k] * f->Fh[k];
+    *mflux = f->wf[k] * f->Fq[k];
+}
+
+/* The new state of cells [lo, hi): volume and momentum from the face
+ * fluxes (each face finished just before the cell below it needs it) and
+ * sources, drag, friction; then u, c, the CFL speed and the volume of the
+ * new state (summed in cell order, as dfle_flow1d_volume does). */
+static int update(dfle_flow1d *f, double dt, double L, size_t lo, size_t hi, dfle_error *err)
+{
+    const dfle_flow1d_params p = f->p;
+    const double dx = f->dx, drag = dt * 2.0 * p.eta * p.v_f;
+    const double *restrict w = f->w, *restrict wdx = f->wdx, *restrict gz = f->gz,
+                 *restrict rgz = f->rgz, *restrict held = f->held;
+    double *restrict hs = f->h, *restrict qa = f->q, *restrict u = f->u, *restrict c = f->c;
+    double smax = 0.0, volume = 0.0, fv0, fv1, mf0, mf1;
+
+    finish_face(f, lo, dt, &fv0, &mf0);
+    for (size_t k = lo; k < hi; k++, fv0 = fv1, mf0 = mf1) {
+        const double h0 = hs[k], q0 = qa[k];
+        double vol, h, qs, fc, qn, s, phi;
+
+        finish_face(f, k + 1, dt, &fv1, &mf1);
+        vol = wdx[k] * h0 - (fv1 - fv0);
+        h = vol > 0 ? vol / wdx[k] : 0.0; /* only round-off can make vol < 0 */
+        hs[k] = h;
+        volume += w[k] * h * dx;
+        if (!(h > p.h_dry)) {
+            qa[k] = u[k] = c[k] = 0.0;
+            continue;
+        }
+        c[k] = sqrt(gz[k] * h);
+        if (held[k] != 0.0) {
+            qa[k] = u[k] = 0.0;
+            s = c[k];
+        } else {
+            qs = momentum_after_fluxes(f, k, dt, h0, q0, mf1 - mf0) / wdx[k];
+            /* Viscous pore-fluid drag 2 eta v_f v / (rho h), implicitly. */
+            qs /= 1.0 + drag / (p.rho * h * h);
+            /* Coulomb friction (1 - lambda) g_z h phi(I): stop, never
+             * reverse.  phi comes from the speed at the start of the step
+             * (u, explicit, as the paper's sources): from the speed after
+             * a whole step of free acceleration it would jump towards
+             * mu_2 and stall every flow that starts from rest.  The
+             * impulse is at least its value at phi = mu_s and lambda =
+             * lambda0 (the same operations; rounding is monotone), so a
+             * cell that stops even then needs neither phi nor the erf,
+             * and one that stops at lambda0 needs no erf. */
+            qn = 0.0;
+            if (!(fabs(qs) <= coulomb(dt, 1.0 - p.lambda0, gz[k], h, p.mu_s))) {
+                phi = phi_wet(&p, rgz[k], h, u[k]);
+                if (!(fabs(qs) <= coulomb(dt, 1.0 - p.lambda0, gz[k], h, phi))) {
+                    fc = coulomb(dt, 1.0 - lambda_of(&p, h, L), gz[k], h, phi);
+                    qn = fabs(qs) <= fc ? 0.0 : qs - copysign(fc, qs);
+                }
+            }
+            if (!isfinite(qn))
+                return dfle_error_set(err, DFLE_ENUMERIC,
+                                      "flow1d: discharge not finite in cell %zu (h = %g m)", k + 1,
+                                      h);
+            qa[k] = qn;
+            u[k] = qn == 0.0 ? 0.0 : qn / h;
+            s = fabs(u[k]) + c[k];
+        }
+        if (s > smax)
+            smax = s;
+    }
+    f->smax = smax;
+    f->volume = volume;
+    return DFLE_OK;
+}
+
+static void zero_faces(dfle_flow1d *f, size_t k0, size_t k1)
+{
+    for (size_t k = k0; k < k1; k++)
+        f->Fh[k] = f->Fq[k] = f->face_vol[k] = 0.0;
+}
+
+/* The window of the next step: the cells holding any volume (all of it
+ * lies in the last step's window) and one more on each side, which is
+ * as far as one step can move volume.  Faces leaving the window are
+ * cleared, so that outside it every face reads 0. */
+static void narrow_window(dfle_flow1d *f)
+{
+    const size_t n = f->n, lo0 = f->lo, hi0 = f->hi;
+    size_t a = lo0, b = hi0, lo, hi;
+    while (a < b && f->h[a] == 0.0)
+        a++;
+    while (b > a && f->h[b - 1] == 0.0)
+        b--;
+    if (a == b) { /* nothing left on the grid */
+        lo = hi = 0;
+        if (lo0 < hi0)
+            zero_faces(f, lo0, hi0 + 1);
+    } else {
+        lo = a > 0 ? a - 1 : 0;
+        hi = b < n ? b + 1 : n;
+        if (lo > lo0)
+            zero_faces(f, lo0, lo);
+        if (hi < hi0)
+            zero_faces(f, hi + 1, hi0 + 1);
+    }
+    f->lo = lo;
+    f->hi = hi;
+}
+
+/* After the caller wrote h or q: velocities and wave speeds afresh. */
+static void refresh(dfle_flow1d *f)
+{
+    for (size_t k = 0; k < f->n; k++)
+        cell_speeds(f, k, &f->u[k], &f->c[k]);
+    f->lo = 0;
+    f->hi = f->n;
+    f->stale = 0;
+}
+
 int dfle_flow1d_step(dfle_flow1d *f, double dt, double t_entry, double *outflow,
                      dfle_error *err)
 {
-    const dfle_flow1d_params *p = &f->p;
-    const size_t n = f->n;
-    const double dx = f->dx;
+    double L;
+    int st;
 
     if (!(dt > 0 && isfinite(dt)))
         return dfle_error_set(err, DFLE_EINVAL, "flow1d: time step must be > 0 s (got %g)", dt);
-    compute_fluxes(f);
-    hold_resting_cells(f, dt, t_entry);
-    limit_outflow(f, dt);
-    for (size_t k = 0; k <= n; k++)
-        f->face_vol[k] = dt * f->wf[k] * f->Fh[k];
-    for (size_t k = 0; k < n; k++) {
-        const double wdx = f->w[k] * dx, h0 = f->h[k];
-        double vol = wdx * h0 - (f->face_vol[k + 1] - f->face_vol[k]);
-        double mom = momentum_after_fluxes(f, k, dt);
-        double h, qs, fc;
-
-        h = vol > 0 ? vol / wdx : 0.0; /* only round-off can make vol < 0 */
-        f->h[k] = h;
-        if (!(h > p->h_dry) || f->held[k] != 0.0) {
-            f->q[k] = 0.0;
-            continue;
-        }
-        qs = mom / wdx;
-        /* Viscous pore-fluid drag 2 eta v_f v / (rho h), implicitly. */
-        qs /= 1.0 + dt * 2.0 * p->eta * p->v_f / (p->rho * h * h);
-        /* Coulomb friction (1 - lambda) g_z h phi(I): stop, never reverse.
-         * phi comes from the speed at the start of the step (explicit, as
-         * the paper's sources): from the speed after a whole step of free
-         * acceleration it would jump towards mu_2 and stall every flow
-         * that starts from rest. */
-        fc = dt * (1.0 - dfle_flow1d_lambda(f, h, t_entry)) * f->gz[k] * h *
-             dfle_flow1d_phi(f, k, h, h0 > p->h_dry ? f->q[k] / h0 : 0.0);
-        f->q[k] = fabs(qs) <= fc ? 0.0 : qs - copysign(fc, qs);
-        if (!isfinite(f->q[k]))
-            return dfle_error_set(err, DFLE_ENUMERIC,
-                                  "flow1d: discharge not finite in cell %zu (h = %g m)", k + 1, h);
+    if (f->stale)
+        refresh(f);
+    else if (!f->p.full_domain)
+        narrow_window(f);
+    L = dfle_flow1d_pore_length(f, t_entry);
+    compute_fluxes(f, f->lo, f->hi);
+    hold_resting_cells(f, dt, L, f->lo, f->hi);
+    limit_outflow(f, dt, f->lo, f->hi);
+    if ((st = update(f, dt, L, f->lo, f->hi, err)) != DFLE_OK) {
+        f->stale = 1; /* the state is half updated */
+        f->lo = 0;
+        f->hi = f->n;
+        return st;
     }
-    *outflow = f->face_vol[n];
+    *outflow = f->face_vol[f->n];
     return DFLE_OK;
 }
 
 double dfle_flow1d_volume(const dfle_flow1d *f, size_t k0, size_t k1)
 {
     double v = 0.0;
-    for (size_t k = k0; k < k1 && k < f->n; k++)
+    if (k1 > f->n)
+        k1 = f->n;
+    if (!f->stale) {
+        if (k0 == 0 && k1 == f->n)
+            return f->volume; /* the same sum, made by the last step */
+        /* Cells outside the window hold nothing: adding their zeros
+         * would not change the sum. */
+        if (k0 < f->lo)
+            k0 = f->lo;
+        if (k1 > f->hi)
+            k1 = f->hi;
+    }
+    for (size_t k = k0; k < k1; k++)
         v += f->w[k] * f->h[k] * f->dx;
     return v;
 }
@@ -389,4 +646,9 @@ double dfle_flow1d_volume(const dfle_flow1d *f, size_t k0, size_t k1)
 double dfle_flow1d_face_volume(const dfle_flow1d *f, size_t k)
 {
     return k <= f->n ? f->face_vol[k] : 0.0;
+}
+
+const double *dfle_flow1d_face_volumes(const dfle_flow1d *f)
+{
+    return f->face_vol;
 }

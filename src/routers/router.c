@@ -11,6 +11,7 @@
 struct dfle_router {
     const dfle_router_ops *ops;
     void *state;
+    int routing; /* a route or node_flow call is running (router.h) */
 };
 
 int dfle_router_new(const dfle_router_ops *ops, void *state,
@@ -32,6 +33,7 @@ int dfle_router_new(const dfle_router_ops *ops, void *state,
     }
     rt->ops = ops;
     rt->state = state;
+    rt->routing = 0;
     *out = rt;
     return DFLE_OK;
 }
@@ -45,11 +47,31 @@ void dfle_router_free(dfle_router *rt)
     free(rt);
 }
 
+/* A routing calls the law's integrand, which may be Lua that runs
+ * another model with this router: that nested routing would reallocate
+ * and overwrite the state (arrival times, snapshots) the outer one is
+ * writing into. */
+static int refuse_nested(const dfle_router *rt, dfle_error *err)
+{
+    return dfle_error_set(err, DFLE_ECALLBACK,
+                          "router.%s: used again while it is routing (from inside a function the "
+                          "routing calls: the erosion law's integrand, a flow() written in Lua); "
+                          "a router routes one flow at a time", rt->ops->name);
+}
+
 int dfle_router_route(dfle_router *rt, const dfle_network *net,
                       const double *S, dfle_flow *flow, dfle_error *err)
 {
-    return rt->ops->route(rt->state, net, S, flow, err);
+    int st;
+    if (rt->routing)
+        return refuse_nested(rt, err);
+    rt->routing = 1;
+    st = rt->ops->route(rt->state, net, S, flow, err);
+    rt->routing = 0;
+    return st;
 }
+
+int dfle_router_is_routing(const dfle_router *rt) { return rt->routing; }
 
 int dfle_router_needs_reroute(dfle_router *rt, size_t n, const double *S_routed,
                               const double *S, int *reroute, dfle_error *err)
@@ -63,11 +85,17 @@ int dfle_router_needs_reroute(dfle_router *rt, size_t n, const double *S_routed,
 int dfle_router_node_flow(dfle_router *rt, const dfle_network *net, size_t i,
                           double S, dfle_flow *node, int *goes_on, dfle_error *err)
 {
+    int st;
     *goes_on = 0;
     if (rt->ops->node_flow == NULL)
         return dfle_error_set(err, DFLE_ESTATE,
                               "router.%s cannot evaluate the flow at one node", rt->ops->name);
-    return rt->ops->node_flow(rt->state, net, i, S, node, goes_on, err);
+    if (rt->routing)
+        return refuse_nested(rt, err);
+    rt->routing = 1;
+    st = rt->ops->node_flow(rt->state, net, i, S, node, goes_on, err);
+    rt->routing = 0;
+    return st;
 }
 
 size_t dfle_router_params(const dfle_router *rt, dfle_param *out, size_t cap)

@@ -29,6 +29,7 @@ typedef struct process {
     dfle_process_report report;
     size_t n_alloc, snap_alloc;
     double *arrival;
+    double *cos_theta; /* cos(atan(S)) per node, set when the flow first erodes there */
     /* Snapshot request and results. */
     size_t n_snap;
     double *snap_times, *snap_t, *snap_h;
@@ -65,12 +66,14 @@ static int process_reserve(process *pr, size_t n, dfle_error *err)
     if (pr->n_alloc == n && pr->snap_alloc == pr->n_snap && pr->arrival != NULL)
         return DFLE_OK;
     free(pr->arrival);
+    free(pr->cos_theta);
     free(pr->snap_h);
     pr->report.routed = 0; /* the report's arrays go */
     pr->arrival = calloc(n, sizeof *pr->arrival);
+    pr->cos_theta = calloc(n, sizeof *pr->cos_theta);
     pr->snap_h = calloc(pr->n_snap * n + 1, sizeof *pr->snap_h);
     pr->n_alloc = pr->snap_alloc = 0;
-    if (pr->arrival == NULL || pr->snap_h == NULL)
+    if (pr->arrival == NULL || pr->cos_theta == NULL || pr->snap_h == NULL)
         return dfle_error_set(err, DFLE_ENOMEM, "router.process: out of memory for %zu nodes", n);
     pr->n_alloc = n;
     pr->snap_alloc = pr->n_snap;
@@ -94,9 +97,11 @@ static int process_route(void *state, const dfle_network *net, const double *S, 
     const size_t n = dfle_network_size(net), G = (size_t)o->n_ghost, N = G + n;
     const double dx = dfle_network_length(net)[0];
     const double *w = dfle_network_w(net), *A = dfle_network_A(net);
-    double *cw = NULL, *cS = NULL, *h, *q, released, out_total = 0.0, t = 0.0, t_entry = -1.0;
+    double *cw = NULL, *cS = NULL, *pile, released, out_total = 0.0, t = 0.0, t_entry = -1.0;
+    const double *h, *q, *face_vol;
+    double phi_max;
     dfle_flow1d *f = NULL;
-    size_t steps = 0, next_snap = 0;
+    size_t steps = 0, next_snap = 0, cell_steps = 0;
     int st, end, moved = 0;
 
     /* Two-phase flow down one channel: the equations are 1D. */
@@ -126,11 +131,14 @@ static int process_route(void *state, const dfle_network *net, const double *S, 
     }
     if ((st = dfle_flow1d_new(N, dx, cw, cS, &o->flow, &f, err)) != DFLE_OK)
         goto done;
-    h = dfle_flow1d_h(f);
-    q = dfle_flow1d_q(f);
+    pile = dfle_flow1d_h(f);
     for (size_t k = 0; k < G; k++)
-        h[k] = o->M0 / ((double)G * dx * w[0]); /* a static pile of volume M0 */
+        pile[k] = o->M0 / ((double)G * dx * w[0]); /* a static pile of volume M0 */
     released = dfle_flow1d_volume(f, 0, N);
+    h = dfle_flow1d_depth(f);
+    q = dfle_flow1d_discharge(f);
+    face_vol = dfle_flow1d_face_volumes(f);
+    phi_max = dfle_flow1d_phi_max(f);
 
     dfle_flow_clear(flow);
     flow->time_resolved = 1;
@@ -141,7 +149,8 @@ static int process_route(void *state, const dfle_network *net, const double *S, 
     record_snapshots(pr, &next_snap, 0.0, h + G, n);
 
     for (;;) {
-        double dt = dfle_flow1d_stable_dt(f), outflow, left, qmax = 0.0;
+        double dt = dfle_flow1d_stable_dt(f), outflow, left, qmax = 0.0, L;
+        size_t k0, k1;
         if (isinf(dt)) { /* everything dry: nothing left to move */
             end = DFLE_PROCESS_LEFT;
             break;
@@ -162,28 +171,41 @@ static int process_route(void *state, const dfle_network *net, const double *S, 
         steps++;
         out_total += outflow;
         /* The flow enters the domain when it first crosses the head. */
-        if (t_entry < 0 && dfle_flow1d_face_volume(f, G) > 0)
+        if (t_entry < 0 && face_vol[G] > 0)
             t_entry = t;
-        for (size_t i = 0; i < n; i++) {
-            const size_t k = G + i;
+        /* Only the cells the step worked on: outside its window the depth,
+         * discharge and face volumes are exactly 0, which would add
+         * nothing to any record below. */
+        dfle_flow1d_window(f, &k0, &k1);
+        cell_steps += k1 - k0;
+        L = dfle_flow1d_pore_length(f, t_entry < 0 ? -1.0 : t - t_entry);
+        for (size_t k = k0 > G ? k0 : G; k < k1; k++) {
+            const size_t i = k - G;
             const double hk = h[k], qk = fabs(q[k]);
             if (qk > qmax)
                 qmax = qk;
             if (hk > flow->h[i])
                 flow->h[i] = hk;
-            flow->M[i] += dfle_flow1d_face_volume(f, k + 1);
+            flow->M[i] += face_vol[k + 1];
             if (qk > o->q_erode) { /* Phi = 1 */
                 const double v = qk / hk;
-                const double lam = dfle_flow1d_lambda(f, hk, t_entry < 0 ? -1.0 : t - t_entry);
-                const double tau = (1.0 - lam) * o->flow.rho * o->flow.g * cos(atan(S[i])) * hk *
-                                   dfle_flow1d_phi(f, k, hk, v);
-                double g;
+                const double lam = dfle_flow1d_lambda_at(f, hk, L);
+                double tau, g;
+                if (isnan(pr->arrival[i])) { /* first erosion here */
+                    pr->arrival[i] = t;
+                    pr->cos_theta[i] = cos(atan(S[i]));
+                }
+                /* The peak Coulomb stress (1 - lambda) rho g_z h phi: phi
+                 * (four divisions and a root) only when its bound could
+                 * beat the peak so far. */
+                tau = (1.0 - lam) * o->flow.rho * o->flow.g * pr->cos_theta[i] * hk * phi_max;
+                if (tau > flow->tau[i])
+                    tau = (1.0 - lam) * o->flow.rho * o->flow.g * pr->cos_theta[i] * hk *
+                          dfle_flow1d_phi(f, k, hk, v);
                 if ((st = flow->integrand(flow->integrand_state, hk, v, lam, &g, err)) != DFLE_OK)
                     goto done;
                 flow->integral[i] += g * dt;
                 flow->t_p[i] += dt;
-                if (isnan(pr->arrival[i]))
-                    pr->arrival[i] = t;
                 if (v > flow->v[i])
                     flow->v[i] = v;
                 if (qk * w[i] > flow->Q[i])
@@ -192,7 +214,7 @@ static int process_route(void *state, const dfle_network *net, const double *S, 
                     flow->tau[i] = tau;
             }
         }
-        for (size_t k = 0; k < G; k++)
+        for (size_t k = k0; k < k1 && k < G; k++)
             if (fabs(q[k]) > qmax)
                 qmax = fabs(q[k]);
         record_snapshots(pr, &next_snap, t, h + G, n);
@@ -236,7 +258,8 @@ static int process_route(void *state, const dfle_network *net, const double *S, 
         flow->reach[i] = i < flow->runout_end;
     pr->report = (dfle_process_report){
         .routed = 1, .end = end, .volume_in = released, .volume_out = out_total,
-        .volume_left = dfle_flow1d_volume(f, 0, N), .duration = t, .steps = steps, .n = n,
+        .volume_left = dfle_flow1d_volume(f, 0, N), .duration = t, .steps = steps,
+        .cell_steps = cell_steps, .n = n,
         .arrival = pr->arrival, .n_snapshots = pr->n_snap, .snapshot_t = pr->snap_t,
         .snapshot_h = pr->snap_h,
     };
@@ -289,6 +312,7 @@ static void process_destroy(void *state)
     if (pr == NULL)
         return;
     free(pr->arrival);
+    free(pr->cos_theta);
     free(pr->snap_times);
     free(pr->snap_t);
     free(pr->snap_h);
@@ -355,6 +379,10 @@ int dfle_router_process_set_snapshots(dfle_router *rt, size_t k, const double *t
 
     if (rt == NULL || dfle_router_get_ops(rt) != &process_ops)
         return dfle_error_set(err, DFLE_EINVAL, "router: snapshots need a process-based router");
+    /* The running routing writes into the snapshot arrays. */
+    if (dfle_router_is_routing(rt))
+        return dfle_error_set(err, DFLE_ECALLBACK, "router.process: snapshots cannot change "
+                              "while it is routing (from inside the erosion law's integrand)");
     pr = dfle_router_state(rt);
     if (k > MAX_SNAPSHOTS)
         return dfle_error_set(err, DFLE_EINVAL, "router.process: at most %d snapshots (got %zu)",

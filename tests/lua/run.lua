@@ -159,6 +159,8 @@ function T.tmpname(suffix)
     if suffix then
         p = p .. suffix
         temps[#temps + 1] = p
+        -- the JSON record dfle writes beside a CSV file goes too
+        if suffix == ".csv" then temps[#temps + 1] = p:sub(1, -5) .. ".json" end
     end
     return p
 end
@@ -177,6 +179,127 @@ function T.read_file(path)
     return s
 end
 
+-- A scratch directory; the returned function removes it.
+function T.scratch()
+    local h = io.popen("mktemp -d")
+    local dir = h:read("l")
+    h:close()
+    return dir, function() os.execute("rm -rf " .. shquote(dir)) end
+end
+
+-- Run a shell command; returns its combined output, status and code.
+function T.sh(cmd)
+    local h = io.popen(cmd .. " 2>&1")
+    local out = h:read("a")
+    local ok, _, code = h:close()
+    return out, ok, code
+end
+
+-- A CSV file dfle wrote: { comments = { "# ...", ... } (the lines
+-- before the header), header = "x,A", names = { "x", "A" },
+-- units = { x = "m", ... } (from "# units:"), rows = { { "0", "1000" },
+-- ... } (fields as text, split at commas: no quoted fields) }.
+function T.read_csv(path)
+    local text = assert(T.read_file(path), path)
+    local t = { comments = {}, names = {}, units = {}, rows = {} }
+    for line in text:gmatch("([^\n]*)\n") do
+        if t.header == nil and line:sub(1, 1) == "#" then
+            t.comments[#t.comments + 1] = line
+            local u = line:match("^# units: (.*)$")
+            if u then
+                for name, unit in (u .. ", "):gmatch("([^=,]+)=(.-), ") do t.units[name] = unit end
+            end
+        elseif t.header == nil then
+            t.header = line
+            for name in (line .. ","):gmatch("([^,]*),") do t.names[#t.names + 1] = name end
+        else
+            local row = {}
+            for field in (line .. ","):gmatch("([^,]*),") do row[#row + 1] = field end
+            t.rows[#t.rows + 1] = row
+        end
+    end
+    return t
+end
+
+-- Decode JSON text strictly (the whole text one value; raises at the
+-- first fault): objects as tables, arrays as arrays, null as T.null.
+T.null = setmetatable({}, { __tostring = function() return "null" end })
+function T.json_decode(text)
+    local pos = 1
+    local function fail_at(what)
+        error(("JSON: %s at byte %d: %q"):format(what, pos, text:sub(pos, pos + 20)), 0)
+    end
+    local function ws() pos = text:find("[^ \t\r\n]", pos) or #text + 1 end
+    local value
+    local function str()
+        local out, i = {}, pos + 1
+        while true do
+            local c = text:sub(i, i)
+            if c == "" then fail_at("unterminated string") end
+            if c == '"' then pos = i + 1; return table.concat(out) end
+            if c:byte() < 32 then fail_at("control byte in a string") end
+            if c == "\\" then
+                local e = text:sub(i + 1, i + 1)
+                local simple = { ['"'] = '"', ["\\"] = "\\", ["/"] = "/", b = "\b", f = "\f",
+                                 n = "\n", r = "\r", t = "\t" }
+                if simple[e] then out[#out + 1] = simple[e]; i = i + 2
+                elseif e == "u" and text:sub(i + 2, i + 5):match("^%x%x%x%x$") then
+                    out[#out + 1] = utf8.char(tonumber(text:sub(i + 2, i + 5), 16)); i = i + 6
+                else fail_at("bad escape") end
+            else
+                out[#out + 1] = c; i = i + 1
+            end
+        end
+    end
+    function value()
+        ws()
+        local c = text:sub(pos, pos)
+        if c == "{" then
+            local t = {}
+            pos = pos + 1; ws()
+            if text:sub(pos, pos) == "}" then pos = pos + 1; return t end
+            while true do
+                ws()
+                if text:sub(pos, pos) ~= '"' then fail_at("expected a key") end
+                local k = str()
+                if t[k] ~= nil then fail_at("duplicate key " .. k) end
+                ws()
+                if text:sub(pos, pos) ~= ":" then fail_at("expected ':'") end
+                pos = pos + 1
+                t[k] = value()
+                ws()
+                local d = text:sub(pos, pos); pos = pos + 1
+                if d == "}" then return t end
+                if d ~= "," then fail_at("expected ',' or '}'") end
+            end
+        elseif c == "[" then
+            local t = {}
+            pos = pos + 1; ws()
+            if text:sub(pos, pos) == "]" then pos = pos + 1; return t end
+            while true do
+                t[#t + 1] = value()
+                ws()
+                local d = text:sub(pos, pos); pos = pos + 1
+                if d == "]" then return t end
+                if d ~= "," then fail_at("expected ',' or ']'") end
+            end
+        elseif c == '"' then return str()
+        elseif text:sub(pos, pos + 3) == "true" then pos = pos + 4; return true
+        elseif text:sub(pos, pos + 4) == "false" then pos = pos + 5; return false
+        elseif text:sub(pos, pos + 3) == "null" then pos = pos + 4; return T.null
+        else
+            local num = text:match("^-?%d+%.?%d*[eE]?[-+]?%d*", pos)
+            if not num or not tonumber(num) or num:match("^-?0%d") then fail_at("bad value") end
+            pos = pos + #num
+            return tonumber(num)
+        end
+    end
+    local v = value()
+    ws()
+    if pos <= #text then fail_at("text after the value") end
+    return v
+end
+
 -- Run the dfle binary on a script text (written to a temporary file)
 -- with extra command-line words; returns combined output, the exit
 -- status (true/nil as os.execute) and the exit code.
@@ -185,6 +308,7 @@ function T.run_dfle(script, args, opts)
     local path = T.tmpname(".lua")
     T.write_file(path, script)
     local cmd = shquote(T.dfle) .. " " .. (opts.flags or "-q") .. " " .. shquote(path)
+    if opts.env then cmd = opts.env .. " " .. cmd end
     for _, a in ipairs(args or {}) do cmd = cmd .. " " .. shquote(a) end
     local h = io.popen(cmd .. (opts.stderr_only and " 2>&1 >/dev/null" or " 2>&1"))
     local out = h:read("a")

@@ -51,28 +51,20 @@ tests["contract: the issue's example runs and its results are consistent"] = fun
     end
 
     T.eq(m:write_csv(csv), m, "write_csv returns the model")
-    local text = assert(T.read_file(csv))
-    local header = text:match("^[^\n]*")
-    T.has(header, "tau (Pa)", "x (m)", "S (")
-    local rows = 0
-    for _ in text:gmatch("\n") do rows = rows + 1 end
-    T.eq(rows, m.n + 1, "CSV lines (header + one per node)")
+    local tab = T.read_csv(csv)
+    T.eq(tab.header, "x,A,w,z,S,E_f,E_df,dzdt,M,Q,h,v,t_p,tau,Theta")
+    T.eq(tab.units.tau, "Pa"); T.eq(tab.units.x, "m"); T.eq(tab.units.S, "-")
+    T.eq(#tab.rows, m.n, "CSV rows (one per node)")
     -- The S column of the CSV holds the same numbers as m:get("S").
     local col
-    local k = 0
-    for name in (header .. ","):gmatch("([^,]*),") do
-        k = k + 1
-        if name:match("^S %(") then col = k end
+    for k, name in ipairs(tab.names) do
+        if name == "S" then col = k end
     end
     T.ok(col ~= nil, "CSV has an S column")
     local i = 0
-    for line in text:gmatch("\n([^\n]+)") do
+    for _, row in ipairs(tab.rows) do
         i = i + 1
-        local j, val = 0, nil
-        for field in (line .. ","):gmatch("([^,]*),") do
-            j = j + 1
-            if j == col then val = tonumber(field) end
-        end
+        local val = tonumber(row[col])
         T.close(val, S[i], 1e-9, 1e-300, "CSV S at node " .. i)
     end
 
@@ -480,6 +472,64 @@ tests["plot.xy: a colour value per point, checked against the points"] = functio
                   "series[1] has 30 points but 1 colour values")
     T.raises_here(function() return dfle.plot.xy{ path = png, series = { { x = x, y = y } }, logc = 1 } end,
                   "'logc' must be a boolean")
+end
+
+tests["channel:params: the options given, which rebuild the same channel"] = function()
+    local ch = dfle.channel{ dx = 10, A0 = 2000, hack_coef = 30, hack_exp = 1.6, k_w = 0.07,
+                             b = 0.4, A_max = 3e6 }
+    local p = ch:params()
+    T.eq(p.dx, 10); T.eq(p.A0, 2000); T.eq(p.hack_coef, 30); T.eq(p.hack_exp, 1.6)
+    T.eq(p.k_w, 0.07); T.eq(p.b, 0.4)
+    T.eq(p.A_max, 3e6, "A_max as asked, not the outlet's area")
+    T.ok(ch.A_max > 3e6, "the outlet's area passes A_max")
+    T.eq(p.length, 0)
+    local again = dfle.channel(p)
+    T.eq(again.n, ch.n)
+    local A, B = ch:get("w"), again:get("w")
+    for i = 1, ch.n do T.eq(B[i], A[i], "w[" .. i .. "]") end
+    p.dx = 99 -- a copy: the channel keeps its own
+    T.eq(ch:params().dx, 10)
+    -- a geometry given as arrays or functions has no formula to list
+    local arr = dfle.channel{ dx = 4, area = { 1e3, 2e3, 4e3 } }
+    local q = arr:params()
+    T.eq(q.dx, 4)
+    T.eq(q.A0, nil, "no Hack parameters for an area array")
+    T.eq(dfle.channel{ width = function(A) return 1 end, A_max = 1e5 }:params().k_w, nil)
+end
+
+tests["fluvial:params: Table G1 and the law they give; stream power's K, m, n"] = function()
+    local fl = dfle.fluvial.stochastic_threshold{ k_e = 6e-14, R_c = 0.3 }
+    local p = fl:params()
+    T.eq(p.k_e, 6e-14); T.eq(p.R_c, 0.3); T.eq(p.rho_s, 2600); T.eq(p.tau_c_coef, 0.045)
+    T.eq(p.K, fl.K); T.eq(p.m_s, fl.m_s); T.eq(p.n_s, fl.n_s)
+    -- the list rebuilds the same law (K, m_s, n_s as overrides)
+    local again = dfle.fluvial.stochastic_threshold(p)
+    T.eq(again.K, fl.K); T.eq(again.n_s, fl.n_s)
+    -- an override shows as the value the law runs
+    T.eq(dfle.fluvial.stochastic_threshold{ n_s = 2 }:params().n_s, 2)
+    local sp = dfle.fluvial.stream_power{ K = 1e-6, m = 0.5, n = 1 }:params()
+    T.eq(sp.K, 1e-6); T.eq(sp.m, 0.5); T.eq(sp.n, 1); T.eq(sp.k_e, nil)
+    T.eq(dfle.fluvial.stream_power(sp).K, 1e-6)
+end
+
+tests["model:params: U, cfl, dt_max and every component's params"] = function()
+    local ch = dfle.channel{ A_max = 2e5 }
+    local rt = dfle.router.empirical{ tau_y = 100 }
+    local m = dfle.model{ channel = ch, router = rt, U = 2e-4, cfl = 0.3, dt_max = 50,
+                          fluvial = dfle.fluvial.stream_power{ K = 1e-6, m = 0.5, n = 1 } }
+    local p = m:params()
+    T.eq(p.U, 2e-4); T.eq(p.cfl, 0.3); T.eq(p.dt_max, 50)
+    T.eq(p.router.tau_y, 100)
+    T.eq(p.law.alpha, 6, "the default law's")
+    T.eq(p.fluvial.K, 1e-6)
+    T.eq(p.channel.A_max, 2e5)
+    m:set_U(4e-4)
+    T.eq(m:params().U, 4e-4, "U now")
+    local off = dfle.model{ channel = ch, fluvial = false, router = false }:params()
+    T.eq(off.fluvial, false); T.eq(off.router, false); T.eq(off.law, false)
+    -- a law written in Lua lists its own params
+    local lua_law = dfle.law.define{ params = { k = 2 }, rate = function(c, q) return 0 end }
+    T.eq(dfle.model{ channel = ch, law = lua_law }:params().law.k, 2)
 end
 
 return tests

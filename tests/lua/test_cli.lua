@@ -177,7 +177,34 @@ print("work done")
     T.has(out, "one output directory at most")
     out = run("")
     T.has(out, "quick=false data=D0 output=.")
+    -- an output "directory" that is a file: named at the script's line
+    local file = dir .. "/a/file"
+    T.write_file(file, "x")
+    out, ok = run(q(file))
+    T.eq(ok, nil)
+    T.has(out, ".lua:1:", "exists and is not a directory", file)
+    T.ok(not out:find("work done"))
+    -- an empty default (DFLE_DATA_DIR set but empty) is no value
+    T.write_file(script, [=[
+local o = dfle.args{ options = { data = { "DIR", "the data", default = "" } } }
+print("data=" .. tostring(o.data))
+]=])
+    T.has(run(""), "data=nil")
     os.execute("rm -rf " .. q(dir))
+end
+
+tests["every example refuses a misspelt option before doing any work"] = function()
+    need_binary()
+    local p = io.popen("ls " .. q(T.root .. "/examples") .. "/*.lua")
+    local n = 0
+    for path in p:lines() do
+        local out, ok = sh(q(T.dfle) .. " -q " .. q(path) .. " --qiuck")
+        T.eq(ok, nil, path)
+        T.has(out, 'unknown option "--qiuck"', "--quick", "--help")
+        n = n + 1
+    end
+    p:close()
+    T.ok(n >= 10, "examples found: " .. n)
 end
 
 tests["examples say which data they need when it is missing"] = function()

@@ -156,11 +156,12 @@ tests["network: the catchment's cells, fit, CSV"] = function()
     for _, a in ipairs(channels:get("A")) do T.ok(a >= 1e5) end
     local csv = T.tmpname(".csv")
     T.eq(channels:write_csv(csv), channels)
-    local text = assert(T.read_file(csv))
-    T.eq(text:match("^[^\n]*"), "E (m),N (m),x (m),d (m),z (m),A (m^2),S (-),receiver")
-    local rows = 0
-    for _ in text:gmatch("\n") do rows = rows + 1 end
-    T.eq(rows, channels.n + 1)
+    local tab = T.read_csv(csv)
+    T.eq(tab.header, "E,N,x,d,z,A,S,receiver")
+    T.eq(tab.units.A, "m^2"); T.eq(tab.units.receiver, nil)
+    T.eq(#tab.rows, channels.n)
+    -- where it came from: the DEM and the limits asked for
+    T.has(table.concat(tab.comments, "\n"), "# profile network: dem=", "A_min=100000 m^2")
     -- Without an outlet: all channels of the DEM.
     local all = dem:network{ A_min = 1e7 }
     T.ok(all.n > 0)
@@ -271,6 +272,75 @@ tests["errors: degrees, pits, outlets, options"] = function()
     end
     raises(function() return p:get("A") end, "closed")
     T.eq(tostring(p), "dfle.profile (closed)")
+end
+
+-- The DEM's products as GeoTIFF bands, read back through dfle.dem.read.
+tests["write_geotiff: filled z, area, D8, slope and channel mask, read back"] = function()
+    local dem = filled()
+    local tif = T.tmpname(".tif")
+    T.ok(rawequal(dem:write_geotiff(tif, { layers = { "z", "area", "d8", "slope", "channels" },
+                                           A_min = 1e6 }), dem))
+    local E, N = BLACK[1], BLACK[2]
+    local z, A = dem:at(E, N)
+    local band = {}
+    for _, k in ipairs{ 1, 3, 4, 5 } do band[k] = dfle.dem.read(tif, { band = k }) end
+    T.eq(band[1].nx, dem.nx)
+    T.eq(band[1].epsg, 32611, "the CRS goes with the grid")
+    T.close(band[1].extent.E_min, dem.extent.E_min, 0, 1e-6)
+    T.eq(band[1]:at(E, N), z)
+    T.ok(A >= 900)
+    -- D8 codes are ESRI's powers of two, 0 where nothing drains out
+    local seen = {}
+    for _, c in ipairs{ 0, 1, 2, 4, 8, 16, 32, 64, 128 } do seen[c] = true end
+    local d8 = band[3]
+    for k = 1, 200 do
+        local e = dem.extent.E_min + 15 + 30 * (k * 7 % dem.nx)
+        local n = dem.extent.N_max - 15 - 30 * (k * 13 % dem.ny)
+        T.ok(seen[d8:at(e, n)], "D8 code " .. tostring(d8:at(e, n)))
+        local a = dem:at(e, n)
+        local mask = band[5]:at(e, n)
+        local _, area = dem:at(e, n)
+        T.eq(mask, area >= 1e6 and 1 or 0)
+        T.ok(band[4]:at(e, n) >= 0 or a ~= a, "slopes of a filled DEM are >= 0")
+    end
+    raises(function() return dem:write_geotiff(tif, { layers = { "channels" } }) end, "needs A_min")
+    raises(function() return dem:write_geotiff(tif, { layers = { "zz" } }) end, "invalid option 'zz'")
+    raises(function() return dem:write_geotiff(tif, { layers = { "z", "z" } }) end, "listed twice")
+    raises(function() return dem:write_geotiff("/no/such/dir/x.tif") end, "/no/such/dir/x.tif")
+end
+
+tests["write_geotiff: on a small grid every band equals what the DEM says"] = function()
+    local asc = T.tmpname(".asc")
+    T.write_file(asc, "ncols 4\nnrows 3\nxllcorner 1000\nyllcorner 2000\ncellsize 10\n" ..
+                      "9 8 7 9\n8 5 4 8\n9 6 2 9\n")
+    local dem = dfle.dem.read(asc, { crs = "EPSG:32611" })
+    dem:fill()
+    local tif = T.tmpname(".tif")
+    dem:write_geotiff(tif, { layers = { "area", "d8", "slope", "z" } })
+    local area, d8, slope, z = dfle.dem.read(tif, { band = 1 }), dfle.dem.read(tif, { band = 2 }),
+                               dfle.dem.read(tif, { band = 3 }), dfle.dem.read(tif, { band = 4 })
+    local outlets = 0
+    for r = 0, 2 do
+        for c = 0, 3 do
+            local e, n = 1005 + 10 * c, 2025 - 10 * r
+            local zz, A = dem:at(e, n)
+            T.eq(z:at(e, n), zz)
+            T.eq(area:at(e, n), A)
+            local code = d8:at(e, n)
+            if code == 0 then
+                outlets = outlets + 1
+                T.ok(slope:at(e, n) == nil, "no slope where nothing drains out")
+            else
+                -- the receiver: the neighbour the code points to
+                local k = math.floor(math.log(code, 2) + 0.5)
+                local dE = ({ 1, 1, 0, -1, -1, -1, 0, 1 })[k + 1]
+                local dN = ({ 0, -1, -1, -1, 0, 1, 1, 1 })[k + 1]
+                local zr = dem:at(e + 10 * dE, n + 10 * dN)
+                T.close(slope:at(e, n), (zz - zr) / (10 * math.sqrt(dE * dE + dN * dN)), 1e-12)
+            end
+        end
+    end
+    T.ok(outlets >= 1, "water leaves the grid somewhere")
 end
 
 return tests

@@ -8,20 +8,9 @@ local tests = {}
 
 local q = T.shquote
 
--- A scratch directory for one test; removed by the returned function.
-local function scratch()
-    local h = io.popen("mktemp -d")
-    local dir = h:read("l")
-    h:close()
-    return dir, function() os.execute("rm -rf " .. q(dir)) end
-end
-
-local function sh(cmd)
-    local h = io.popen(cmd .. " 2>&1")
-    local out = h:read("a")
-    local ok, _, code = h:close()
-    return out, ok, code
-end
+-- A scratch directory for one test (removed by the returned function),
+-- a shell command's output and status: from the runner.
+local scratch, sh = T.scratch, T.sh
 
 -- The sweep script used by the CLI tests: arg[1] = out file, arg[2] =
 -- extra Lua put into build (e.g. a delay), arg[3] = limit.
@@ -317,14 +306,16 @@ tests["CLI: a killed parallel run resumes without losing or repeating a row"] = 
     -- machine: a fixed delay once killed it before any row was written.
     -- The wait is bounded (30 s), so a run that never writes fails here.
     local delay = "local c = os.clock() while os.clock() - c < 0.05 do end"
+    -- lines above the rows: the meta line, the comment lines, the header
+    local _, head = T.read_file(dir .. "/ref.csv"):match("^(.-\nindex,[^\n]*\n)"):gsub("\n", "")
     sh("cd " .. q(dir) .. " && { " .. q(T.dfle) .. " -q -j 2 sweep.lua k.csv " .. q(delay) ..
        " & pid=$!; i=0; while [ $i -lt 3000 ]; do" ..
-       " [ \"$(grep -c '' k.csv 2>/dev/null)\" -ge 3 ] 2>/dev/null && break;" ..
+       " [ \"$(grep -c '' k.csv 2>/dev/null)\" -ge " .. (head + 1) .. " ] 2>/dev/null && break;" ..
        " sleep 0.01; i=$((i+1)); done; kill -9 $pid; wait $pid; }")
     local partial = T.read_file(dir .. "/k.csv")
     T.ok(partial ~= nil, "the killed run left a file")
     local _, lines = partial:gsub("\n", "")
-    local rows = lines - 2 -- complete rows (a cut last line has no newline)
+    local rows = lines - head -- complete rows (a cut last line has no newline)
     T.ok(rows >= 1 and rows < 32, "killed mid-run after " .. rows .. " rows")
     local out = run(dir, "-j 2", "k.csv")
     local ran = tonumber(out:match("ran=(%d+)"))
@@ -421,6 +412,21 @@ tests["errors name the parameter and the calling line"] = function()
     T.raises_here(function() dfle.ensemble(with("params", { U = { 1, 0 } })) end,
                   "dfle.ensemble: parameter 'U': range needs lo < hi")
     T.raises_here(function() dfle.gather{ out = "x.csv" } end, "either 'files'")
+end
+
+tests["ens:write_netcdf: the rows, the design and units as a NetCDF table"] = function()
+    local dir = scratch()
+    local ens = dfle.ensemble{
+        params = { k_df = {5e-5, 1e-3, log = true}, U = {1e-4, 1e-3} },
+        n = 4, seed = 3, out = dir .. "/e.csv", workers = 1, build = small_build,
+        outputs = { "S_df", "A_df" } }
+    T.ok(rawequal(ens:write_netcdf(dir .. "/e.nc"), ens))
+    local s = assert(T.read_file(dir .. "/e.nc"))
+    T.eq(s:sub(1, 4), "CDF\2")
+    T.has(s, "sample", "k_df", "S_df", "status", "reason", "dfle_design",
+          "dfle.ensemble v1 n=4 seed=3", "m/yr", "m2")
+    T.raises_here(function() return ens:write_netcdf() end, "string expected")
+    T.raises_here(function() return ens:write_netcdf(dir .. "/no/such/dir.nc") end, "no/such/dir.nc")
 end
 
 return tests

@@ -102,13 +102,27 @@ end
 
 tests["method and record errors name themselves"] = function()
     local m = model()
-    T.raises_here(function() return m:run_to_steady{ method = "newton" } end, "method 'newton' is not one of explicit, implicit, direct, auto")
+    T.raises_here(function() return m:run_to_steady{ method = "newton" } end, "method must be 'explicit', 'implicit', 'direct' or 'auto' (got 'newton')")
     T.raises_here(function() return m:run_to_steady{ method = 3 } end, "'method' must be a string")
     T.raises_here(function() return m:run{ years = 10, method = "direct" } end, "steady states only")
     T.raises_here(function() return m:run{ years = 10, record = { 5, 2 } } end, "record times must increase")
     T.raises_here(function() return m:run{ years = 10, record = { 20 } } end, "record times must increase")
     T.raises_here(function() return m:run{ years = 10, rtol = 0 } end, "rtol must be in (0, 1)")
     T.raises_here(function() return m:run_to_steady{ direct_tol = 2 } end, "direct_tol must be in (0, 1)")
+end
+
+-- The recorded states as a CF NetCDF file (the values themselves are
+-- read back in tests/test_netcdf.c; here: the binding's part).
+tests["run: record = {...}, netcdf = path writes the recorded states"] = function()
+    local m = model()
+    local nc = T.tmpname(".nc")
+    local r = m:run{ years = 1000, record = { 0, 500, 1000 }, netcdf = nc }
+    T.eq(#r.records, 3)
+    local s = assert(T.read_file(nc))
+    T.eq(s:sub(1, 4), "CDF\2", "classic 64-bit-offset NetCDF")
+    T.has(s, "Conventions", "CF-1.8", "featureType", "profile", "history", "elevation above the outlet")
+    T.raises_here(function() return m:run{ years = 10, netcdf = nc } end, "give 'record' times too")
+    T.raises_here(function() return m:run{ years = 10, record = { 5 }, netcdf = 7 } end, "netcdf")
 end
 
 return tests

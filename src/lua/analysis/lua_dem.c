@@ -22,6 +22,7 @@
 #include <string.h>
 
 #include "dfle/dem.h"
+#include "dfle/raster.h"
 
 #define DFLE_LUA_DEM "dfle.dem"
 #define DFLE_LUA_PROFILE "dfle.profile"
@@ -173,6 +174,93 @@ static int l_dem_flow(lua_State *L)
     return 1;
 }
 
+
+/* dem:write_geotiff(path [, { layers = {...}, A_min = }]): the DEM's
+ * products as bands of one GeoTIFF on the DEM's grid and CRS. */
+static int l_dem_write_geotiff(lua_State *L)
+{
+    static const char *const fn = "dem:write_geotiff";
+    static const char *const all[] = {"z", "area", "d8", "slope", "channels", NULL};
+    static const char *const other[] = {"layers", NULL};
+    dfle_dem *dem = check_dem(L, 1);
+    const char *path = dfle_lua_check_string(L, 2, fn, "the path");
+    const char *names[5];
+    const double *bands[5];
+    double A_min = NAN, ext[4];
+    const dfle_lua_param params[] = {{"A_min", &A_min}};
+    size_t nb = 0, n = dfle_dem_nx(dem) * dfle_dem_ny(dem);
+    dfle_raster_geo geo;
+    dfle_error err;
+
+    lua_settop(L, 3);
+    if (!lua_isnil(L, 3))
+        luaL_checktype(L, 3, LUA_TTABLE);
+    dfle_lua_read_params(L, 3, fn, params, 1, other);
+    if (lua_istable(L, 3) && lua_getfield(L, 3, "layers") != LUA_TNIL) {
+        if (!lua_istable(L, -1) || lua_rawlen(L, -1) == 0 || lua_rawlen(L, -1) > 5)
+            luaL_error(L, "dfle.%s: 'layers' must be a list of 1 to 5 names among z, area, d8, "
+                          "slope, channels", fn);
+        for (lua_Integer k = 1; k <= (lua_Integer)lua_rawlen(L, -1); k++) {
+            lua_rawgeti(L, -1, k);
+            names[nb++] = all[luaL_checkoption(L, -1, NULL, all)];
+            lua_pop(L, 1);
+        }
+    } else {
+        names[nb++] = "z", names[nb++] = "area", names[nb++] = "d8";
+    }
+    if (dfle_dem_route(dem, &err) != DFLE_OK)
+        return dfle_lua_raise(L, &err);
+    for (size_t k = 0; k < nb; k++) {
+        const double *z = dfle_dem_z(dem), *A = dfle_dem_area(dem);
+        const unsigned char *dir = dfle_dem_dir(dem);
+        double *b;
+        for (size_t j = 0; j < k; j++)
+            if (strcmp(names[j], names[k]) == 0)
+                luaL_error(L, "dfle.%s: layer '%s' is listed twice", fn, names[k]);
+        if (strcmp(names[k], "z") == 0) {
+            bands[k] = z;
+            continue;
+        }
+        if (strcmp(names[k], "area") == 0) {
+            bands[k] = A;
+            continue;
+        }
+        b = lua_newuserdatauv(L, n * sizeof *b, 0); /* kept on the stack until written */
+        bands[k] = b;
+        if (strcmp(names[k], "channels") == 0 && !(A_min > 0))
+            luaL_error(L, "dfle.%s: layer 'channels' needs A_min (m^2, > 0): the drainage area "
+                          "where channels begin", fn);
+        for (size_t i = 0; i < n; i++) {
+            long long r = dfle_dem_receiver(dem, i);
+            if (isnan(z[i])) {
+                b[i] = NAN;
+            } else if (strcmp(names[k], "d8") == 0) {
+                /* ESRI's codes: 1 E, 2 SE, 4 S, 8 SW, 16 W, 32 NW, 64 N, 128 NE; 0 none */
+                b[i] = dir[i] < 8 ? (double)(1u << dir[i]) : 0.0;
+            } else if (strcmp(names[k], "slope") == 0) {
+                double Ei, Ni, Er, Nr;
+                if (r < 0) {
+                    b[i] = NAN;
+                } else {
+                    dfle_dem_cell_centre(dem, i, &Ei, &Ni);
+                    dfle_dem_cell_centre(dem, (size_t)r, &Er, &Nr);
+                    b[i] = (z[i] - z[r]) / hypot(Ei - Er, Ni - Nr);
+                }
+            } else {
+                b[i] = A[i] >= A_min ? 1.0 : 0.0;
+            }
+        }
+    }
+    dfle_dem_extent(dem, ext);
+    geo = (dfle_raster_geo){ext[0], ext[3], dfle_dem_dx(dem), dfle_dem_dy(dem),
+                            dfle_dem_crs_wkt(dem)};
+    if (dfle_raster_write_geotiff(path, dfle_dem_nx(dem), dfle_dem_ny(dem), &geo, nb, bands, names,
+                                  &err) != DFLE_OK)
+        return dfle_lua_raise(L, &err);
+    dfle_lua_note(L, DFLE_LUA_DETAIL, "wrote %s (%zu band%s)", path, nb, nb == 1 ? "" : "s");
+    lua_settop(L, 1);
+    return 1;
+}
 /* dem:at(E, N) -> z, A (nil, nil on NoData) */
 static int l_dem_at(lua_State *L)
 {
@@ -392,13 +480,31 @@ static int l_profile_slope_area(lua_State *L)
     return 1;
 }
 
+/* p:write_csv(path [, { record = true | false | "p.json" }]) */
 static int l_profile_write_csv(lua_State *L)
 {
+    static const char *const keys[] = {"record", NULL};
     dfle_profile *p = check_profile(L, 1);
     const char *path = dfle_lua_check_string(L, 2, "profile:write_csv", "the path");
+    dfle_record *rec;
+    const char *jpath;
     dfle_error err;
-    if (dfle_profile_write_csv(p, path, &err) != DFLE_OK)
+
+    lua_settop(L, 3);
+    if (!lua_isnil(L, 3)) {
+        luaL_checktype(L, 3, LUA_TTABLE);
+        dfle_lua_read_params(L, 3, "profile:write_csv", NULL, 0, keys);
+    }
+    rec = dfle_lua_push_record(L, dfle_profile_is_network(p)
+                                      ? "DEM channel network: one row per cell, each before "
+                                        "its receiver"
+                                      : "DEM channel profile: one row per cell, from the head "
+                                        "to the outlet");
+    dfle_profile_describe(p, rec);
+    jpath = dfle_lua_record_path(L, rec, 3, path, "profile:write_csv");
+    if (dfle_profile_write_csv(p, path, rec, &err) != DFLE_OK)
         return dfle_lua_raise(L, &err);
+    dfle_lua_record_done(L, rec, path, jpath);
     dfle_lua_note(L, DFLE_LUA_DETAIL, "wrote %s (%zu cells)", path, dfle_profile_size(p));
     lua_settop(L, 1);
     return 1;
@@ -425,6 +531,17 @@ static int l_profile_channel(lua_State *L)
     }
     u = dfle_lua_newobject(L, sizeof *u, DFLE_LUA_CHANNEL, 0);
     if (dfle_profile_channel(p, dx, k_w, b, &u->ch, &err) != DFLE_OK)
+        return dfle_lua_raise(L, &err);
+    return 1;
+}
+
+/* p:main_stem() -> dfle.profile: a network's main stem (a profile's copy) */
+static int l_profile_main_stem(lua_State *L)
+{
+    dfle_profile *p = check_profile(L, 1);
+    dfle_lua_profile *u = dfle_lua_newobject(L, sizeof *u, DFLE_LUA_PROFILE, 0);
+    dfle_error err;
+    if (dfle_profile_main_stem(p, &u->p, &err) != DFLE_OK)
         return dfle_lua_raise(L, &err);
     return 1;
 }
@@ -518,10 +635,12 @@ void dfle_lua_open_dem(lua_State *L)
 {
     static const luaL_Reg dem_methods[] = {
         {"fill", l_dem_fill}, {"flow", l_dem_flow}, {"at", l_dem_at},
-        {"profile", l_dem_profile}, {"network", l_dem_network}, {NULL, NULL}};
+        {"profile", l_dem_profile}, {"network", l_dem_network},
+        {"write_geotiff", l_dem_write_geotiff}, {NULL, NULL}};
     static const luaL_Reg profile_methods[] = {
         {"get", l_profile_get}, {"slope_area", l_profile_slope_area},
-        {"write_csv", l_profile_write_csv}, {"channel", l_profile_channel}, {NULL, NULL}};
+        {"write_csv", l_profile_write_csv}, {"channel", l_profile_channel},
+        {"main_stem", l_profile_main_stem}, {NULL, NULL}};
     static const luaL_Reg profile_meta[] = {{"__len", l_profile_len}, {NULL, NULL}};
     static const dfle_lua_type dem_type = {
         .name = DFLE_LUA_DEM, .free = dem_free, .describe = dem_describe,

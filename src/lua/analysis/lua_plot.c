@@ -3,7 +3,8 @@
  *
  *   dfle.plot.slope_area(m, "slope_area.png" [, fit [, {title =, nbins =}]])
  *   dfle.plot.profile(m, "profile.png" [, {title =}])
- *   dfle.plot.xy{ path =, series = {{x =, y =, label =, lines =}, ...},
+ *   dfle.plot.xy{ path =, series = {{x =, y =, label =, lines =, lo =, hi =,
+ *                                     rgb =, dash =}, ...},
  *                 title =, xlabel =, ylabel =, logx =, logy = }
  */
 #include "lua/core/dfle_lua.h"
@@ -16,20 +17,6 @@
 #include "dfle/plot.h"
 
 #define DEFAULT_NBINS 100
-
-static const char *opt_string(lua_State *L, int idx, const char *key, const char *fn)
-{
-    const char *s = NULL;
-    if (lua_istable(L, idx)) {
-        int t = lua_getfield(L, idx, key);
-        if (t != LUA_TNIL && t != LUA_TSTRING)
-            luaL_error(L, "dfle.%s: parameter '%s' must be a string, got %s", fn, key,
-                       luaL_typename(L, -1));
-        s = t == LUA_TNIL ? NULL : dfle_lua_check_string(L, -1, fn, key); /* the table holds it */
-        lua_pop(L, 1);
-    }
-    return s;
-}
 
 static int opt_bool(lua_State *L, int idx, const char *key, const char *fn)
 {
@@ -80,7 +67,7 @@ static int l_plot_slope_area(lua_State *L)
     lua_settop(L, 4); /* scratch arrays go above the arguments */
     path = dfle_lua_check_string(L, 2, "plot.slope_area", "the path");
     check_opts(L, 4, "plot.slope_area", params, 1);
-    title = opt_string(L, 4, "title", "plot.slope_area");
+    title = dfle_lua_opt_string(L, 4, "title", "plot.slope_area");
     dfle_lua_check_whole(L, nbins, "plot.slope_area", "nbins", 1, 1e6);
     memset(&fit, 0, sizeof fit);
     if (lua_istable(L, 3)) {
@@ -107,6 +94,7 @@ static int l_plot_slope_area(lua_State *L)
     dfle_bins_release(&bins);
     if (st != DFLE_OK)
         return dfle_lua_raise(L, &err);
+    dfle_lua_note_file(L, path); /* for run records */
     return 0;
 }
 
@@ -119,12 +107,13 @@ static int l_plot_profile(lua_State *L)
     dfle_error err;
 
     check_opts(L, 3, "plot.profile", NULL, 0);
-    title = opt_string(L, 3, "title", "plot.profile");
+    title = dfle_lua_opt_string(L, 3, "title", "plot.profile");
     x = dfle_lua_model_field(L, 1, DFLE_FIELD_X, "dfle.plot.profile");
     z = dfle_lua_model_field(L, 1, DFLE_FIELD_Z, "dfle.plot.profile");
     S = dfle_lua_model_field(L, 1, DFLE_FIELD_S, "dfle.plot.profile");
     if (dfle_plot_profile(path, title, dfle_model_size(m), x, z, S, &err) != DFLE_OK)
         return dfle_lua_raise(L, &err);
+    dfle_lua_note_file(L, path); /* for run records */
     return 0;
 }
 
@@ -159,7 +148,7 @@ static int l_plot_flow(lua_State *L)
     series = lua_newuserdatauv(L, (ns + 1) * sizeof *series, 0);
     labels = lua_newuserdatauv(L, (ns + 1) * 48, 0);
     memset(&o, 0, sizeof o);
-    o.title = opt_string(L, 4, "title", "plot.flow");
+    o.title = dfle_lua_opt_string(L, 4, "title", "plot.flow");
     o.xlabel = "Distance from channel head, x (m)";
     o.ylabel = "Elevation (m)";
     series[k++] = (dfle_plot_series){.label = "bed", .n = n, .x = x, .y = z, .lines = 1};
@@ -190,6 +179,7 @@ static int l_plot_flow(lua_State *L)
     }
     if (dfle_plot_xy(path, &o, series, k, &err) != DFLE_OK)
         return dfle_lua_raise(L, &err);
+    dfle_lua_note_file(L, path); /* for run records */
     return 0;
 }
 
@@ -199,7 +189,8 @@ static int l_plot_xy(lua_State *L)
 {
     static const char *const keys[] = {"path", "series", "title", "xlabel", "ylabel",
                                        "logx", "logy", "clabel", "logc", NULL};
-    static const char *const series_keys[] = {"x", "y", "label", "lines", "color", NULL};
+    static const char *const series_keys[] = {"x", "y", "label", "lines", "color", "lo", "hi",
+                                              "rgb", "dash", NULL};
     dfle_plot_opts o;
     dfle_plot_series *series;
     const char *path;
@@ -209,16 +200,16 @@ static int l_plot_xy(lua_State *L)
 
     luaL_checktype(L, 1, LUA_TTABLE);
     dfle_lua_read_params(L, 1, "plot.xy", NULL, 0, keys);
-    path = opt_string(L, 1, "path", "plot.xy");
+    path = dfle_lua_opt_string(L, 1, "path", "plot.xy");
     if (path == NULL)
         luaL_error(L, "dfle.plot.xy: parameter 'path' is required");
     memset(&o, 0, sizeof o);
-    o.title = opt_string(L, 1, "title", "plot.xy");
-    o.xlabel = opt_string(L, 1, "xlabel", "plot.xy");
-    o.ylabel = opt_string(L, 1, "ylabel", "plot.xy");
+    o.title = dfle_lua_opt_string(L, 1, "title", "plot.xy");
+    o.xlabel = dfle_lua_opt_string(L, 1, "xlabel", "plot.xy");
+    o.ylabel = dfle_lua_opt_string(L, 1, "ylabel", "plot.xy");
     o.logx = opt_bool(L, 1, "logx", "plot.xy");
     o.logy = opt_bool(L, 1, "logy", "plot.xy");
-    o.clabel = opt_string(L, 1, "clabel", "plot.xy");
+    o.clabel = dfle_lua_opt_string(L, 1, "clabel", "plot.xy");
     o.logc = opt_bool(L, 1, "logc", "plot.xy");
     if (lua_getfield(L, 1, "series") != LUA_TTABLE)
         luaL_error(L, "dfle.plot.xy: parameter 'series' must be an array of {x =, y =}");
@@ -236,15 +227,33 @@ static int l_plot_xy(lua_State *L)
         if (!lua_istable(L, s_idx))
             luaL_error(L, "dfle.plot.xy: series[%d] must be a table", (int)k + 1);
         dfle_lua_read_params(L, s_idx, "plot.xy series", NULL, 0, series_keys);
-        series[k].label = opt_string(L, s_idx, "label", "plot.xy");
+        series[k].label = dfle_lua_opt_string(L, s_idx, "label", "plot.xy");
         series[k].lines = opt_bool(L, s_idx, "lines", "plot.xy");
         lua_getfield(L, s_idx, "x");
         series[k].x = dfle_lua_check_array(L, -1, "plot.xy: series.x", &series[k].n);
-        lua_getfield(L, s_idx, "y");
-        series[k].y = dfle_lua_check_array(L, -1, "plot.xy: series.y", &ny);
-        if (ny != series[k].n)
-            luaL_error(L, "dfle.plot.xy: series[%d] has %d x but %d y values", (int)k + 1,
-                       (int)series[k].n, (int)ny);
+        series[k].lo = series[k].hi = NULL;
+        series[k].rgb = dfle_lua_opt_string(L, s_idx, "rgb", "plot.xy");
+        series[k].dash = opt_bool(L, s_idx, "dash", "plot.xy");
+        if (lua_getfield(L, s_idx, "lo") != LUA_TNIL) {
+            /* a band between lo and hi: y is not needed */
+            size_t nl, nh;
+            series[k].lo = dfle_lua_check_array(L, -1, "plot.xy: series.lo", &nl);
+            lua_getfield(L, s_idx, "hi");
+            series[k].hi = dfle_lua_check_array(L, -1, "plot.xy: series.hi", &nh);
+            if (nl != series[k].n || nh != series[k].n)
+                luaL_error(L, "dfle.plot.xy: series[%d] has %d x but %d lo and %d hi values",
+                           (int)k + 1, (int)series[k].n, (int)nl, (int)nh);
+        }
+        if (series[k].lo == NULL || lua_getfield(L, s_idx, "y") != LUA_TNIL) {
+            if (series[k].lo == NULL)
+                lua_getfield(L, s_idx, "y");
+            series[k].y = dfle_lua_check_array(L, -1, "plot.xy: series.y", &ny);
+            if (ny != series[k].n)
+                luaL_error(L, "dfle.plot.xy: series[%d] has %d x but %d y values", (int)k + 1,
+                           (int)series[k].n, (int)ny);
+        } else {
+            series[k].y = NULL;
+        }
         series[k].c = NULL;
         if (lua_getfield(L, s_idx, "color") != LUA_TNIL) {
             size_t nc;
@@ -259,6 +268,7 @@ static int l_plot_xy(lua_State *L)
     }
     if (dfle_plot_xy(path, &o, series, ns, &err) != DFLE_OK)
         return dfle_lua_raise(L, &err);
+    dfle_lua_note_file(L, path); /* for run records */
     return 0;
 }
 

@@ -342,22 +342,33 @@ static const char **input_names(lua_State *L, int idx, size_t *D)
     return names;
 }
 
-/* List the keys of the data table at idx (for "no column" messages). */
+/* List the keys of the data table at idx (for "no column" messages).
+ * The names are gathered first and joined after the traversal: a
+ * luaL_Buffer that grows pushes onto the stack, and lua_next then took
+ * that for its key ("invalid key to 'next'" with a long column name). */
 static const char *data_columns(lua_State *L, int idx)
 {
     luaL_Buffer bf;
-    int first = 1;
+    lua_Integer n = 0;
+    int names;
 
-    luaL_buffinit(L, &bf);
+    idx = lua_absindex(L, idx);
+    lua_newtable(L);
+    names = lua_gettop(L);
     lua_pushnil(L);
     while (lua_next(L, idx) != 0) {
         lua_pop(L, 1);
         if (lua_type(L, -1) == LUA_TSTRING) {
-            if (!first)
-                luaL_addstring(&bf, ", ");
-            luaL_addstring(&bf, lua_tostring(L, -1));
-            first = 0;
+            lua_pushvalue(L, -1);
+            lua_rawseti(L, names, ++n);
         }
+    }
+    luaL_buffinit(L, &bf);
+    for (lua_Integer i = 1; i <= n; i++) {
+        if (i > 1)
+            luaL_addstring(&bf, ", ");
+        lua_rawgeti(L, names, i);
+        luaL_addvalue(&bf);
     }
     luaL_pushresult(&bf);
     return lua_tostring(L, -1);

@@ -34,6 +34,7 @@
 #include "dfle/fluvial.h"
 #include "dfle/law.h"
 #include "dfle/model.h"
+#include "dfle/record.h"
 #include "dfle/solver.h"
 #include "dfle/router.h"
 
@@ -88,17 +89,24 @@ typedef struct dfle_lua_type {
 /* Lifetime while in use (C objects point at each other, and Lua code
  * runs in the middle of C calls: U(t), laws and routers written in Lua).
  * An object is freed only when nothing uses it: __gc and __close of an
- * object that a model holds, or that a running call uses, only mark it,
- * and the last user frees it.  __close of a busy object raises (a model
- * closed from inside its own U(t) or law).
+ * object that a model holds, or that a running call uses, only mark it
+ * ("doomed").  The last holder to let go frees it; an object a call was
+ * using is closed when the call ends its use, but freed only by its next
+ * __gc (the collector's, once unreachable), because the call may still
+ * read it (a model's field values, a router's report) after end_use.
+ * __close of a busy object raises (a model closed from inside its own
+ * U(t) or law).
  *
  * dfle_lua_begin_use marks the object at idx busy for a call that may run
  * Lua code, raising if it is busy already (re-entry: m:run inside its own
- * U(t)); `what` names the call in that message.  dfle_lua_end_use undoes
- * it (never raises) and frees a doomed object.  Between the two, nothing
- * may raise: collect the error status and raise after end_use. */
+ * U(t)) or closed; `what` names the call in that message.
+ * dfle_lua_end_use undoes it (never raises, never frees).  Between the
+ * two, nothing may raise: collect the error status and raise after
+ * end_use. */
 dfle_lua_object *dfle_lua_begin_use(lua_State *L, int idx, const char *what);
 void dfle_lua_end_use(lua_State *L, int idx);
+/* The C object of the dfle object at idx, or NULL if it is closed. */
+void *dfle_lua_object_ptr(lua_State *L, int idx);
 /* The n values of field `field` of the model at idx, evaluated if need
  * be (which may run Lua laws and routers: the model is in use meanwhile);
  * raises on error, naming `what`. */
@@ -149,6 +157,10 @@ void dfle_lua_read_params(lua_State *L, int idx, const char *fn,
  * mistake (dfle/plausible.h).  dfle_lua_read_params calls it for every
  * value it reads. */
 void dfle_lua_warn_implausible(lua_State *L, const char *fn, const char *name, double v);
+/* Push and return the provenance line of files dfle writes: the UTC
+ * time and the command (the global `arg`: program, options, script and
+ * its arguments), e.g. "2026-12-01T19:50:00Z: dfle -j 2 run.lua --quick". */
+const char *dfle_lua_push_history(lua_State *L);
 /* A warning "file:line: dfle.<fn>: <msg>" through lua_warning. */
 void dfle_lua_warn(lua_State *L, const char *fn, const char *msg);
 
@@ -193,6 +205,25 @@ double *dfle_lua_check_array(lua_State *L, int idx, const char *what, size_t *n)
 lua_Integer dfle_lua_check_whole(lua_State *L, double v, const char *fn, const char *name,
                                  double lo, double hi);
 
+/* Text built from pieces: a table of strings on the stack joined at the
+ * end (a luaL_Buffer cannot have other values pushed above it, and the
+ * pieces come from calls that push).  init pushes the table; add pops
+ * the string on top into it; finish replaces the table by the joined
+ * string and drops anything above it. */
+typedef struct dfle_lua_text {
+    int t;
+    lua_Integer k;
+} dfle_lua_text;
+void dfle_lua_text_init(lua_State *L, dfle_lua_text *p);
+void dfle_lua_text_add(lua_State *L, dfle_lua_text *p);
+void dfle_lua_text_str(lua_State *L, dfle_lua_text *p, const char *s);
+void dfle_lua_text_finish(lua_State *L, dfle_lua_text *p);
+
+/* Option `key` of the options table at idx as a string (NULL when the
+ * table or the key is absent; the table holds the string); raises
+ * naming dfle.<fn> for another type. */
+const char *dfle_lua_opt_string(lua_State *L, int idx, const char *key, const char *fn);
+
 /* Slope-area pairs of argument `arg`: a dfle.model (its nodes above the
  * outlet) or a table {A = {...}, S = {...}} (copied to scratch userdata
  * left on the stack).  Returns the number of pairs. */
@@ -221,6 +252,53 @@ int dfle_lua_push_param_field(lua_State *L, const char *name, dfle_lua_params_fn
  * table. */
 void dfle_lua_push_described(lua_State *L, int obj, const char *prefix, const char *name,
                              dfle_lua_params_fn fn, const void *comp);
+
+/* --- lua_record.c: records of what produced an output --- */
+
+/* The command line that runs the script (argv[script] the script), set
+ * by the host before the script runs; without it records take the
+ * global `arg` (dfle loaded into a plain lua). */
+void dfle_lua_set_command(lua_State *L, char **argv, int argc, int script);
+
+/* Push a new record (a userdata that frees it) stamped with the version,
+ * the date, `about` (may be NULL), the command, the script and the
+ * working directory; returns it.  Raises if memory runs out. */
+dfle_record *dfle_lua_push_record(lua_State *L, const char *about);
+/* The same without a stamp: an empty record. */
+dfle_record *dfle_lua_push_empty_record(lua_State *L);
+
+/* Add the entries of the table at t to rec's current section, sorted by
+ * key (as parameters if `params`): numbers, booleans and strings as
+ * they are, anything else as its type name. */
+void dfle_lua_record_table(lua_State *L, dfle_record *rec, int t, int params);
+/* The value at v as entry `key` of rec's current section, as
+ * dfle_lua_record_table does it. */
+void dfle_lua_record_value(lua_State *L, dfle_record *rec, const char *key, int v, int params);
+/* The params a component written in Lua keeps (user value 2 of its
+ * object at obj), as parameters of rec's current section. */
+void dfle_lua_record_own_params(lua_State *L, dfle_record *rec, int obj);
+
+/* Remember that the script wrote `path` (records list the files). */
+void dfle_lua_note_file(lua_State *L, const char *path);
+
+/* Where the JSON record of the output `path` goes, from the option
+ * `record` of the table at opts (absent or true: beside it, "p.csv" ->
+ * "p.json", anything else + ".json", none beside a device or a pipe;
+ * false: none; a string: there), pushed (or nil) and returned; when
+ * there is one, rec names it at the top level ("record").  Raises for a
+ * `record` of another type, naming `fn`. */
+const char *dfle_lua_record_path(lua_State *L, dfle_record *rec, int opts, const char *path,
+                                 const char *fn);
+/* After `output` was written with rec: write the JSON record at jpath
+ * (NULL: none) with the output and the files written so far; note the
+ * files.  Raises if the record cannot be written. */
+void dfle_lua_record_done(lua_State *L, dfle_record *rec, const char *output, const char *jpath);
+void dfle_lua_write_record(lua_State *L, dfle_record *rec, const char *output, const char *jpath);
+
+/* (lua_model.c) The model at idx into rec (dfle_model_describe, the params
+ * of components written in Lua, a U(t) function, and the last run since
+ * the state was last set: section "run"). */
+void dfle_lua_record_model(lua_State *L, dfle_record *rec, int idx);
 
 /* --- lua_state.c: what the binding keeps per lua_State --- */
 
@@ -295,9 +373,11 @@ void dfle_lua_open_analysis(lua_State *L);
 void dfle_lua_open_plot(lua_State *L);
 void dfle_lua_open_sampling(lua_State *L);
 void dfle_lua_open_args(lua_State *L); /* dfle.args, dfle.mkdir (lua_args.c) */
+void dfle_lua_open_write_csv(lua_State *L); /* dfle.write_csv (lua_write_csv.c) */
 void dfle_lua_open_dem(lua_State *L);
 void dfle_lua_open_landscape(lua_State *L);
 void dfle_lua_open_ensemble(lua_State *L); /* after sampling: wraps dfle.pawn */
+void dfle_lua_open_invert(lua_State *L);   /* after plot: adds dfle.plot.corner, ... */
 void dfle_lua_open_trace_hook(lua_State *L); /* a test hook, in the registry */
 
 #endif

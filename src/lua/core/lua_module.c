@@ -35,9 +35,11 @@ int luaopen_dfle(lua_State *L)
     dfle_lua_open_plot(L);
     dfle_lua_open_sampling(L);
     dfle_lua_open_args(L);
+    dfle_lua_open_write_csv(L);
     dfle_lua_open_dem(L);
     dfle_lua_open_landscape(L);
     dfle_lua_open_ensemble(L);
+    dfle_lua_open_invert(L);
     dfle_lua_open_trace_hook(L);
     dfle_lua_set_module(L, -1);
     return 1;

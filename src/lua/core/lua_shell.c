@@ -69,6 +69,18 @@ void *dfle_lua_shell_new(lua_State *L, const dfle_lua_shell_def *def)
     return sh;
 }
 
+int dfle_lua_shell_enter(dfle_lua_shell *sh, const char *functions, dfle_error *err)
+{
+    if (sh->running)
+        return dfle_error_set(err, DFLE_ECALLBACK, "%s: used again from inside its own %s "
+                              "(directly, or through a model or routing they started)",
+                              sh->who, functions);
+    sh->running = 1;
+    return DFLE_OK;
+}
+
+void dfle_lua_shell_leave(dfle_lua_shell *sh) { sh->running = 0; }
+
 void dfle_lua_shell_close(lua_State *T, lua_CFunction sweep)
 {
     const int n = lua_gettop(T);

@@ -33,6 +33,7 @@ typedef struct dfle_lua_shell {
     lua_State *T; /* the component's own thread */
     char name[64];
     char who[80]; /* "<kind>.<name>": the prefix of its error messages */
+    int running;  /* an op is in progress (dfle_lua_shell_enter) */
 } dfle_lua_shell;
 
 /* How dfle.<kind>.define builds its object. */
@@ -52,6 +53,16 @@ typedef struct dfle_lua_shell_def {
  * state: zeroed but for its dfle_lua_shell head.  Raises on a bad
  * definition; nothing is leaked then. */
 void *dfle_lua_shell_new(lua_State *L, const dfle_lua_shell_def *def);
+
+/* Every op that touches the thread runs between these two.  An op
+ * started while another runs (a law used by another model from inside
+ * its own integrand, a router from inside its own flow()) would
+ * rearrange the stack under the running call and overwrite the state it
+ * is using (the channel, the flow arrays), so enter refuses it:
+ * DFLE_ECALLBACK, "<who>: used again from inside its own <functions>".
+ * Nothing may be touched before enter succeeds. */
+int dfle_lua_shell_enter(dfle_lua_shell *sh, const char *functions, dfle_error *err);
+void dfle_lua_shell_leave(dfle_lua_shell *sh);
 
 /* Push the sweep closure over every slot of T so far (they become its
  * upvalues 1, 2, ...: lua_upvalueindex(slot) inside it). */

@@ -50,6 +50,17 @@ static const dfle_lua_type *type_of(lua_State *L, int idx)
     return t;
 }
 
+/* Closed: freed, or doomed and used by nothing any more.  The second
+ * kind is what a call leaves when its object was closed (or collected by
+ * hand) from inside it: the call still holds pointers into the object
+ * after it ends its use (a model's field values, a router's report), so
+ * the memory goes only at the next __gc, the collector's once nothing
+ * can reach it. */
+static int is_closed(const dfle_lua_object *o)
+{
+    return o->ptr == NULL || (o->doomed && o->busy == 0 && o->holders == 0);
+}
+
 /* Free it if it was doomed and nothing uses it any more. */
 static void free_if_unused(lua_State *L, int idx, dfle_lua_object *o)
 {
@@ -60,7 +71,8 @@ static void free_if_unused(lua_State *L, int idx, dfle_lua_object *o)
 }
 
 /* __gc: upvalue 1 is the type.  Never raises (it may run as a finalizer);
- * an object still in use is only marked, and its last user frees it. */
+ * an object still in use is only marked: its last holder frees it, or,
+ * if a call was using it, its next __gc. */
 static int object_gc(lua_State *L)
 {
     const dfle_lua_type *t = lua_touserdata(L, lua_upvalueindex(1));
@@ -94,7 +106,7 @@ dfle_lua_object *dfle_lua_begin_use(lua_State *L, int idx, const char *what)
     const dfle_lua_type *t = type_of(L, idx);
     if (o == NULL || t == NULL)
         luaL_error(L, "dfle: %s: not a dfle object", what);
-    if (o->ptr == NULL)
+    if (is_closed(o))
         luaL_error(L, "%s: %s has been closed", what, t->name);
     if (o->busy > 0)
         luaL_error(L, "%s: the %s is running already: it cannot be used from inside its own "
@@ -106,10 +118,9 @@ dfle_lua_object *dfle_lua_begin_use(lua_State *L, int idx, const char *what)
 void dfle_lua_end_use(lua_State *L, int idx)
 {
     dfle_lua_object *o = lua_touserdata(L, idx);
-    if (o != NULL && o->busy > 0) {
-        o->busy--;
-        free_if_unused(L, idx, o);
-    }
+    (void)L;
+    if (o != NULL && o->busy > 0)
+        o->busy--; /* a doomed object is now closed, freed by its next __gc */
 }
 
 void dfle_lua_hold(lua_State *L, int idx)
@@ -132,12 +143,12 @@ void dfle_lua_unhold(lua_State *L, int idx)
 static int object_tostring(lua_State *L)
 {
     const dfle_lua_type *t = lua_touserdata(L, lua_upvalueindex(1));
-    void **p = luaL_checkudata(L, 1, t->name);
+    dfle_lua_object *o = luaL_checkudata(L, 1, t->name);
     lua_settop(L, 1);
-    if (*p == NULL)
+    if (is_closed(o))
         lua_pushfstring(L, "%s (closed)", t->name);
     else
-        t->describe(L, *p);
+        t->describe(L, o->ptr);
     return 1;
 }
 
@@ -172,9 +183,14 @@ static int object_index(lua_State *L)
     } else if (lua_getfield(L, lua_upvalueindex(1), "params") == LUA_TFUNCTION) {
         /* The object's parameters are its fields (the method itself, read
          * from the methods table: indexing the object would come back here). */
+        /* Protected: called by hand with no live object (debug.getmetatable
+         * hands scripts this function), params would raise from here, a C
+         * frame, without the script's position that the error below gives. */
         lua_pushvalue(L, 1);
-        lua_call(L, 1, 1);
-        fields = lua_pushfstring(L, "name, %s", dfle_lua_push_sorted_keys(L, -1));
+        if (lua_pcall(L, 1, 1, 0) == LUA_OK && lua_istable(L, -1))
+            fields = lua_pushfstring(L, "name, %s", dfle_lua_push_sorted_keys(L, -1));
+        else
+            fields = lua_pushfstring(L, "none readable (not a live %s)", t->name);
     } else {
         fields = "none";
     }
@@ -253,14 +269,20 @@ static void check_colon(lua_State *L, int arg, const char *tname)
 
 void *dfle_lua_check_object(lua_State *L, int arg, const char *tname)
 {
-    void **p;
+    dfle_lua_object *o;
     int top = lua_gettop(L);
     check_colon(L, arg, tname);
     lua_settop(L, top);
-    p = luaL_checkudata(L, arg, tname);
-    if (*p == NULL)
+    o = luaL_checkudata(L, arg, tname);
+    if (is_closed(o))
         luaL_argerror(L, arg, lua_pushfstring(L, "%s has been closed", tname));
-    return *p;
+    return o->ptr;
+}
+
+void *dfle_lua_object_ptr(lua_State *L, int idx)
+{
+    dfle_lua_object *o = lua_touserdata(L, idx);
+    return o == NULL || is_closed(o) ? NULL : o->ptr;
 }
 
 dfle_channel *dfle_lua_check_channel(lua_State *L, int arg)

@@ -1,13 +1,14 @@
 /*
  * lua_util.c - the pieces every binding file uses: checked option
- * tables, error raising, numbers as text, tables and arrays, slope-area
- * data.
+ * tables, error raising, numbers as text, tables and arrays, text built
+ * from pieces, slope-area data.
  */
 #include "lua/core/dfle_lua.h"
 
 #include <math.h>
 #include <stdio.h>
 #include <string.h>
+#include <time.h>
 #include "dfle/plausible.h"
 
 /* Format the list of known keys into the message buffer for an
@@ -213,6 +214,10 @@ size_t dfle_lua_slope_area(lua_State *L, int arg, const char *fn, const double *
      * own pairs through p:slope_area(), a table read like a user's. --- */
     if (luaL_testudata(L, arg, "dfle.profile") != NULL ||
         luaL_testudata(L, arg, "dfle.landscape") != NULL) { /* lua_landscape.c: channel cells */
+        /* Closed, it would fail inside the call below, which has no
+         * position of the script's to give. */
+        dfle_lua_check_object(L, arg, luaL_testudata(L, arg, "dfle.profile") != NULL
+                                          ? "dfle.profile" : "dfle.landscape");
         lua_getfield(L, arg, "slope_area");
         lua_pushvalue(L, arg);
         lua_call(L, 1, 1);
@@ -325,4 +330,90 @@ void dfle_lua_warn(lua_State *L, const char *fn, const char *msg)
     lua_pushfstring(L, "%sdfle.%s: %s", lua_tostring(L, -1), fn, msg);
     lua_warning(L, lua_tostring(L, -1), 0);
     lua_pop(L, 2);
+}
+
+const char *dfle_lua_push_history(lua_State *L)
+{
+    char when[32];
+    time_t now = time(NULL);
+    struct tm utc;
+    luaL_Buffer b;
+    lua_Integer lo = 0, hi;
+
+    if (gmtime_r(&now, &utc) == NULL || strftime(when, sizeof when, "%Y-%m-%dT%H:%M:%SZ", &utc) == 0)
+        snprintf(when, sizeof when, "(unknown time)");
+    int a;
+    lua_getglobal(L, "arg");
+    a = lua_gettop(L);
+    if (lua_istable(L, a)) {
+        while (lo > -64 && lua_rawgeti(L, a, lo - 1) == LUA_TSTRING) {
+            lua_pop(L, 1);
+            lo--;
+        }
+        lua_pop(L, 1);
+    }
+    luaL_buffinit(L, &b);
+    luaL_addstring(&b, when);
+    luaL_addstring(&b, ":");
+    if (lua_istable(L, a)) {
+        hi = (lua_Integer)lua_rawlen(L, a);
+        for (lua_Integer i = lo; i <= hi && i - lo < 256; i++) {
+            if (lua_rawgeti(L, a, i) == LUA_TSTRING) {
+                luaL_addchar(&b, ' ');
+                luaL_addvalue(&b);
+            } else {
+                lua_pop(L, 1);
+            }
+        }
+    } else {
+        luaL_addstring(&b, " dfle (embedded)");
+    }
+    luaL_pushresult(&b);
+    lua_remove(L, -2);
+    return lua_tostring(L, -1);
+}
+
+void dfle_lua_text_init(lua_State *L, dfle_lua_text *p)
+{
+    lua_newtable(L);
+    p->t = lua_gettop(L);
+    p->k = 0;
+}
+
+void dfle_lua_text_add(lua_State *L, dfle_lua_text *p)
+{
+    lua_rawseti(L, p->t, ++p->k);
+}
+
+void dfle_lua_text_str(lua_State *L, dfle_lua_text *p, const char *s)
+{
+    lua_pushstring(L, s);
+    dfle_lua_text_add(L, p);
+}
+
+void dfle_lua_text_finish(lua_State *L, dfle_lua_text *p)
+{
+    luaL_Buffer b;
+    lua_settop(L, p->t);
+    luaL_buffinit(L, &b);
+    for (lua_Integer k = 1; k <= p->k; k++) {
+        lua_rawgeti(L, p->t, k);
+        luaL_addvalue(&b);
+    }
+    luaL_pushresult(&b);
+    lua_replace(L, p->t);
+}
+
+const char *dfle_lua_opt_string(lua_State *L, int idx, const char *key, const char *fn)
+{
+    const char *s = NULL;
+    if (lua_istable(L, idx)) {
+        int t = lua_getfield(L, idx, key);
+        if (t != LUA_TNIL && t != LUA_TSTRING)
+            luaL_error(L, "dfle.%s: parameter '%s' must be a string, got %s", fn, key,
+                       luaL_typename(L, -1));
+        s = t == LUA_TNIL ? NULL : dfle_lua_check_string(L, -1, fn, key); /* the table holds it */
+        lua_pop(L, 1);
+    }
+    return s;
 }

@@ -44,6 +44,7 @@
 static int run_sweep(lua_law *ll, int op, const dfle_law_ctx *ctx, const double *F_in,
                      double *out, dfle_error *err)
 {
+    int st;
     if (ctx->n == 0)
         return DFLE_OK;
     if (ll->spec_valid && !ll->busy) {
@@ -54,16 +55,15 @@ static int run_sweep(lua_law *ll, int op, const dfle_law_ctx *ctx, const double 
             return DFLE_OK;
         }
     }
-    if (ll->busy)
-        return dfle_error_set(err, DFLE_ECALLBACK,
-                              "law.%s: the law was used again from inside its own functions",
-                              ll->sh.name);
-    if (ll->compile && ll->cstate[op] >= 0) {
-        int st = ll_compiled_sweep(ll, op, ctx, F_in, out, err);
-        if (st != TRY_LUA)
-            return st;
-    }
-    return ll_interpreted_sweep(ll, op, ctx, F_in, out, err);
+    if ((st = dfle_lua_shell_enter(&ll->sh, "functions", err)) != DFLE_OK)
+        return st;
+    st = TRY_LUA;
+    if (ll->compile && ll->cstate[op] >= 0)
+        st = ll_compiled_sweep(ll, op, ctx, F_in, out, err);
+    if (st == TRY_LUA)
+        st = ll_interpreted_sweep(ll, op, ctx, F_in, out, err);
+    dfle_lua_shell_leave(&ll->sh);
+    return st;
 }
 
 static int ll_flow_factor(void *state, const dfle_law_ctx *ctx, double *F, dfle_error *err)
@@ -94,6 +94,7 @@ static int ll_integrand(void *state, double h, double v, double lambda, double *
                         dfle_error *err)
 {
     lua_law *ll = state;
+    int st;
 
     if (ll->g_kind == G_POWER) {
         double r = ll->gh != 0 ? pow(h, ll->gh) : 1.0;
@@ -109,12 +110,18 @@ static int ll_integrand(void *state, double h, double v, double lambda, double *
                               "%s: the law has no integrand, which a time-resolved router needs: "
                               "give integrand = { h = beta } (h^beta, as the power law) or a "
                               "function", ll->sh.who);
-    if (ll->compile && ll->gstate >= 0) {
-        int st = ll_compiled_integrand(ll, h, v, lambda, g, err);
-        if (st != TRY_LUA)
-            return st;
-    }
-    return ll_lua_integrand(ll, h, v, lambda, g, err);
+    /* Called from inside its own functions (through another model's
+     * routing), it would reset the thread's stack under the running
+     * call. */
+    if ((st = dfle_lua_shell_enter(&ll->sh, "functions", err)) != DFLE_OK)
+        return st;
+    st = TRY_LUA;
+    if (ll->compile && ll->gstate >= 0)
+        st = ll_compiled_integrand(ll, h, v, lambda, g, err);
+    if (st == TRY_LUA)
+        st = ll_lua_integrand(ll, h, v, lambda, g, err);
+    dfle_lua_shell_leave(&ll->sh);
+    return st;
 }
 
 static void ll_destroy(void *state)

@@ -43,8 +43,9 @@ enum { O_H, O_V, O_T_P, O_M, O_Q, O_TAU, O_THETA, N_OUT };
 typedef struct lua_router {
     dfle_lua_shell sh;   /* the thread (user value 1 of the router), name, who */
     dfle_router_ops ops; /* named after the user's router */
-    /* The call in progress. */
-    int busy;
+    /* The call in progress (set only once dfle_lua_shell_enter let it
+     * start: a nested route would otherwise point these at another
+     * model's network and flow under the running sweep). */
     const dfle_network *net;
     const double *S;   /* route: n slopes, by node; node_flow: &s */
     size_t node;       /* node_flow: the node; route: ALL_NODES */
@@ -174,16 +175,11 @@ static int sweep(lua_State *T)
     return 0;
 }
 
+/* The sweep, for an op that dfle_lua_shell_enter let start. */
 static int run_sweep(lua_router *r, dfle_error *err)
 {
-    int st;
-    if (r->busy)
-        return dfle_error_set(err, DFLE_ECALLBACK,
-                              "router.%s: the router was used again from inside its own flow()",
-                              r->sh.name);
-    r->busy = 1;
-    st = dfle_lua_shell_sweep(&r->sh, SLOT_COUNT, SLOT_SWEEP, "error in flow()", err);
-    r->busy = 0;
+    int st = dfle_lua_shell_sweep(&r->sh, SLOT_COUNT, SLOT_SWEEP, "error in flow()", err);
+    dfle_lua_shell_leave(&r->sh);
     return st;
 }
 
@@ -198,6 +194,8 @@ static int lr_route(void *state, const dfle_network *net, const double *S, dfle_
     if (flow->n != n)
         return dfle_error_set(err, DFLE_EINVAL, "router.%s: flow has %zu nodes, network %zu",
                               r->sh.name, flow->n, n);
+    if ((st = dfle_lua_shell_enter(&r->sh, "flow()", err)) != DFLE_OK)
+        return st;
     flow->time_resolved = 0;
     r->net = net, r->S = S, r->node = ALL_NODES, r->flow = flow;
     if ((st = run_sweep(r, err)) != DFLE_OK)
@@ -222,6 +220,8 @@ static int lr_node_flow(void *state, const dfle_network *net, size_t i, double S
     zero_node(node, 0);
     if (!(S > 0))
         return DFLE_OK;
+    if ((st = dfle_lua_shell_enter(&r->sh, "flow()", err)) != DFLE_OK)
+        return st;
     r->net = net, r->S = &S, r->node = i, r->flow = node;
     if ((st = run_sweep(r, err)) != DFLE_OK)
         return st;

@@ -34,8 +34,58 @@
 
 #include "lua/ensemble/lua_ensemble_internal.h"
 
-static const char calls_key = 'c';
-static const char stop_key = 'x'; /* the error value that stops a worker's script */
+/* The counts of the result table at res into rec's current section, and
+ * its rows per status as section "status". */
+static void record_counts(lua_State *L, dfle_record *rec, int res)
+{
+    static const char *const keys[] = {"n", "count", "ok", "failed", "ran"};
+    for (int k = 0; k < 5; k++) {
+        lua_getfield(L, res, keys[k]);
+        dfle_record_number(rec, keys[k], lua_tonumber(L, -1), NULL);
+        lua_pop(L, 1);
+    }
+    lua_getfield(L, res, "complete");
+    dfle_record_bool(rec, "complete", lua_toboolean(L, -1));
+    lua_getfield(L, res, "status");
+    dfle_record_section(rec, "status", NULL);
+    dfle_lua_record_table(L, rec, -1, 0);
+    lua_pop(L, 2);
+}
+
+/* The JSON record of a finished dfle.ensemble (the table at 1, its
+ * context at ctx, its result at res): what ran it, the design, the
+ * options and the counts.  The CSV file's own comment lines carry only
+ * what is the same for every run (the date and command are here). */
+static void ensemble_record(lua_State *L, int ctx, int res, const char *path, int workers)
+{
+    const dfle_lua_ensemble_host *host = dfle_lua_ens_host(L);
+    dfle_record *rec = dfle_lua_push_record(L, "dfle.ensemble: one row per sample, in index "
+                                               "order");
+    const char *jpath;
+    int top = lua_gettop(L);
+
+    dfle_record_section(rec, "ensemble", NULL);
+    lua_getfield(L, ctx, "meta");
+    dfle_record_text(rec, "meta", lua_tostring(L, -1));
+    dfle_record_number(rec, "workers", workers, NULL);
+    if (host != NULL && host->shard_n > 1) {
+        char shard[64];
+        snprintf(shard, sizeof shard, "%zu/%zu", host->shard_i, host->shard_n);
+        dfle_record_text(rec, "shard", shard);
+    }
+    record_counts(L, rec, res);
+    for (int k = 0; k < 2; k++) {
+        const char *key = k == 0 ? "run" : "fit";
+        if (lua_getfield(L, 1, key) == LUA_TTABLE) {
+            dfle_record_section(rec, key, NULL);
+            dfle_lua_record_table(L, rec, -1, 1);
+        }
+        lua_pop(L, 1);
+    }
+    jpath = dfle_lua_record_path(L, rec, 1, path, "ensemble");
+    dfle_lua_record_done(L, rec, path, jpath);
+    lua_settop(L, top - 1);
+}
 
 /* ------------------------------------------------------------------ */
 /* dfle.ensemble                                                       */
@@ -43,10 +93,9 @@ static const char stop_key = 'x'; /* the error value that stops a worker's scrip
 static int l_ensemble(lua_State *L)
 {
     const dfle_lua_ensemble_host *host = dfle_lua_ens_host(L);
-    worker_mode *wm;
     lua_Integer call;
     spec s;
-    int ctx, nw;
+    int ctx, nw, role;
     run_box *box;
     dfle_error err;
     size_t total, ran = 0;
@@ -54,29 +103,13 @@ static int l_ensemble(lua_State *L)
     const char *path;
 
     lua_settop(L, 1);
-    lua_rawgetp(L, LUA_REGISTRYINDEX, &calls_key);
-    call = lua_tointeger(L, -1) + 1;
-    lua_pop(L, 1);
-    lua_pushinteger(L, call);
-    lua_rawsetp(L, LUA_REGISTRYINDEX, &calls_key);
-    lua_rawgetp(L, LUA_REGISTRYINDEX, &dfle_lua_ens_worker_key);
-    wm = lua_touserdata(L, -1);
-    lua_pop(L, 1);
-
-    if (wm != NULL && call >= wm->target) {
-        /* A worker replaying the script: hand the table over and stop. */
-        if (call == wm->target) {
-            lua_pushvalue(L, 1);
-            lua_rawsetp(L, LUA_REGISTRYINDEX, &dfle_lua_ens_spec_key);
-        }
-        lua_pushlightuserdata(L, (void *)&stop_key);
-        return lua_error(L);
-    }
+    /* A worker replaying the script stops in here at its own call. */
+    role = dfle_lua_par_enter(L, DFLE_LUA_PAR_ENSEMBLE, 1, &call);
     dfle_lua_ens_read_spec(L, 1, "ensemble", &s, host);
     ctx = lua_gettop(L);
     lua_getfield(L, ctx, "out");
     path = lua_tostring(L, -1);
-    if (wm != NULL) {
+    if (role == DFLE_LUA_PAR_EARLIER) {
         /* An earlier ensemble of the script, finished by the main state. */
         dfle_lua_ens_push_result(L, "ensemble", path, host ? host->shard_i : 0, host ? host->shard_n : 0, 0);
         return 1;
@@ -85,10 +118,11 @@ static int l_ensemble(lua_State *L)
     dfle_lua_check_interrupt(L, "ensemble");
     started = dfle_lua_ens_now();
     box = dfle_lua_ens_new_box(L);
+    lua_getfield(L, ctx, "comments");
     lua_getfield(L, ctx, "meta");
     lua_getfield(L, ctx, "header");
-    if (dfle_ens_file_open(path, lua_tostring(L, -2), lua_tostring(L, -1), (size_t)s.n, s.resume,
-                           &box->file, &err) != DFLE_OK ||
+    if (dfle_ens_file_open(path, lua_tostring(L, -2), lua_tostring(L, -3), lua_tostring(L, -1),
+                           (size_t)s.n, s.resume, &box->file, &err) != DFLE_OK ||
         dfle_ens_queue_new((size_t)s.n, host ? host->shard_i : 0, host ? host->shard_n : 0,
                            box->file, s.limit, &box->queue, &err) != DFLE_OK)
         return luaL_error(L, "dfle.ensemble: %s", err.msg);
@@ -102,12 +136,12 @@ static int l_ensemble(lua_State *L)
                       path, dfle_ens_file_ndone(box->file));
 
     nw = host != NULL && host->workers > 0 ? host->workers : s.workers > 0 ? s.workers : dfle_lua_ens_cores();
-    if (host == NULL || host->open_state == NULL)
+    if (host == NULL || host->open_state == NULL || role == DFLE_LUA_PAR_NESTED)
         nw = 1;
     if ((size_t)nw > total)
         nw = (int)(total > 0 ? total : 1);
 
-    if (host != NULL && host->remote != NULL && total > 0) {
+    if (host != NULL && host->remote != NULL && total > 0 && role == DFLE_LUA_PAR_RUN) {
         char msg[DFLE_ERROR_MSG_MAX];
         size_t done = 0;
         int r = host->remote(host->ud, (long long)call, lua_tostring(L, -2), lua_tostring(L, -1),
@@ -129,7 +163,10 @@ static int l_ensemble(lua_State *L)
         size_t i, failed = 0;
         double t0 = dfle_lua_ens_now();
         while (!dfle_lua_interrupted(L) && dfle_ens_queue_next(box->queue, &i)) {
+            /* Parallel calls inside a sample run here, in this state. */
+            dfle_lua_par_depth(L, +1);
             failed += (size_t)dfle_lua_ens_sample_row(L, ctx, i);
+            dfle_lua_par_depth(L, -1);
             /* A sample cut short by the interrupt is not a result: its
              * row is dropped, and a resumed run does it again. */
             if (dfle_lua_interrupted(L))
@@ -179,6 +216,7 @@ static int l_ensemble(lua_State *L)
                   ran == 1 ? "" : "s", dfle_lua_ens_now() - started);
     dfle_lua_ens_push_result(L, "ensemble", path, host ? host->shard_i : 0, host ? host->shard_n : 0,
                 (lua_Integer)ran);
+    ensemble_record(L, ctx, lua_gettop(L), path, nw);
     return 1;
 }
 
@@ -187,7 +225,7 @@ static int l_gather(lua_State *L)
 {
     double shards = 0;
     const dfle_lua_param nums[] = {{"shards", &shards}};
-    static const char *const other[] = {"files", "out", NULL};
+    static const char *const other[] = {"files", "out", "record", NULL};
     const char **files;
     size_t nf;
     dfle_error err;
@@ -227,13 +265,58 @@ static int l_gather(lua_State *L)
     if (dfle_ens_gather(files, nf, out, NULL, &err) != DFLE_OK)
         return luaL_error(L, "dfle.gather: %s", err.msg);
     dfle_lua_ens_push_result(L, "gather", out, 0, 0, 0);
+    {
+        int res = lua_gettop(L);
+        dfle_record *rec = dfle_lua_push_record(L, "dfle.gather: the rows of the shards, in "
+                                                   "index order");
+        const char *jpath;
+        dfle_record_section(rec, "gather", NULL);
+        dfle_record_list(rec, "from", files, nf);
+        record_counts(L, rec, res);
+        jpath = dfle_lua_record_path(L, rec, 1, out, "gather");
+        dfle_lua_record_done(L, rec, out, jpath);
+        lua_settop(L, res);
+    }
     return 1;
+}
+
+/* The plain dfle.pawn (upvalue 1 of l_pawn_ensemble) on the nargs values
+ * on top of the stack, leaving nres results; its errors get the
+ * script's position here (called from C, they carry none). */
+static void plain_pawn(lua_State *L, int nargs, int nres)
+{
+    lua_pushvalue(L, lua_upvalueindex(1));
+    lua_insert(L, -nargs - 1);
+    if (lua_pcall(L, nargs, nres, 0) != LUA_OK) {
+        if (lua_type(L, -1) == LUA_TSTRING) {
+            luaL_where(L, 1);
+            lua_insert(L, -2);
+            lua_concat(L, 2);
+        }
+        lua_error(L);
+    }
+}
+
+/* The array of names at idx: a table of strings (the script's options,
+ * or the result table, which a script may have changed). */
+static void check_names(lua_State *L, int idx, const char *what)
+{
+    lua_Integer n;
+    if (!lua_istable(L, idx))
+        luaL_error(L, "dfle.pawn: %s must be an array of names, got %s", what,
+                   dfle_lua_typename(L, idx));
+    n = (lua_Integer)lua_rawlen(L, idx);
+    for (lua_Integer i = 1; i <= n; i++) {
+        if (lua_rawgeti(L, idx, i) != LUA_TSTRING)
+            luaL_error(L, "dfle.pawn: %s[%d] must be a name, got %s", what, (int)i,
+                       dfle_lua_typename(L, -1));
+        lua_pop(L, 1);
+    }
 }
 
 /* dfle.pawn(ens, {outputs =, inputs =, S =, ...}): PAWN of each output
  * on the rows with status "ok"; anything else goes to the plain
- * dfle.pawn (upvalue 1), whose errors get the script's position here
- * (called from C, they carry none). */
+ * dfle.pawn. */
 static int l_pawn_ensemble(lua_State *L)
 {
     static const char *const keys[] = {"outputs", "inputs", NULL};
@@ -248,43 +331,39 @@ static int l_pawn_ensemble(lua_State *L)
         lua_pop(L, 2);
     }
     if (!is_ens) {
-        lua_pushvalue(L, lua_upvalueindex(1));
-        lua_insert(L, 1);
-        if (lua_pcall(L, lua_gettop(L) - 1, LUA_MULTRET, 0) != LUA_OK) {
-            if (lua_type(L, -1) == LUA_TSTRING) {
-                luaL_where(L, 1);
-                lua_insert(L, -2);
-                lua_concat(L, 2);
-            }
-            return lua_error(L);
-        }
+        plain_pawn(L, lua_gettop(L), LUA_MULTRET);
         return lua_gettop(L);
     }
     lua_settop(L, 2);
     dfle_lua_read_params(L, 2, "pawn", nums, 4, keys);
+    /* The result is a plain table the script may have changed: every
+     * part used is checked before it is used. */
     lua_getfield(L, 1, "data");
     data = lua_gettop(L);
+    if (!lua_istable(L, data))
+        return luaL_error(L, "dfle.pawn: the ensemble's 'data' is not a table (got %s)",
+                          dfle_lua_typename(L, data));
     if (!lua_istable(L, 2) || lua_getfield(L, 2, "outputs") == LUA_TNIL) {
         lua_settop(L, data);
         lua_getfield(L, 1, "outputs");
     }
     outs = lua_gettop(L);
-    if (!lua_istable(L, outs))
-        return luaL_error(L, "dfle.pawn: parameter 'outputs' must be an array of output names");
+    check_names(L, outs, "outputs");
     if (!lua_istable(L, 2) || lua_getfield(L, 2, "inputs") == LUA_TNIL) {
         /* default: the numeric parameters */
         lua_Integer nin, j = 0;
         lua_settop(L, outs);
         lua_getfield(L, 1, "inputs");
-        nin = luaL_len(L, -1);
+        check_names(L, -1, "the ensemble's inputs");
+        nin = (lua_Integer)lua_rawlen(L, -1);
         lua_newtable(L);
         for (lua_Integer c = 1; c <= nin; c++) {
             int numeric = 1;
             lua_Integer nr;
-            lua_geti(L, -2, c);
+            lua_rawgeti(L, -2, c);
             lua_pushvalue(L, -1);
-            lua_gettable(L, data);
-            nr = (lua_Integer)lua_rawlen(L, -1);
+            numeric = lua_gettable(L, data) == LUA_TTABLE;
+            nr = numeric ? (lua_Integer)lua_rawlen(L, -1) : 0;
             for (lua_Integer r = 1; r <= nr && numeric; r++) {
                 numeric = lua_geti(L, -1, r) == LUA_TNUMBER;
                 lua_pop(L, 1);
@@ -298,16 +377,17 @@ static int l_pawn_ensemble(lua_State *L)
         lua_remove(L, -2);
     }
     ins = lua_gettop(L);
-    if (!lua_istable(L, ins))
-        return luaL_error(L, "dfle.pawn: parameter 'inputs' must be an array of parameter names");
+    check_names(L, ins, "inputs");
     /* Row numbers with status ok. */
     lua_newtable(L);
     okrows = lua_gettop(L);
-    lua_getfield(L, data, "status");
+    if (lua_getfield(L, data, "status") != LUA_TTABLE)
+        return luaL_error(L, "dfle.pawn: the ensemble's data.status is not a table (got %s)",
+                          dfle_lua_typename(L, -1));
     count = (lua_Integer)lua_rawlen(L, -1);
     for (lua_Integer r = 1; r <= count; r++) {
-        lua_geti(L, -1, r);
-        if (strcmp(lua_tostring(L, -1), "ok") == 0) {
+        lua_rawgeti(L, -1, r);
+        if (lua_type(L, -1) == LUA_TSTRING && strcmp(lua_tostring(L, -1), "ok") == 0) {
             lua_pushinteger(L, r);
             lua_rawseti(L, okrows, ++k);
         }
@@ -318,17 +398,16 @@ static int l_pawn_ensemble(lua_State *L)
     si = lua_gettop(L);
     lua_newtable(L);
     info = lua_gettop(L);
-    for (lua_Integer o = 1, no = luaL_len(L, outs); o <= no; o++) {
+    for (lua_Integer o = 1, no = (lua_Integer)lua_rawlen(L, outs); o <= no; o++) {
         int cols, base = lua_gettop(L);
-        lua_pushvalue(L, lua_upvalueindex(1));
         lua_createtable(L, 0, 8);
         lua_newtable(L);
         cols = lua_gettop(L);
-        for (lua_Integer c = 0, nin = luaL_len(L, ins); c <= nin; c++) {
+        for (lua_Integer c = 0, nin = (lua_Integer)lua_rawlen(L, ins); c <= nin; c++) {
             if (c == 0)
-                lua_geti(L, outs, o);
+                lua_rawgeti(L, outs, o);
             else
-                lua_geti(L, ins, c);
+                lua_rawgeti(L, ins, c);
             lua_pushvalue(L, -1);
             if (lua_gettable(L, data) != LUA_TTABLE)
                 return luaL_error(L, "dfle.pawn: the ensemble has no column '%s'",
@@ -342,18 +421,18 @@ static int l_pawn_ensemble(lua_State *L)
             lua_remove(L, -2);
             lua_settable(L, cols);
         }
-        lua_setfield(L, base + 2, "data");
-        lua_pushvalue(L, ins), lua_setfield(L, base + 2, "inputs");
-        lua_geti(L, outs, o), lua_setfield(L, base + 2, "output");
-        lua_pushnumber(L, S), lua_setfield(L, base + 2, "S");
-        lua_pushnumber(L, boot), lua_setfield(L, base + 2, "bootstrap");
-        lua_pushnumber(L, conf), lua_setfield(L, base + 2, "conf");
-        lua_pushnumber(L, seed), lua_setfield(L, base + 2, "seed");
-        lua_call(L, 1, 2);
-        lua_geti(L, outs, o);
+        lua_setfield(L, base + 1, "data");
+        lua_pushvalue(L, ins), lua_setfield(L, base + 1, "inputs");
+        lua_rawgeti(L, outs, o), lua_setfield(L, base + 1, "output");
+        lua_pushnumber(L, S), lua_setfield(L, base + 1, "S");
+        lua_pushnumber(L, boot), lua_setfield(L, base + 1, "bootstrap");
+        lua_pushnumber(L, conf), lua_setfield(L, base + 1, "conf");
+        lua_pushnumber(L, seed), lua_setfield(L, base + 1, "seed");
+        plain_pawn(L, 1, 2);
+        lua_rawgeti(L, outs, o);
         lua_insert(L, -2);
         lua_settable(L, info);
-        lua_geti(L, outs, o);
+        lua_rawgeti(L, outs, o);
         lua_insert(L, -2);
         lua_settable(L, si);
         lua_settop(L, base);
@@ -382,6 +461,7 @@ void dfle_lua_open_ensemble(lua_State *L)
     if (luaL_newmetatable(L, RESULT_MT)) {
         lua_pushliteral(L, RESULT_MT);
         lua_setfield(L, -2, "__name");
+        dfle_lua_ens_result_methods(L); /* ens:write_netcdf */
     }
     lua_pop(L, 1);
     lua_pushcfunction(L, l_ensemble);

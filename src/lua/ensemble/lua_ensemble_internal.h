@@ -4,6 +4,11 @@
  * lua_ensemble_sample.c (the ensemble's table, one sample, rows and
  * results), lua_ensemble_pool.c (worker threads and their states) and,
  * below those, lua_ensemble_host.c (a state's host, registry keys, clock).
+ *
+ * The replay machinery (a worker state that runs the script up to the
+ * k-th parallel call and is then handed that call's table) serves every
+ * parallel call of the binding: dfle.ensemble here and dfle.invert
+ * (src/lua/invert/), which include this header for it.
  */
 #ifndef DFLE_LUA_ENSEMBLE_INTERNAL_H
 #define DFLE_LUA_ENSEMBLE_INTERNAL_H
@@ -56,11 +61,40 @@ typedef struct pool {
     const volatile sig_atomic_t *interrupt;
 } pool;
 
+/* The kinds of parallel call; each counts its calls separately. */
+enum { DFLE_LUA_PAR_ENSEMBLE, DFLE_LUA_PAR_INVERT, DFLE_LUA_PAR_KINDS };
+
+/* What a worker state replays to: the target-th call of `kind`.  Once
+ * that call's table is handed over, `serving` is set: parallel calls
+ * made while serving (inside a sample's build or measure) run in the
+ * worker's own state, one after the other. */
 typedef struct worker_mode {
+    int kind;
     lua_Integer target;
+    int serving;
 } worker_mode;
 
+/* What dfle_lua_par_enter decides for a parallel call. */
+enum {
+    DFLE_LUA_PAR_RUN,     /* run it here, on worker threads if it likes      */
+    DFLE_LUA_PAR_NESTED,  /* run it here, in this state only (inside another) */
+    DFLE_LUA_PAR_EARLIER  /* a replaying worker passes an earlier call: return
+                           * that call's finished result                      */
+};
+
 /* lua_ensemble_host.c; dfle_lua_set_ensemble_host is in lua_ensemble.h. */
+
+/* Count a parallel call of `kind` (its table at arg) and decide what to
+ * do with it (above); *call receives its number among the calls of its
+ * kind (0 for a nested call, which is not counted).  When it is the
+ * target of a replaying worker, the table is handed over and the script
+ * stopped: this does not return. */
+int dfle_lua_par_enter(lua_State *L, int kind, int arg, lua_Integer *call);
+/* Parallel calls in progress in this state (a sample being run, an
+ * inversion evaluating): calls made meanwhile are nested. */
+void dfle_lua_par_depth(lua_State *L, int delta);
+/* The name of a kind in messages: "dfle.ensemble", "dfle.invert". */
+const char *dfle_lua_par_name(int kind);
 const dfle_lua_ensemble_host *dfle_lua_ens_host(lua_State *L);
 double dfle_lua_ens_now(void);
 int dfle_lua_ens_box_gc(lua_State *L);
@@ -72,6 +106,19 @@ int dfle_lua_ens_sample_row(lua_State *L, int ctx, size_t i);
 void dfle_lua_ens_push_result(lua_State *L, const char *fn, const char *path, size_t shard_i,
                               size_t shard_n, lua_Integer ran);
 int dfle_lua_ens_cores(void);
+/* Set __index of the result metatable (at the top): ens:write_netcdf. */
+void dfle_lua_ens_result_methods(lua_State *L);
+
+/* lua_ensemble_pool.c: a worker state from the host (one thread at a
+ * time, as the host requires), and the replay in it: run the script (the
+ * chunk and nargs arguments on L's stack) up to the target-th call of
+ * `kind`, then call serve(spec, ud) in protected mode with that call's
+ * table and a light userdata ud.  0, or -1 with a message in msg. */
+lua_State *dfle_lua_par_open(const dfle_lua_ensemble_host *host, int *nargs, char *msg,
+                             size_t msglen);
+int dfle_lua_par_replay(lua_State *L, int nargs, int kind, lua_Integer target,
+                        const dfle_lua_ensemble_host *host, lua_CFunction serve, void *ud,
+                        char *msg, size_t msglen);
 void dfle_lua_ens_run_threads(lua_State *L, pool *pl, int nw, size_t total);
 
 #endif

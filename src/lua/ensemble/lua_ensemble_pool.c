@@ -1,7 +1,9 @@
 /*
  * lua_ensemble_pool.c - worker threads, each with a Lua state of its
  * own made by the host, replaying the script up to its ensemble call and
- * then running samples from a shared queue (lua_ensemble.c).
+ * then running samples from a shared queue (lua_ensemble.c).  The replay
+ * itself (dfle_lua_par_open, dfle_lua_par_replay) serves dfle.invert's
+ * workers too (src/lua/invert/lua_invert_pool.c).
  */
 #include <math.h>
 #include <pthread.h>
@@ -40,24 +42,93 @@ typedef struct feed {
     void *ud;
 } feed;
 
-/* worker_main(feed, chunk, args...): runs protected in the worker's state. */
-static int worker_main(lua_State *L)
+/* replay_main(job, chunk, args...): runs protected in the worker's state. */
+typedef struct replay_job {
+    int kind;
+    lua_CFunction serve;
+    void *ud;
+} replay_job;
+
+static int replay_main(lua_State *L)
 {
-    const feed *fd = lua_touserdata(L, 1);
-    int nargs = lua_gettop(L) - 2, st, ctx;
-    spec s;
-    size_t i;
-    char msg[DFLE_ERROR_MSG_MAX];
+    const replay_job *jb = lua_touserdata(L, 1);
+    int nargs = lua_gettop(L) - 2, st;
+    worker_mode *wm;
 
     st = lua_pcall(L, nargs, 0, 0);
     if (lua_rawgetp(L, LUA_REGISTRYINDEX, &dfle_lua_ens_spec_key) != LUA_TTABLE) {
         if (st != LUA_OK)
-            return luaL_error(L, "worker: the script failed before reaching dfle.ensemble: %s",
+            return luaL_error(L, "worker: the script failed before reaching %s: %s",
+                              dfle_lua_par_name(jb->kind),
                               lua_tostring(L, -2) ? lua_tostring(L, -2) : "(no message)");
-        return luaL_error(L, "worker: the script ended without reaching the same dfle.ensemble "
-                             "call (the script must do the same thing on every run up to it)");
+        return luaL_error(L, "worker: the script ended without reaching the same %s call (the "
+                             "script must do the same thing on every run up to it)",
+                          dfle_lua_par_name(jb->kind));
     }
-    dfle_lua_ens_read_spec(L, lua_gettop(L), "ensemble", &s, fd->host);
+    lua_rawgetp(L, LUA_REGISTRYINDEX, &dfle_lua_ens_worker_key);
+    wm = lua_touserdata(L, -1);
+    lua_pop(L, 1);
+    wm->serving = 1;
+    lua_pushcfunction(L, jb->serve);
+    lua_insert(L, -2);
+    lua_pushlightuserdata(L, jb->ud);
+    lua_call(L, 2, 0);
+    return 0;
+}
+
+int dfle_lua_par_replay(lua_State *L, int nargs, int kind, lua_Integer target,
+                        const dfle_lua_ensemble_host *host, lua_CFunction serve, void *ud,
+                        char *msg, size_t msglen)
+{
+    worker_mode wm;
+    replay_job jb;
+    int st = 0;
+
+    wm.kind = kind;
+    wm.target = target;
+    wm.serving = 0;
+    jb.kind = kind;
+    jb.serve = serve;
+    jb.ud = ud;
+    dfle_lua_set_ensemble_host(L, host);
+    lua_pushlightuserdata(L, &wm);
+    lua_rawsetp(L, LUA_REGISTRYINDEX, &dfle_lua_ens_worker_key);
+    /* stack: chunk, args -> replay_main, job, chunk, args */
+    lua_pushcfunction(L, replay_main);
+    lua_insert(L, 1);
+    lua_pushlightuserdata(L, &jb);
+    lua_insert(L, 2);
+    if (lua_pcall(L, nargs + 2, 0, 0) != LUA_OK) {
+        const char *m = lua_tostring(L, -1);
+        snprintf(msg, msglen, "%s", m ? m : "worker failed");
+        st = -1;
+    }
+    lua_pushnil(L);
+    lua_rawsetp(L, LUA_REGISTRYINDEX, &dfle_lua_ens_worker_key);
+    return st;
+}
+
+lua_State *dfle_lua_par_open(const dfle_lua_ensemble_host *host, int *nargs, char *msg,
+                             size_t msglen)
+{
+    lua_State *L;
+    pthread_mutex_lock(&open_lock);
+    L = host->open_state(host->ud, nargs, msg, msglen);
+    pthread_mutex_unlock(&open_lock);
+    return L;
+}
+
+/* An ensemble worker, once handed its table (serve(spec, feed)): build
+ * the same design and run the samples the feed gives. */
+static int ensemble_serve(lua_State *L)
+{
+    const feed *fd = lua_touserdata(L, 2);
+    spec s;
+    size_t i;
+    int ctx;
+    char msg[DFLE_ERROR_MSG_MAX];
+
+    dfle_lua_ens_read_spec(L, 1, "ensemble", &s, fd->host);
     ctx = lua_gettop(L);
     lua_getfield(L, ctx, "meta");
     lua_getfield(L, ctx, "header");
@@ -79,26 +150,8 @@ static int worker_main(lua_State *L)
  * the script in worker mode, then serve the feed.  0, or -1 with msg. */
 static int run_worker(lua_State *L, int nargs, const feed *fd, char *msg, size_t msglen)
 {
-    worker_mode wm;
-    wm.target = fd->target;
-    dfle_lua_set_ensemble_host(L, fd->host);
-    lua_pushlightuserdata(L, &wm);
-    lua_rawsetp(L, LUA_REGISTRYINDEX, &dfle_lua_ens_worker_key);
-    /* stack: chunk, args -> worker_main, feed, chunk, args */
-    lua_pushcfunction(L, worker_main);
-    lua_insert(L, 1);
-    lua_pushlightuserdata(L, (void *)fd);
-    lua_insert(L, 2);
-    if (lua_pcall(L, nargs + 2, 0, 0) != LUA_OK) {
-        const char *m = lua_tostring(L, -1);
-        snprintf(msg, msglen, "%s", m ? m : "worker failed");
-        lua_pushnil(L);
-        lua_rawsetp(L, LUA_REGISTRYINDEX, &dfle_lua_ens_worker_key);
-        return -1;
-    }
-    lua_pushnil(L);
-    lua_rawsetp(L, LUA_REGISTRYINDEX, &dfle_lua_ens_worker_key);
-    return 0;
+    return dfle_lua_par_replay(L, nargs, DFLE_LUA_PAR_ENSEMBLE, fd->target, fd->host,
+                               ensemble_serve, (void *)fd, msg, msglen);
 }
 
 int dfle_lua_ensemble_serve(lua_State *L, int nargs, long long call,
@@ -155,9 +208,7 @@ static void *worker_thread(void *arg)
     feed fd;
 
     msg[0] = '\0';
-    pthread_mutex_lock(&open_lock);
-    L = pl->host->open_state(pl->host->ud, &nargs, msg, sizeof msg);
-    pthread_mutex_unlock(&open_lock);
+    L = dfle_lua_par_open(pl->host, &nargs, msg, sizeof msg);
     if (L == NULL) {
         pool_fail(pl, msg[0] ? msg : "cannot create a worker's Lua state");
     } else {

@@ -13,6 +13,10 @@
 
 #include "lua/ensemble/lua_ensemble_internal.h"
 
+#ifndef DFLE_VERSION
+#define DFLE_VERSION "unknown"
+#endif
+
 /* ------------------------------------------------------------------ */
 /* C resources held while Lua code runs: freed by __gc if it raises.   */
 
@@ -50,39 +54,6 @@ static void check_column_name(lua_State *L, const char *fn, const char *what, co
         if (strcmp(name, reserved[k]) == 0)
             luaL_error(L, "dfle.%s: %s name '%s' is reserved for a column of the result", fn,
                        what, name);
-}
-
-/* Strings built from pieces: a table of strings joined at the end
- * (a luaL_Buffer cannot have other values pushed above it). */
-typedef struct pieces {
-    int t;
-    lua_Integer k;
-} pieces;
-
-static void pc_init(lua_State *L, pieces *p)
-{
-    lua_newtable(L);
-    p->t = lua_gettop(L);
-    p->k = 0;
-}
-static void pc_add(lua_State *L, pieces *p) { lua_rawseti(L, p->t, ++p->k); } /* pops */
-static void pc_str(lua_State *L, pieces *p, const char *s)
-{
-    lua_pushstring(L, s);
-    pc_add(L, p);
-}
-/* Replace the pieces table by the joined string; drop what is above. */
-static void pc_finish(lua_State *L, pieces *p)
-{
-    luaL_Buffer b;
-    lua_settop(L, p->t);
-    luaL_buffinit(L, &b);
-    for (lua_Integer k = 1; k <= p->k; k++) {
-        lua_rawgeti(L, p->t, k);
-        luaL_addvalue(&b);
-    }
-    luaL_pushresult(&b);
-    lua_replace(L, p->t);
 }
 
 static void push_number_text(lua_State *L, double v)
@@ -134,70 +105,70 @@ static void push_value_text(lua_State *L, int idx, int quote)
 /* Push the names of array `arr` joined by commas. */
 static void push_joined(lua_State *L, int arr)
 {
-    pieces pc;
-    pc_init(L, &pc);
+    dfle_lua_text pc;
+    dfle_lua_text_init(L, &pc);
     for (lua_Integer k = 1, n = (lua_Integer)lua_rawlen(L, arr); k <= n; k++) {
         if (k > 1)
-            pc_str(L, &pc, ",");
+            dfle_lua_text_str(L, &pc, ",");
         lua_geti(L, arr, k);
-        pc_add(L, &pc);
+        dfle_lua_text_add(L, &pc);
     }
-    pc_finish(L, &pc);
+    dfle_lua_text_finish(L, &pc);
 }
 
 /* The meta line: what identifies the ensemble (resume and gather check it). */
 static void push_meta(lua_State *L, const spec *s, int params, int names, int outputs,
                       int centered)
 {
-    pieces pc;
+    dfle_lua_text pc;
     char buf[96];
 
-    pc_init(L, &pc);
+    dfle_lua_text_init(L, &pc);
     snprintf(buf, sizeof buf, "# dfle.ensemble v1 n=%lld seed=%lld centered=%s inputs=",
              (long long)s->n, (long long)s->seed, centered ? "true" : "false");
-    pc_str(L, &pc, buf);
+    dfle_lua_text_str(L, &pc, buf);
     push_joined(L, names);
-    pc_add(L, &pc);
-    pc_str(L, &pc, " outputs=");
+    dfle_lua_text_add(L, &pc);
+    dfle_lua_text_str(L, &pc, " outputs=");
     push_joined(L, outputs);
-    pc_add(L, &pc);
-    pc_str(L, &pc, " design=");
+    dfle_lua_text_add(L, &pc);
+    dfle_lua_text_str(L, &pc, " design=");
     for (size_t k = 1; k <= s->nparams; k++) {
         int p;
         if (k > 1)
-            pc_str(L, &pc, ";");
+            dfle_lua_text_str(L, &pc, ";");
         lua_geti(L, names, (lua_Integer)k);
         lua_pushvalue(L, -1);
-        pc_add(L, &pc);
+        dfle_lua_text_add(L, &pc);
         lua_gettable(L, params);
         p = lua_gettop(L);
         if (lua_getfield(L, p, "values") == LUA_TTABLE) {
             int vals = lua_gettop(L);
-            pc_str(L, &pc, ":{");
+            dfle_lua_text_str(L, &pc, ":{");
             for (lua_Integer j = 1, nv = (lua_Integer)lua_rawlen(L, vals); j <= nv; j++) {
                 if (j > 1)
-                    pc_str(L, &pc, ",");
+                    dfle_lua_text_str(L, &pc, ",");
                 lua_geti(L, vals, j);
                 push_value_text(L, -1, 1);
-                pc_add(L, &pc);
+                dfle_lua_text_add(L, &pc);
                 lua_pop(L, 1);
             }
-            pc_str(L, &pc, "}");
+            dfle_lua_text_str(L, &pc, "}");
         } else {
-            pc_str(L, &pc, ":[");
+            dfle_lua_text_str(L, &pc, ":[");
             lua_geti(L, p, 1);
             push_number_text(L, lua_tonumber(L, -1));
-            pc_add(L, &pc);
-            pc_str(L, &pc, ",");
+            dfle_lua_text_add(L, &pc);
+            dfle_lua_text_str(L, &pc, ",");
             lua_geti(L, p, 2);
             push_number_text(L, lua_tonumber(L, -1));
-            pc_add(L, &pc);
+            dfle_lua_text_add(L, &pc);
             lua_getfield(L, p, "log");
-            pc_str(L, &pc, lua_toboolean(L, -1) ? ",log]" : "]");
+            dfle_lua_text_str(L, &pc, lua_toboolean(L, -1) ? ",log]" : "]");
         }
         lua_settop(L, p - 1);
     }
-    pc_finish(L, &pc);
+    dfle_lua_text_finish(L, &pc);
 }
 
 /* Shard file name: "dir/ens.csv" -> "dir/ens.shard-2-of-4.csv". */
@@ -217,7 +188,119 @@ void dfle_lua_ens_push_shard_path(lua_State *L, const char *out, size_t i, size_
 }
 
 static const char *const spec_keys[] = {"params", "order", "centered", "build", "measure",
-                                        "outputs", "out", "resume", "run", "fit", NULL};
+                                        "outputs", "out", "resume", "run", "fit", "units",
+                                        "record", NULL};
+
+/* Units of the outputs dfle computes (fit, run, derived); a script's
+ * `units` names those of its parameters and measured outputs. */
+static const struct { const char *name, *unit; } output_units[] = {
+    {"S_df", "-"},   {"A_df", "m^2"},   {"a2", "-"},      {"r2", "-"},       {"r2_log", "-"},
+    {"rmse", "-"},   {"rmse_log", "-"}, {"S_max", "-"},   {"S_ch", "-"},
+    {"S_max_minus_S_ch", "-"},          {"time", "yr"},   {"rate_ratio", "-"},
+    {"dt_min", "yr"}, {"dt_max", "yr"}, {"runout_A", "m^2"}, {"runout_x", "m"}};
+
+/* Push the unit of column `name` (nil if none is known): the script's
+ * `units` (table at units, may be 0) first, then dfle's own. */
+static void push_unit(lua_State *L, int units, const char *name, int output)
+{
+    if (units != 0 && lua_getfield(L, units, name) == LUA_TSTRING)
+        return;
+    if (units != 0)
+        lua_pop(L, 1);
+    for (size_t k = 0; output && k < sizeof output_units / sizeof output_units[0]; k++)
+        if (strcmp(name, output_units[k].name) == 0) {
+            lua_pushstring(L, output_units[k].unit);
+            return;
+        }
+    lua_pushnil(L);
+}
+
+/* The comment lines under the meta line: the version that wrote the
+ * file, the run and fit options, the units of the columns.  Nothing
+ * that changes from one run to the next (no date, no command): a file
+ * must be the same for any number of workers, shards or resumes. */
+static void push_comments(lua_State *L, int arg, int names, int outputs, const char *fn)
+{
+    dfle_record *rec = dfle_lua_push_empty_record(L);
+    int box = lua_gettop(L), units = 0;
+    lua_Integer np = (lua_Integer)lua_rawlen(L, names), no = (lua_Integer)lua_rawlen(L, outputs);
+    const char **nm, **un;
+    char *text = NULL, *line;
+    size_t len = 0;
+    FILE *fp;
+
+    if (lua_getfield(L, arg, "units") != LUA_TNIL) {
+        if (!lua_istable(L, -1))
+            luaL_error(L, "dfle.%s: parameter 'units' must be a table {name = \"unit\"} of "
+                          "parameters and outputs", fn);
+        units = lua_gettop(L);
+        lua_pushnil(L);
+        while (lua_next(L, units) != 0) {
+            int known = 0;
+            if (lua_type(L, -2) != LUA_TSTRING || lua_type(L, -1) != LUA_TSTRING ||
+                strpbrk(lua_tostring(L, -1), ",=\r\n") != NULL)
+                luaL_error(L, "dfle.%s: units must map names to unit texts (\"m/yr\", \"-\"), "
+                              "without commas or '='", fn);
+            for (lua_Integer k = 1; k <= np + no && !known; k++) {
+                lua_geti(L, k <= np ? names : outputs, k <= np ? k : k - np);
+                known = strcmp(lua_tostring(L, -1), lua_tostring(L, -3)) == 0;
+                lua_pop(L, 1);
+            }
+            if (!known)
+                luaL_error(L, "dfle.%s: units names '%s', which is neither a parameter nor an "
+                              "output", fn, lua_tostring(L, -2));
+            lua_pop(L, 1);
+        }
+    } else {
+        lua_pop(L, 1);
+    }
+    dfle_record_text(rec, "dfle", DFLE_VERSION);
+    for (int k = 0; k < 2; k++) {
+        const char *key = k == 0 ? "run" : "fit";
+        if (lua_getfield(L, arg, key) == LUA_TTABLE) {
+            dfle_record_section(rec, key, NULL);
+            dfle_lua_record_table(L, rec, -1, 1);
+        }
+        lua_pop(L, 1);
+    }
+    /* Names and units of every column: index, parameters, outputs,
+     * status, reason (units only for quantities). */
+    nm = lua_newuserdatauv(L, 2 * (size_t)(np + no + 3) * sizeof *nm, 0);
+    un = nm + np + no + 3;
+    lua_newtable(L); /* anchors the unit texts */
+    nm[0] = "index", un[0] = NULL;
+    for (lua_Integer k = 1; k <= np + no; k++) {
+        lua_geti(L, k <= np ? names : outputs, k <= np ? k : k - np);
+        nm[k] = lua_tostring(L, -1); /* anchored in names / outputs */
+        lua_pop(L, 1);
+        push_unit(L, units, nm[k], k > np);
+        un[k] = lua_tostring(L, -1);
+        lua_rawseti(L, -2, k);
+    }
+    nm[np + no + 1] = "status", un[np + no + 1] = NULL;
+    nm[np + no + 2] = "reason", un[np + no + 2] = NULL;
+    fp = dfle_record_status(rec, NULL) == DFLE_OK ? open_memstream(&text, &len) : NULL;
+    if (fp == NULL) {
+        luaL_error(L, "dfle.%s: out of memory", fn);
+        return;
+    }
+    dfle_record_write_comments(rec, fp);
+    line = dfle_units_line(nm, un, (size_t)(np + no + 3));
+    if (line != NULL)
+        fprintf(fp, "%s\n", line);
+    free(line);
+    if (fclose(fp) != 0 || text == NULL) {
+        free(text);
+        luaL_error(L, "dfle.%s: out of memory", fn);
+    }
+    if (len > 0 && text[len - 1] == '\n')
+        len--; /* the lines, joined by '\n' */
+    lua_pushlstring(L, text, len);
+    free(text);
+    lua_replace(L, box);
+    lua_settop(L, box);
+}
+
 
 /* Read and check the table at arg; push the context table. */
 void dfle_lua_ens_read_spec(lua_State *L, int arg, const char *fn, spec *s,
@@ -335,17 +418,19 @@ void dfle_lua_ens_read_spec(lua_State *L, int arg, const char *fn, spec *s,
     push_meta(L, s, lua_gettop(L), names, outputs, centered);
     lua_setfield(L, ctx, "meta");
     lua_pop(L, 1);
+    push_comments(L, arg, names, outputs, fn);
+    lua_setfield(L, ctx, "comments");
     {
-        pieces pc;
-        pc_init(L, &pc);
-        pc_str(L, &pc, "index,");
+        dfle_lua_text pc;
+        dfle_lua_text_init(L, &pc);
+        dfle_lua_text_str(L, &pc, "index,");
         push_joined(L, names);
-        pc_add(L, &pc);
-        pc_str(L, &pc, ",");
+        dfle_lua_text_add(L, &pc);
+        dfle_lua_text_str(L, &pc, ",");
         push_joined(L, outputs);
-        pc_add(L, &pc);
-        pc_str(L, &pc, ",status,reason");
-        pc_finish(L, &pc);
+        dfle_lua_text_add(L, &pc);
+        dfle_lua_text_str(L, &pc, ",status,reason");
+        dfle_lua_text_finish(L, &pc);
     }
     lua_setfield(L, ctx, "header");
     lua_settop(L, ctx);
@@ -503,7 +588,7 @@ int dfle_lua_ens_sample_row(lua_State *L, int ctx, size_t i)
 {
     int failed, top, p, names, outputs;
     lua_Integer np, nout;
-    pieces pc;
+    dfle_lua_text pc;
     char buf[32];
 
     lua_pushcfunction(L, run_sample);
@@ -531,35 +616,35 @@ int dfle_lua_ens_sample_row(lua_State *L, int ctx, size_t i)
     outputs = lua_gettop(L);
     np = (lua_Integer)lua_rawlen(L, names);
     nout = (lua_Integer)lua_rawlen(L, outputs);
-    pc_init(L, &pc);
+    dfle_lua_text_init(L, &pc);
     snprintf(buf, sizeof buf, "%zu", i);
-    pc_str(L, &pc, buf);
+    dfle_lua_text_str(L, &pc, buf);
     for (lua_Integer k = 1; k <= np; k++) {
-        pc_str(L, &pc, ",");
+        dfle_lua_text_str(L, &pc, ",");
         lua_geti(L, names, k);
         lua_gettable(L, p);
         push_value_text(L, -1, 1);
-        pc_add(L, &pc);
+        dfle_lua_text_add(L, &pc);
         lua_pop(L, 1);
     }
     for (lua_Integer k = 1; k <= nout; k++) {
-        pc_str(L, &pc, ",");
+        dfle_lua_text_str(L, &pc, ",");
         if (lua_istable(L, top)) {
             lua_geti(L, top, k);
             push_number_text(L, lua_tonumber(L, -1));
-            pc_add(L, &pc);
+            dfle_lua_text_add(L, &pc);
             lua_pop(L, 1);
         } else {
-            pc_str(L, &pc, "nan");
+            dfle_lua_text_str(L, &pc, "nan");
         }
     }
-    pc_str(L, &pc, ",");
+    dfle_lua_text_str(L, &pc, ",");
     lua_pushvalue(L, top - 2);
-    pc_add(L, &pc);
-    pc_str(L, &pc, ",");
+    dfle_lua_text_add(L, &pc);
+    dfle_lua_text_str(L, &pc, ",");
     push_value_text(L, top - 1, 1);
-    pc_add(L, &pc);
-    pc_finish(L, &pc);
+    dfle_lua_text_add(L, &pc);
+    dfle_lua_text_finish(L, &pc);
     lua_replace(L, top - 2);
     lua_settop(L, top - 2);
     return failed;
@@ -568,14 +653,28 @@ int dfle_lua_ens_sample_row(lua_State *L, int ctx, size_t i)
 /* ------------------------------------------------------------------ */
 /* Reading a result file back into the table dfle.ensemble returns.    */
 
-/* Split one CSV line; push each field (strings); return the count.
- * quoted[k] says whether field k was quoted (up to maxq fields). */
-static int push_fields(lua_State *L, const char *s, unsigned char *quoted, int maxq)
+/* Split one CSV line; push each of its first maxpush fields (strings)
+ * and return the count of all.  quoted[k] says whether field k was
+ * quoted (up to maxq fields).  Fields past maxpush are only counted: a
+ * damaged line of a million commas ran the stack out ("stack overflow
+ * (too many columns)") instead of saying it has too many fields. */
+static int push_fields(lua_State *L, const char *s, unsigned char *quoted, int maxq,
+                       int maxpush)
 {
     int n = 0;
     for (;;) {
         luaL_Buffer b;
         int q = 0;
+        if (n >= maxpush) {
+            int inq = 0;
+            for (; *s != '\0'; s++) {
+                if (*s == '"')
+                    inq = !inq;
+                else if (*s == ',' && !inq)
+                    n++;
+            }
+            return n + 1;
+        }
         luaL_checkstack(L, 2, "too many columns");
         luaL_buffinit(L, &b);
         if (*s == '"') {
@@ -708,7 +807,7 @@ void dfle_lua_ens_push_result(lua_State *L, const char *fn, const char *path, si
     luaL_checkstack(L, (int)ncols + 8, "too many columns");
     for (size_t r = 0; r < t->nrows; r++) {
         int base = lua_gettop(L);
-        int nf = push_fields(L, t->rows[r], quoted, (int)sizeof quoted);
+        int nf = push_fields(L, t->rows[r], quoted, (int)sizeof quoted, (int)ncols + 1);
         if (nf != ncols)
             luaL_error(L, "dfle.%s: %s: sample %d has %d fields, the header %d", fn, path,
                        (int)t->index[r], nf, (int)ncols);

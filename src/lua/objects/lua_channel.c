@@ -47,10 +47,19 @@ static int channel_from_lua(lua_State *L, const dfle_channel_opts *o, int area_t
         if (o->length > 0) {
             n = (size_t)ceil(o->length / o->dx - 1e-9) + 1;
         } else {
-            /* The outlet is the first node whose area reaches A_max. */
-            for (n = 1; n <= AREA_SEARCH_MAX_NODES; n++)
-                if (call_number(L, area_idx, (double)(n - 1) * o->dx, "area(x)", "x") >= o->A_max)
+            /* The outlet is the first node whose area reaches A_max.  An
+             * area that is not a finite positive number stops the search
+             * at once: NaN or 0 never reaches A_max, and the search went
+             * on for a million calls before saying so wrongly. */
+            for (n = 1; n <= AREA_SEARCH_MAX_NODES; n++) {
+                const double x = (double)(n - 1) * o->dx;
+                const double a = call_number(L, area_idx, x, "area(x)", "x");
+                if (!(isfinite(a) && a > 0))
+                    luaL_error(L, "dfle.channel: A at node %d must be > 0 m^2 (got %s from "
+                                  "area(x) at x = %f m)", (int)n, dfle_lua_number_text(L, a), x);
+                if (a >= o->A_max)
                     break;
+            }
             if (n > AREA_SEARCH_MAX_NODES)
                 luaL_error(L, "dfle.channel: area(x) did not reach A_max = %f m^2 within %d "
                               "nodes; give length instead", o->A_max, AREA_SEARCH_MAX_NODES);
@@ -159,6 +168,19 @@ static int l_channel_get(lua_State *L)
     return 1;
 }
 
+static size_t channel_params(const void *ch, dfle_param *out, size_t cap)
+{
+    return dfle_channel_params(ch, out, cap);
+}
+
+/* ch:params(): the options it was built from (only dx for a channel
+ * given area or width: its geometry is the arrays). */
+static int l_channel_params(lua_State *L)
+{
+    dfle_lua_push_params(L, 1, channel_params, dfle_lua_check_channel(L, 1));
+    return 1;
+}
+
 static int l_channel_property(lua_State *L)
 {
     dfle_channel *ch = dfle_lua_check_channel(L, 1);
@@ -199,7 +221,8 @@ static void channel_free(void *obj) { dfle_channel_free(obj); }
 
 void dfle_lua_open_channel(lua_State *L)
 {
-    static const luaL_Reg methods[] = {{"get", l_channel_get}, {NULL, NULL}};
+    static const luaL_Reg methods[] = {
+        {"get", l_channel_get}, {"params", l_channel_params}, {NULL, NULL}};
     static const luaL_Reg meta[] = {{"__len", l_channel_len}, {NULL, NULL}};
     static const dfle_lua_type type = {
         .name = DFLE_LUA_CHANNEL, .free = channel_free, .describe = channel_describe,

@@ -109,11 +109,20 @@ static int l_fluvial_rate(lua_State *L)
 {
     dfle_fluvial *fl = dfle_lua_check_fluvial(L, 1);
     double A = check_positive(L, 2, "fluvial:rate", "A (drainage area, m^2)", 0);
-    double S = luaL_checknumber(L, 3);
+    double S = luaL_checknumber(L, 3), E;
     if (!isfinite(S))
         luaL_error(L, "dfle.fluvial:rate: S (slope) must be a finite number, got %s",
                    dfle_lua_number_text(L, S));
-    lua_pushnumber(L, dfle_fluvial_rate(fl, A, S));
+    /* K A^m_s S^n_s can overflow (or be 0 * inf) for finite A and S: an
+     * error, as in a run, not an inf the script computes on with. */
+    E = dfle_fluvial_rate(fl, A, S);
+    if (!isfinite(E))
+        luaL_error(L, "dfle.fluvial:rate: E_f = K A^m_s S^n_s is not finite for A = %s m^2, "
+                      "S = %s (K = %s, m_s = %s, n_s = %s)", dfle_lua_number_text(L, A),
+                   dfle_lua_number_text(L, S), dfle_lua_number_text(L, dfle_fluvial_K(fl)),
+                   dfle_lua_number_text(L, dfle_fluvial_m(fl)),
+                   dfle_lua_number_text(L, dfle_fluvial_n(fl)));
+    lua_pushnumber(L, E);
     return 1;
 }
 
@@ -122,7 +131,29 @@ static int l_fluvial_steady_slope(lua_State *L)
     dfle_fluvial *fl = dfle_lua_check_fluvial(L, 1);
     double U = check_positive(L, 2, "fluvial:steady_slope", "U (uplift rate, m/yr)", 0);
     double A = check_positive(L, 3, "fluvial:steady_slope", "A (drainage area, m^2)", 0);
-    lua_pushnumber(L, dfle_fluvial_steady_slope(fl, U, A));
+    double S = dfle_fluvial_steady_slope(fl, U, A);
+    /* inf means "no fluvial erosion" (K = 0, documented); from overflow
+     * it would mean nothing. */
+    if (!isfinite(S) && dfle_fluvial_K(fl) > 0)
+        luaL_error(L, "dfle.fluvial:steady_slope: S = (U/K)^(1/n_s) A^(-m_s/n_s) is not finite "
+                      "for U = %s m/yr, A = %s m^2 (K = %s, m_s = %s, n_s = %s)",
+                   dfle_lua_number_text(L, U), dfle_lua_number_text(L, A),
+                   dfle_lua_number_text(L, dfle_fluvial_K(fl)),
+                   dfle_lua_number_text(L, dfle_fluvial_m(fl)),
+                   dfle_lua_number_text(L, dfle_fluvial_n(fl)));
+    lua_pushnumber(L, S);
+    return 1;
+}
+
+static size_t fluvial_params(const void *fl, dfle_param *out, size_t cap)
+{
+    return dfle_fluvial_params(fl, out, cap);
+}
+
+/* fl:params(): Table G1 and the K, m_s, n_s they give, or K, m, n. */
+static int l_fluvial_params(lua_State *L)
+{
+    dfle_lua_push_params(L, 1, fluvial_params, dfle_lua_check_fluvial(L, 1));
     return 1;
 }
 
@@ -141,7 +172,8 @@ static void fluvial_free(void *obj) { dfle_fluvial_free(obj); }
 void dfle_lua_open_fluvial(lua_State *L)
 {
     static const luaL_Reg methods[] = {
-        {"rate", l_fluvial_rate}, {"steady_slope", l_fluvial_steady_slope}, {NULL, NULL}};
+        {"rate", l_fluvial_rate}, {"steady_slope", l_fluvial_steady_slope},
+        {"params", l_fluvial_params}, {NULL, NULL}};
     static const dfle_lua_type type = {
         .name = DFLE_LUA_FLUVIAL, .free = fluvial_free, .describe = fluvial_describe,
         .methods = methods, .property = l_fluvial_property,

@@ -12,14 +12,16 @@
  * script may drop its own references to them.
  */
 #include "lua/core/dfle_lua.h"
+#include "dfle/netcdf.h"
 
 #include <stdio.h>
 #include <string.h>
 #include <time.h>
 
 enum { UV_CHANNEL = 1, UV_FLUVIAL, UV_ROUTER, UV_LAW,
-       UV_U, /* U(t): the uplift function, or nil */
-       UV_COUNT = UV_U };
+       UV_U,   /* U(t): the uplift function, or nil */
+       UV_RUN, /* the last run since the state was set: {kind =, opts =, result =}, or nil */
+       UV_COUNT = UV_RUN };
 
 /* Push component `key` of the options table, or a default built by
  * calling dfle.<ctor_path>{}; push nil when the user said `false`. */
@@ -68,7 +70,7 @@ static int default_law(lua_State *L) { return call_module_ctor(L, "law", "power"
 
 static void *udata_ptr(lua_State *L, int idx)
 {
-    return lua_isnil(L, idx) ? NULL : *(void **)lua_touserdata(L, idx);
+    return lua_isnil(L, idx) ? NULL : dfle_lua_object_ptr(L, idx);
 }
 
 static int l_model_new(lua_State *L)
@@ -154,6 +156,13 @@ static void check_idle(lua_State *L, const char *what)
     dfle_lua_end_use(L, 1);
 }
 
+/* The state of the model at 1 was set anew: no run led to it. */
+static void forget_run(lua_State *L)
+{
+    lua_pushnil(L);
+    lua_setiuservalue(L, 1, UV_RUN);
+}
+
 static int l_model_init_fluvial_steady(lua_State *L)
 {
     dfle_model *m = dfle_lua_check_model(L, 1);
@@ -163,6 +172,7 @@ static int l_model_init_fluvial_steady(lua_State *L)
     if (dfle_model_init_fluvial_steady(m, fl, &err) != DFLE_OK)
         return dfle_lua_raise(L, &err);
     lua_settop(L, 1);
+    forget_run(L);
     return 1;
 }
 
@@ -176,6 +186,7 @@ static int l_model_set_z(lua_State *L)
     if (dfle_model_set_z(m, z, n, &err) != DFLE_OK)
         return dfle_lua_raise(L, &err);
     lua_settop(L, 1);
+    forget_run(L);
     return 1;
 }
 
@@ -190,6 +201,7 @@ static int l_model_set_U(lua_State *L)
     dfle_lua_warn_implausible(L, "model:set_U", "U", lua_tonumber(L, 2));
     lua_setiuservalue(L, 1, UV_U);
     lua_settop(L, 1);
+    forget_run(L);
     return 1;
 }
 
@@ -250,7 +262,60 @@ static int lua_uplift(void *ud, double t, double *U, dfle_error *err)
     return ok ? DFLE_OK : DFLE_ECALLBACK;
 }
 
+/* Keep what the run at the top of the stack was asked and gave, for the
+ * model's records (dfle_lua_record_model). */
+static void remember_run(lua_State *L, int steady, const dfle_run_opts *o, double years)
+{
+    static const char *const methods[] = {"explicit", "implicit", "direct", "auto"};
+    lua_createtable(L, 0, 3);
+    lua_pushstring(L, steady ? "run_to_steady" : "run");
+    lua_setfield(L, -2, "kind");
+    lua_createtable(L, 0, 5);
+    lua_pushstring(L, (int)o->method >= 0 && (int)o->method < 4 ? methods[o->method] : "?");
+    lua_setfield(L, -2, "method_asked"); /* the result says which ran */
+    if (steady) {
+        lua_pushnumber(L, o->tol), lua_setfield(L, -2, "tol");
+        lua_pushnumber(L, o->max_time), lua_setfield(L, -2, "max_time");
+        lua_pushnumber(L, o->direct_tol), lua_setfield(L, -2, "direct_tol");
+    } else {
+        lua_pushnumber(L, years), lua_setfield(L, -2, "years");
+        lua_pushnumber(L, o->rtol), lua_setfield(L, -2, "rtol");
+    }
+    lua_pushinteger(L, (lua_Integer)o->max_steps), lua_setfield(L, -2, "max_steps");
+    lua_setfield(L, -2, "opts");
+    lua_newtable(L);
+    dfle_lua_copy_table(L, -3, -1); /* a copy: the script may change its own */
+    lua_setfield(L, -2, "result");
+    lua_setiuservalue(L, 1, UV_RUN);
+}
+
 /* Shared by run_to_steady and run: `steady` selects the defaults. */
+/* m:run{ record = {...}, netcdf = path }: the recorded states z(t, x) as
+ * a CF NetCDF file (netcdf.h), with the run's provenance. */
+static void write_records(lua_State *L, dfle_model *m, const char *path, const dfle_run_opts *o,
+                          const dfle_run_result *res)
+{
+    static const dfle_nc_var z_var = {"z", "m", "elevation above the outlet"};
+    const double *x, *A, *values[1];
+    dfle_nc_attr attrs[3];
+    dfle_error err;
+    if ((x = dfle_model_field(m, DFLE_FIELD_X, &err)) == NULL ||
+        (A = dfle_model_field(m, DFLE_FIELD_A, &err)) == NULL)
+        dfle_lua_raise(L, &err);
+    if (res->n_recorded == 0)
+        luaL_error(L, "dfle.model:run: no record time was reached; '%s' not written", path);
+    values[0] = o->record_z;
+    attrs[0] = (dfle_nc_attr){"title", "dfle: a channel profile's recorded states (m:run)"};
+    attrs[1] = (dfle_nc_attr){"history", dfle_lua_push_history(L)};
+    attrs[2] = (dfle_nc_attr){"U_m_per_yr", lua_pushfstring(L, "%f", dfle_model_U(m))};
+    if (dfle_nc_write_profiles(path, dfle_model_size(m), x, A, res->n_recorded, o->record_times,
+                               1, &z_var, values, 3, attrs, &err) != DFLE_OK)
+        dfle_lua_raise(L, &err);
+    lua_pop(L, 2);
+    dfle_lua_note(L, DFLE_LUA_DETAIL, "wrote %s (%zu states of %zu nodes)", path, res->n_recorded,
+                  dfle_model_size(m));
+}
+
 /* How a run ended, for its --verbose line. */
 static const char *outcome(int steady, int reason)
 {
@@ -277,7 +342,7 @@ static double clock_seconds(void)
 static int model_run(lua_State *L, int steady)
 {
     static const char *const steady_keys[] = {"progress", "method", NULL};
-    static const char *const run_keys[] = {"progress", "method", "record", NULL};
+    static const char *const run_keys[] = {"progress", "method", "record", "netcdf", NULL};
     static const char *const methods[] = {"explicit", "implicit", "direct", "auto", NULL};
     dfle_model *m = dfle_lua_check_model(L, 1);
     const char *fn = steady ? "model:run_to_steady" : "model:run";
@@ -286,6 +351,8 @@ static int model_run(lua_State *L, int steady)
     dfle_error err;
     double max_steps, years = -1;
     const dfle_lua_progress *prog = dfle_lua_get_progress(L);
+    const char *netcdf = NULL;
+    int keep;
     double wall;
     int st;
 
@@ -327,14 +394,16 @@ static int model_run(lua_State *L, int steady)
             luaL_error(L, "dfle.%s: parameter 'method' must be a string, got %s", fn,
                        dfle_lua_typename(L, -1));
         {
+            /* Not luaL_checkoption: the value is a field, not an
+             * argument ("bad argument #-2"), and the choices help. */
             const char *name = dfle_lua_check_string(L, -1, fn, "method");
-            o.method = -1;
-            for (int k = 0; methods[k] != NULL; k++)
-                if (strcmp(name, methods[k]) == 0)
-                    o.method = k;
-            if (o.method < 0)
-                luaL_error(L, "dfle.%s: method '%s' is not one of explicit, implicit, direct, auto "
-                              "(lower case)", fn, name);
+            int k = 0;
+            while (methods[k] != NULL && strcmp(methods[k], name) != 0)
+                k++;
+            if (methods[k] == NULL)
+                luaL_error(L, "dfle.%s: method must be 'explicit', 'implicit', 'direct' or "
+                              "'auto' (got '%s')", fn, dfle_lua_shown(L, name, strlen(name)));
+            o.method = k;
         }
         if (!steady && o.method == DFLE_METHOD_DIRECT)
             luaL_error(L, "dfle.model:run: method 'direct' finds steady states only; use "
@@ -353,6 +422,17 @@ static int model_run(lua_State *L, int steady)
         o.record_times = times;
         o.record_z = lua_newuserdatauv(L, (k ? k : 1) * dfle_model_size(m) * sizeof(double), 0);
     }
+    keep = lua_gettop(L); /* the record arrays stay for the run */
+    if (lua_istable(L, 2) && lua_getfield(L, 2, "netcdf") != LUA_TNIL) {
+        if (lua_type(L, -1) != LUA_TSTRING)
+            luaL_error(L, "dfle.%s: parameter 'netcdf' must be a file name, got %s", fn,
+                       dfle_lua_typename(L, -1));
+        netcdf = dfle_lua_check_string(L, -1, fn, "netcdf"); /* the options table keeps it */
+        if (o.n_record == 0)
+            luaL_error(L, "dfle.model:run: 'netcdf' writes the recorded states: give 'record' "
+                          "times too");
+    }
+    lua_settop(L, keep);
     if (lua_istable(L, 2) && lua_getfield(L, 2, "progress") != LUA_TNIL) {
         if (!lua_isboolean(L, -1))
             luaL_error(L, "dfle.%s: parameter 'progress' must be a boolean", fn);
@@ -396,6 +476,7 @@ static int model_run(lua_State *L, int steady)
                       outcome(steady, res.reason), res.steps, dfle_method_name(res.method),
                       res.time, res.fallback ? ", after the direct solve fell back" : "", wall);
     push_result(L, &res);
+    remember_run(L, steady, &o, years);
     if (o.n_record > 0) {
         const size_t n = dfle_model_size(m);
         lua_createtable(L, (int)res.n_recorded, 0);
@@ -407,6 +488,8 @@ static int model_run(lua_State *L, int steady)
         }
         lua_setfield(L, -2, "records");
     }
+    if (netcdf != NULL)
+        write_records(L, m, netcdf, &o, &res);
     return 1;
 }
 
@@ -452,19 +535,141 @@ static int l_model_fields(lua_State *L)
     return 1;
 }
 
+/* The run result's values a record keeps, in this order, with units. */
+static const struct { const char *key, *unit; } run_keys[] = {
+    {"converged", NULL}, {"reason", NULL},   {"method", NULL},   {"fallback", NULL},
+    {"note", NULL},      {"time", "yr"},     {"steps", NULL},    {"routings", NULL},
+    {"iterations", NULL}, {"rate_ratio", NULL}, {"dt_min", "yr"}, {"dt_max", "yr"},
+    {"nonpositive_slope_nodes", NULL}};
+/* ... and the options it was given. */
+static const struct { const char *key, *unit; } run_opts[] = {
+    {"method_asked", NULL}, {"tol", NULL}, {"max_time", "yr"}, {"direct_tol", NULL},
+    {"years", "yr"}, {"rtol", NULL}, {"max_steps", NULL}};
+
+void dfle_lua_record_model(lua_State *L, dfle_record *rec, int idx)
+{
+    static const char *const sections[] = {"channel", "fluvial", "router", "law"};
+    dfle_model *m = dfle_lua_check_model(L, idx);
+    int top = lua_gettop(L);
+
+    idx = lua_absindex(L, idx);
+    dfle_model_describe(m, rec);
+    /* Components written in Lua keep their params in Lua. */
+    for (int k = UV_ROUTER; k <= UV_LAW; k++) {
+        if (lua_getiuservalue(L, idx, k) == LUA_TUSERDATA) {
+            dfle_lua_object *o = lua_touserdata(L, -1);
+            size_t n = k == UV_ROUTER ? dfle_router_params(o->ptr, NULL, 0)
+                                      : dfle_law_params(o->ptr, NULL, 0);
+            if (n == (size_t)-1) {
+                dfle_record_section(rec, sections[k - 1], NULL);
+                dfle_lua_record_own_params(L, rec, lua_gettop(L));
+            }
+        }
+        lua_settop(L, top);
+    }
+    if (lua_getiuservalue(L, idx, UV_U) == LUA_TFUNCTION) {
+        dfle_record_section(rec, "model", NULL);
+        dfle_record_bool(rec, "U_of_t", 1);
+    }
+    lua_settop(L, top);
+    if (lua_getiuservalue(L, idx, UV_RUN) == LUA_TTABLE) {
+        int run = lua_gettop(L);
+        lua_getfield(L, run, "kind");
+        dfle_record_section(rec, "run", lua_tostring(L, -1));
+        lua_getfield(L, run, "opts");
+        for (size_t k = 0; k < sizeof run_opts / sizeof run_opts[0]; k++) {
+            int t = lua_getfield(L, -1, run_opts[k].key);
+            if (t == LUA_TNUMBER)
+                dfle_record_param_number(rec, run_opts[k].key, lua_tonumber(L, -1),
+                                         run_opts[k].unit);
+            else if (t == LUA_TSTRING)
+                dfle_record_param_text(rec, run_opts[k].key, lua_tostring(L, -1));
+            lua_pop(L, 1);
+        }
+        lua_getfield(L, run, "result");
+        for (size_t k = 0; k < sizeof run_keys / sizeof run_keys[0]; k++) {
+            int t = lua_getfield(L, -1, run_keys[k].key);
+            if (t == LUA_TNUMBER)
+                dfle_record_number(rec, run_keys[k].key, lua_tonumber(L, -1), run_keys[k].unit);
+            else if (t == LUA_TBOOLEAN)
+                dfle_record_bool(rec, run_keys[k].key, lua_toboolean(L, -1));
+            else if (t == LUA_TSTRING)
+                dfle_record_text(rec, run_keys[k].key, lua_tostring(L, -1));
+            lua_pop(L, 1);
+        }
+    }
+    lua_settop(L, top);
+}
+
+/* m:write_csv(path [, { record = true | false | "run.json" }]) */
 static int l_model_write_csv(lua_State *L)
 {
     dfle_model *m = dfle_lua_check_model(L, 1);
     const char *path = dfle_lua_check_string(L, 2, "model:write_csv", "the path");
+    dfle_record *rec;
+    const char *jpath;
     dfle_error err;
     int st;
+
+    lua_settop(L, 3);
+    if (!lua_isnil(L, 3)) {
+        static const char *const keys[] = {"record", NULL};
+        luaL_checktype(L, 3, LUA_TTABLE);
+        dfle_lua_read_params(L, 3, "model:write_csv", NULL, 0, keys);
+    }
+    rec = dfle_lua_push_record(L, "model profile: one row per node, from the channel head "
+                                  "(x = 0) to the outlet");
+    check_idle(L, "dfle.model:write_csv");
+    dfle_lua_record_model(L, rec, 1);
+    jpath = dfle_lua_record_path(L, rec, 3, path, "model:write_csv");
     dfle_lua_begin_use(L, 1, "dfle.model:write_csv");
-    st = dfle_model_write_csv(m, path, &err);
+    st = dfle_model_write_csv(m, path, rec, &err);
     dfle_lua_end_use(L, 1);
     if (st != DFLE_OK)
         return dfle_lua_raise(L, &err);
+    dfle_lua_record_done(L, rec, path, jpath);
     dfle_lua_note(L, DFLE_LUA_DETAIL, "wrote %s (%zu nodes)", path, dfle_model_size(m));
     lua_settop(L, 1);
+    return 1;
+}
+
+/* m:write_record(path): the JSON record alone (a run kept as plots). */
+static int l_model_write_record(lua_State *L)
+{
+    const char *path = dfle_lua_check_string(L, 2, "model:write_record", "the path");
+    dfle_record *rec;
+    dfle_lua_check_model(L, 1);
+    lua_settop(L, 2);
+    rec = dfle_lua_push_record(L, "model");
+    dfle_lua_record_model(L, rec, 1);
+    dfle_lua_write_record(L, rec, NULL, path);
+    lua_settop(L, 1);
+    return 1;
+}
+
+static size_t model_params(const void *m, dfle_param *out, size_t cap)
+{
+    return dfle_model_params(m, out, cap);
+}
+
+/* m:params(): U (now), cfl, dt_max, and each component's params() under
+ * its name (false for a process that is off). */
+static int l_model_params(lua_State *L)
+{
+    static const char *const components[] = {"channel", "fluvial", "router", "law"};
+    dfle_lua_push_params(L, 1, model_params, dfle_lua_check_model(L, 1));
+    for (int k = 0; k < 4; k++) {
+        if (lua_getiuservalue(L, 1, k + 1) == LUA_TNIL) {
+            lua_pop(L, 1);
+            lua_pushboolean(L, 0);
+        } else {
+            /* The component's own method: each kind knows its list. */
+            lua_getfield(L, -1, "params");
+            lua_insert(L, -2);
+            lua_call(L, 1, 1);
+        }
+        lua_setfield(L, -2, components[k]);
+    }
     return 1;
 }
 
@@ -528,6 +733,8 @@ void dfle_lua_open_model(lua_State *L)
         {"get", l_model_get},
         {"fields", l_model_fields},
         {"write_csv", l_model_write_csv},
+        {"params", l_model_params},
+        {"write_record", l_model_write_record},
         {NULL, NULL}};
     static const dfle_lua_type type = {
         .name = DFLE_LUA_MODEL, .free = model_free, .describe = model_describe,

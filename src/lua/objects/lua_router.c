@@ -144,6 +144,7 @@ static int l_router_route(lua_State *L)
         lua_pushnumber(L, rep->volume_left), lua_setfield(L, -2, "volume_left");
         lua_pushnumber(L, rep->duration), lua_setfield(L, -2, "duration");
         lua_pushinteger(L, (lua_Integer)rep->steps), lua_setfield(L, -2, "steps");
+        lua_pushinteger(L, (lua_Integer)rep->cell_steps), lua_setfield(L, -2, "cell_steps");
         lua_pushstring(L, dfle_process_end_name(rep->end)), lua_setfield(L, -2, "ended");
         lua_createtable(L, (int)rep->n_snapshots, 0);
         for (size_t j = 0; j < rep->n_snapshots; j++) {

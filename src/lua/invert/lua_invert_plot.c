@@ -1,0 +1,245 @@
+/*
+ * lua_invert_plot.c - the two figures of an inversion, through the plot
+ * machinery of src/io:
+ *
+ *   dfle.plot.corner(res, "corner.png" [, {params =, labels =, truth =, title =}])
+ *   dfle.plot.posterior_predictive(res, "pp.png" [, {n =, truth =, title =}])
+ *
+ * The corner plot shows the posterior's marginals and every pair (the
+ * trade-offs); the posterior-predictive plot shows whether the model, at
+ * parameters the data allow, reproduces the data: bands of the model's
+ * slope-area curve over the binned data (and the raw slopes of a DEM).
+ */
+#include <math.h>
+#include <stdio.h>
+#include <string.h>
+
+#include "lua/invert/lua_invert_internal.h"
+
+#include "dfle/plot.h"
+
+/* The arguments (res, path [, opts]) of both figures: the result's
+ * context index; *path the image. */
+static int plot_args(lua_State *L, const char *fn, const dfle_lua_param *nums, size_t nnums,
+                     const char *const *keys, const char **path)
+{
+    int ctx;
+    lua_settop(L, 3);
+    ctx = inv_result_ctx(L, 1);
+    *path = luaL_checkstring(L, 2);
+    if (!lua_isnil(L, 3) && !lua_istable(L, 3))
+        luaL_argerror(L, 3, "expected a table of options");
+    dfle_lua_read_params(L, 3, fn, nums, nnums, keys);
+    return ctx;
+}
+
+/* dfle.plot.corner(res, path [, opts]) */
+static int l_corner(lua_State *L)
+{
+    static const char *const keys[] = {"params", "labels", "truth", "title", NULL};
+    double panel = 0, nbins = 0;
+    const dfle_lua_param nums[] = {{"panel", &panel}, {"nbins", &nbins}};
+    const char *path, **labels;
+    int ctx, names, sel, *logs;
+    inv_run *R;
+    size_t d, m, np;
+    double *x, *truth;
+    dfle_corner_opts o;
+    dfle_error err;
+
+    ctx = plot_args(L, "plot.corner", nums, 2, keys, &path);
+    lua_getfield(L, ctx, "box");
+    R = luaL_checkudata(L, -1, INV_BOX);
+    lua_pop(L, 1);
+    if (R->steps < 1 || R->have < R->steps + 1)
+        return luaL_error(L, "dfle.plot.corner: the inversion has no posterior samples");
+    lua_getfield(L, ctx, "names");
+    names = lua_gettop(L);
+    /* The parameters shown: `params`, or every free one but sigma. */
+    lua_newtable(L);
+    sel = lua_gettop(L);
+    np = 0;
+    if (lua_istable(L, 3) && lua_getfield(L, 3, "params") != LUA_TNIL) {
+        if (!lua_istable(L, -1))
+            return luaL_error(L, "dfle.plot.corner: 'params' must be an array of names");
+        for (lua_Integer k = 1, n = (lua_Integer)lua_rawlen(L, -1); k <= n; k++) {
+            size_t j;
+            lua_geti(L, -1, k);
+            for (j = 0; j < R->d; j++) {
+                lua_geti(L, names, (lua_Integer)j + 1);
+                if (lua_rawequal(L, -1, -2)) {
+                    lua_pop(L, 1);
+                    break;
+                }
+                lua_pop(L, 1);
+            }
+            if (j == R->d)
+                return luaL_error(L, "dfle.plot.corner: '%s' is not a parameter of the inversion",
+                                  luaL_tolstring(L, -1, NULL));
+            lua_pop(L, 1);
+            lua_pushinteger(L, (lua_Integer)j);
+            lua_rawseti(L, sel, (lua_Integer)++np);
+        }
+        lua_pop(L, 1);
+    } else {
+        if (lua_istable(L, 3))
+            lua_pop(L, 1);
+        for (size_t j = 0; j < R->nmodel; j++) {
+            lua_pushinteger(L, (lua_Integer)j);
+            lua_rawseti(L, sel, (lua_Integer)++np);
+        }
+        if (np == 0) { /* sigma alone */
+            lua_pushinteger(L, 0);
+            lua_rawseti(L, sel, (lua_Integer)++np);
+        }
+    }
+    if (np == 0)
+        return luaL_error(L, "dfle.plot.corner: 'params' is empty");
+    d = np;
+    m = (R->steps - R->burn) * R->walkers;
+    x = lua_newuserdatauv(L, (m * d + d) * sizeof *x, 0);
+    truth = x + m * d;
+    logs = lua_newuserdatauv(L, d * sizeof *logs, 0);
+    labels = lua_newuserdatauv(L, d * sizeof *labels, 0);
+    for (size_t c = 0; c < d; c++) {
+        size_t j;
+        lua_geti(L, sel, (lua_Integer)c + 1);
+        j = (size_t)lua_tointeger(L, -1);
+        lua_pop(L, 1);
+        for (size_t i = 0; i < m; i++)
+            x[i * d + c] = R->X[((R->burn + 1) * R->walkers + i) * R->d + j];
+        logs[c] = R->logs[j];
+        truth[c] = NAN;
+        lua_geti(L, names, (lua_Integer)j + 1);
+        labels[c] = lua_tostring(L, -1); /* held by names */
+        if (lua_istable(L, 3)) {
+            for (int k = 0; k < 2; k++) {
+                if (lua_getfield(L, 3, k == 0 ? "labels" : "truth") == LUA_TTABLE) {
+                    lua_pushvalue(L, -2);
+                    lua_gettable(L, -2);
+                    if (k == 0 && lua_type(L, -1) == LUA_TSTRING)
+                        labels[c] = lua_tostring(L, -1); /* held by opts.labels */
+                    else if (k == 1 && lua_type(L, -1) == LUA_TNUMBER)
+                        truth[c] = lua_tonumber(L, -1);
+                    lua_pop(L, 1);
+                }
+                lua_pop(L, 1);
+            }
+        }
+        lua_pop(L, 1);
+    }
+    memset(&o, 0, sizeof o);
+    o.title = dfle_lua_opt_string(L, 3, "title", "plot.corner");
+    o.labels = labels;
+    o.logaxis = logs;
+    o.truth = truth;
+    o.panel = (int)dfle_lua_check_whole(L, panel, "plot.corner", "panel", 0, 2000);
+    o.nbins = (size_t)dfle_lua_check_whole(L, nbins, "plot.corner", "nbins", 0, 1000);
+    if (dfle_plot_corner(path, &o, d, m, x, &err) != DFLE_OK)
+        return dfle_lua_raise(L, &err);
+    return 0;
+}
+
+/* A truth curve: a dfle.model (its slope-area pairs) or {A =, S =}. */
+static size_t truth_curve(lua_State *L, int opts, const double **A, const double **S)
+{
+    if (!lua_istable(L, opts) || lua_getfield(L, opts, "truth") == LUA_TNIL)
+        return 0;
+    return dfle_lua_slope_area(L, -1, "plot.posterior_predictive: truth", A, S);
+}
+
+/* dfle.plot.posterior_predictive(res, path [, {n = 100, truth =, title =}]) */
+static int l_predictive(lua_State *L)
+{
+    static const char *const keys[] = {"title", "truth", "raw", NULL};
+    double n = 100;
+    const dfle_lua_param nums[] = {{"n", &n}};
+    const char *path;
+    int ctx, pred, data, raw = 1, ns = 0;
+    size_t nA = 0, nd, nt, nraw = 0;
+    const double *tA = NULL, *tS = NULL, *rA = NULL, *rS = NULL;
+    dfle_plot_series s[8];
+    dfle_plot_opts o;
+    dfle_error err;
+    double *arr[9];
+    char lab[96];
+    static const char *const fields[] = {"A", "median", "lo68", "hi68", "lo95", "hi95",
+                                         "obs_lo95", "obs_hi95"};
+
+    ctx = plot_args(L, "plot.posterior_predictive", nums, 1, keys, &path);
+    if (lua_istable(L, 3) && lua_getfield(L, 3, "raw") != LUA_TNIL)
+        raw = lua_toboolean(L, -1);
+    lua_settop(L, 4);
+    /* res:predict{ n = n } */
+    lua_getfield(L, 1, "predict");
+    lua_pushvalue(L, 1);
+    lua_createtable(L, 0, 1);
+    lua_pushnumber(L, n);
+    lua_setfield(L, -2, "n");
+    lua_call(L, 2, 1);
+    pred = lua_gettop(L);
+    for (int k = 0; k < 8; k++) {
+        size_t len;
+        lua_getfield(L, pred, fields[k]);
+        arr[k] = dfle_lua_check_array(L, -1, "plot.posterior_predictive", &len);
+        if (k == 0)
+            nA = len;
+    }
+    lua_getfield(L, ctx, "data");
+    data = lua_gettop(L);
+    lua_getfield(L, data, "A");
+    arr[8] = dfle_lua_check_array(L, -1, "plot.posterior_predictive: data.A", &nd);
+    lua_getfield(L, data, "S");
+    {
+        size_t nS;
+        double *dS = dfle_lua_check_array(L, -1, "plot.posterior_predictive: data.S", &nS);
+        if (raw && lua_getfield(L, data, "raw") == LUA_TTABLE) {
+            lua_getfield(L, -1, "A");
+            rA = dfle_lua_check_array(L, -1, "plot.posterior_predictive: raw A", &nraw);
+            lua_getfield(L, -3, "S");
+            rS = dfle_lua_check_array(L, -1, "plot.posterior_predictive: raw S", &nraw);
+        }
+        nt = truth_curve(L, 3, &tA, &tS);
+        memset(s, 0, sizeof s);
+        if (nraw > 0)
+            s[ns++] = (dfle_plot_series){.label = "Slopes of the DEM cells", .n = nraw, .x = rA,
+                                         .y = rS, .rgb = "#c8c8c8"};
+        s[ns++] = (dfle_plot_series){.label = "95 % of the posterior model", .n = nA,
+                                     .x = arr[0], .lo = arr[4], .hi = arr[5], .rgb = "#9ecae1"};
+        s[ns++] = (dfle_plot_series){.label = "68 %", .n = nA, .x = arr[0], .lo = arr[2],
+                                     .hi = arr[3], .rgb = "#3182bd"};
+        s[ns++] = (dfle_plot_series){.label = "Posterior median", .n = nA, .x = arr[0],
+                                     .y = arr[1], .lines = 1, .rgb = "#08306b"};
+        s[ns++] = (dfle_plot_series){.label = "95 % of binned slopes (with noise)", .n = nA,
+                                     .x = arr[0], .y = arr[6], .lines = 1, .dash = 1,
+                                     .rgb = "#6baed6"};
+        s[ns++] = (dfle_plot_series){.label = NULL, .n = nA, .x = arr[0], .y = arr[7],
+                                     .lines = 1, .dash = 1, .rgb = "#6baed6"};
+        if (nt > 0)
+            s[ns++] = (dfle_plot_series){.label = "True model", .n = nt, .x = tA, .y = tS,
+                                         .lines = 1, .dash = 1, .rgb = "#d01c1c"};
+        snprintf(lab, sizeof lab, "Binned data (%d bins)", (int)nd);
+        s[ns++] = (dfle_plot_series){.label = lab, .n = nd, .x = arr[8], .y = dS,
+                                     .rgb = "#000000"};
+    }
+    memset(&o, 0, sizeof o);
+    o.title = dfle_lua_opt_string(L, 3, "title", "plot.posterior_predictive");
+    o.xlabel = "Drainage area, {/:Italic A} (m^2)";
+    o.ylabel = "Slope, {/:Italic S}";
+    o.logx = o.logy = 1;
+    o.width = 900;
+    o.height = 650;
+    if (dfle_plot_xy(path, &o, s, (size_t)ns, &err) != DFLE_OK)
+        return dfle_lua_raise(L, &err);
+    return 0;
+}
+
+void inv_open_plot(lua_State *L)
+{
+    lua_getfield(L, -1, "plot");
+    lua_pushcfunction(L, l_corner);
+    lua_setfield(L, -2, "corner");
+    lua_pushcfunction(L, l_predictive);
+    lua_setfield(L, -2, "posterior_predictive");
+    lua_pop(L, 1);
+}
