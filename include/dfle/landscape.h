@@ -145,6 +145,9 @@ enum dfle_landscape_field_id {
 int dfle_landscape_field_lookup(const char *name);  /* or -1 */
 const char *dfle_landscape_field_name(int field);
 const char *dfle_landscape_field_unit(int field);
+/* In words, for outputs; the CF standard name where one fits, else NULL. */
+const char *dfle_landscape_field_long_name(int field);
+const char *dfle_landscape_field_standard_name(int field);
 int dfle_landscape_get(dfle_landscape *ls, int field, double *out, dfle_error *err);
 
 /* --- Runs -------------------------------------------------------------- */

@@ -480,14 +480,22 @@ double ls_fluvial_rate(const dfle_landscape *ls, size_t c, double A, double S)
 /* Fields                                                           */
 /* ---------------------------------------------------------------- */
 
+/* Names, units, and the CF long and standard names (a standard name
+ * only where the CF table has one that means the same thing). */
 static const struct {
-    const char *name, *unit;
+    const char *name, *unit, *long_name, *standard_name;
 } field_info[DFLE_LS_NFIELDS] = {
-    [DFLE_LS_Z] = {"z", "m"},          [DFLE_LS_A] = {"A", "m^2"},
-    [DFLE_LS_S] = {"S", "-"},          [DFLE_LS_E_F] = {"E_f", "m/yr"},
-    [DFLE_LS_E_DF] = {"E_df", "m/yr"}, [DFLE_LS_REACH] = {"reach", "-"},
-    [DFLE_LS_CHANNEL] = {"channel", "-"}, [DFLE_LS_DZDT] = {"dzdt", "m/yr"},
-    [DFLE_LS_U] = {"U", "m/yr"},       [DFLE_LS_BASE] = {"base", "-"},
+    [DFLE_LS_Z] = {"z", "m", "elevation of the land surface", "surface_altitude"},
+    [DFLE_LS_A] = {"A", "m^2", "drainage area (D8)", NULL},
+    [DFLE_LS_S] = {"S", "-", "slope to the D8 receiver", NULL},
+    [DFLE_LS_E_F] = {"E_f", "m/yr", "fluvial erosion rate", NULL},
+    [DFLE_LS_E_DF] = {"E_df", "m/yr", "debris-flow erosion rate", NULL},
+    [DFLE_LS_REACH] = {"reach", "-", "debris flows going on at the cell (weighted count)", NULL},
+    [DFLE_LS_CHANNEL] = {"channel", "-", "cell kind: 0 hillslope, 1 channel, 2 channel head",
+                         NULL},
+    [DFLE_LS_DZDT] = {"dzdt", "m/yr", "rate of change of the surface elevation", NULL},
+    [DFLE_LS_U] = {"U", "m/yr", "rock uplift rate", NULL},
+    [DFLE_LS_BASE] = {"base", "-", "base-level cell (1) or not (0)", NULL},
 };
 
 int dfle_landscape_field_lookup(const char *name)
@@ -506,6 +514,16 @@ const char *dfle_landscape_field_name(int f)
 const char *dfle_landscape_field_unit(int f)
 {
     return f >= 0 && f < DFLE_LS_NFIELDS ? field_info[f].unit : NULL;
+}
+
+const char *dfle_landscape_field_long_name(int f)
+{
+    return f >= 0 && f < DFLE_LS_NFIELDS ? field_info[f].long_name : NULL;
+}
+
+const char *dfle_landscape_field_standard_name(int f)
+{
+    return f >= 0 && f < DFLE_LS_NFIELDS ? field_info[f].standard_name : NULL;
 }
 
 int dfle_landscape_get(dfle_landscape *ls, int field, double *out, dfle_error *err)

@@ -36,52 +36,86 @@
 #include <math.h>
 #include <stdlib.h>
 
+/* One cell of a sweep: lower z[i] to the least z_j + S_c L over the
+ * four neighbours k0..k0+3 (those already swept); 1 when it moved. */
+static int relax_cell(const dfle_landscape *ls, double *z, size_t r, size_t c, int k0,
+                      const int *drow, const int *dcol, const long long *step, const double *w)
+{
+    const size_t i = r * ls->nx + c;
+    double best = z[i];
+    if (r > 0 && c > 0 && r + 1 < ls->ny && c + 1 < ls->nx) {
+        for (int k = k0; k < k0 + 4; k++) {
+            const double v = z[(long long)i + step[k]] + w[k]; /* NaN: never less */
+            best = v < best ? v : best;
+        }
+    } else {
+        for (int k = k0; k < k0 + 4; k++) {
+            const long long rr = (long long)r + drow[k], cc = (long long)c + dcol[k];
+            double v;
+            if (rr < 0 || cc < 0 || rr >= (long long)ls->ny || cc >= (long long)ls->nx)
+                continue;
+            v = z[rr * (long long)ls->nx + cc] + w[k];
+            best = v < best ? v : best;
+        }
+    }
+    if (best < z[i]) {
+        z[i] = best;
+        return 1;
+    }
+    return 0;
+}
+
 /* Lower each hillslope cell (free[c]) to min over its neighbours of
- * z_j + S_c L; free cells start at +Inf, every other data cell is held.
- * Neighbours k = 4..7 (W, NW, N, NE) come before a cell in row-major
- * order, k = 0..3 (E, SE, S, SW) after it. */
+ * z_j + S_c L; free cells start at an upper bound (S_c L steps down
+ * their receivers: one path among those the minimum is over), every
+ * other data cell is held.  Neighbours k = 4..7 (W, NW, N, NE) come
+ * before a cell in row-major order, k = 0..3 (E, SE, S, SW) after it. */
 static int relax_hillslopes(dfle_landscape *ls, const unsigned char *free_, dfle_error *err)
 {
     static const int drow[8] = {0, 1, 1, 1, 0, -1, -1, -1};
     static const int dcol[8] = {1, 1, 0, -1, -1, -1, 0, 1};
     const size_t nx = ls->nx, ny = ls->ny;
-    const long long lnx = (long long)nx;
     double *z = ls->z, w[8];
     long long step[8];
     for (int k = 0; k < 8; k++) {
         w[k] = ls->o.S_c * ls->len[k];
-        step[k] = drow[k] * lnx + dcol[k];
+        step[k] = drow[k] * (long long)nx + dcol[k];
     }
     for (size_t pair = 0; pair <= ls->n_data; pair++) {
         int changed = 0;
-        for (int dir = 0; dir < 2; dir++) {
-            const int k0 = dir == 0 ? 4 : 0; /* the neighbours already swept */
-            for (size_t q = 0; q < ls->n; q++) {
-                const size_t i = dir == 0 ? q : ls->n - 1 - q;
-                const size_t r = i / nx, c = i % nx;
-                double best;
-                if (!free_[i])
+        for (int back = 0; back < 2; back++) { /* forward from W, NW, N, NE; back from E, ... */
+            const int k0 = back ? 0 : 4;
+            for (size_t q = 0; q < ny; q++) {
+                const size_t r = back ? ny - 1 - q : q;
+                const unsigned char *fr = free_ + r * nx;
+                double *zr = z + r * nx;
+                if (r == 0 || r + 1 == ny || nx < 3) { /* edge rows: bounds checked */
+                    for (size_t p = 0; p < nx; p++) {
+                        const size_t c = back ? nx - 1 - p : p;
+                        if (fr[c])
+                            changed |= relax_cell(ls, z, r, c, k0, drow, dcol, step, w);
+                    }
                     continue;
-                best = z[i];
-                if (r > 0 && c > 0 && r + 1 < ny && c + 1 < nx) {
+                }
+                if (fr[back ? nx - 1 : 0])
+                    changed |= relax_cell(ls, z, r, back ? nx - 1 : 0, k0, drow, dcol, step, w);
+                for (size_t p = 1; p + 1 < nx; p++) { /* interior: every neighbour exists */
+                    const size_t c = back ? nx - 1 - p : p;
+                    double best;
+                    if (!fr[c])
+                        continue;
+                    best = zr[c];
                     for (int k = k0; k < k0 + 4; k++) {
-                        const double v = z[(long long)i + step[k]] + w[k]; /* NaN: no */
+                        const double v = zr[(long long)c + step[k]] + w[k]; /* NaN: never less */
                         best = v < best ? v : best;
                     }
-                } else {
-                    for (int k = k0; k < k0 + 4; k++) {
-                        const long long rr = (long long)r + drow[k], cc = (long long)c + dcol[k];
-                        double v;
-                        if (rr < 0 || cc < 0 || rr >= (long long)ny || cc >= lnx)
-                            continue;
-                        v = z[rr * lnx + cc] + w[k];
-                        best = v < best ? v : best;
+                    if (best < zr[c]) {
+                        zr[c] = best;
+                        changed = 1;
                     }
                 }
-                if (best < z[i]) {
-                    z[i] = best;
-                    changed = 1;
-                }
+                if (fr[back ? 0 : nx - 1])
+                    changed |= relax_cell(ls, z, r, back ? 0 : nx - 1, k0, drow, dcol, step, w);
             }
         }
         if (!changed)
@@ -180,12 +214,9 @@ int ls_direct_round(dfle_landscape *ls, dfle_error *err)
         const size_t c = stack[k], r = rcv[c];
         if (r == c)
             continue;
-        if (threshold && !(A[c] >= ls->o.A0)) {
-            free_[c] = 1;
-            ls->z[c] = INFINITY;
-        } else {
-            ls->z[c] = ls->z[r] + S[c] * ls->len[dir[c]];
-        }
+        if (threshold && !(A[c] >= ls->o.A0))
+            free_[c] = 1; /* S[c] = S_c: an upper bound, lowered below */
+        ls->z[c] = ls->z[r] + S[c] * ls->len[dir[c]];
     }
     if (threshold)
         st = relax_hillslopes(ls, free_, err);

@@ -161,11 +161,17 @@ static int run_direct(dfle_landscape *ls, const dfle_landscape_run_opts *o,
         if ((s = ls_route(ls, err)) != DFLE_OK)
             return s;
         if (rounds > 0) {
-            if ((s = ls_evaluate_rates(ls, o->tol, o->quantile, st, err)) != DFLE_OK)
-                return s;
             st->steps = rounds;
-            if (steady_met(o, st))
-                return DFLE_OK;
+            /* The rates (a routing of the debris flows, the model's
+             * evaluation) decide only once the network is stable. */
+            if (ls->stable >= o->stable_steps) {
+                if ((s = ls_evaluate_rates(ls, o->tol, o->quantile, st, err)) != DFLE_OK)
+                    return s;
+                if (steady_met(o, st))
+                    return DFLE_OK;
+            }
+            st->rcv_changes = ls->rcv_changes;
+            st->stable = ls->stable;
             if (ls->rcv_changes < fewest) {
                 fewest = ls->rcv_changes;
                 fewest_at = rounds;

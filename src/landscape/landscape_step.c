@@ -151,6 +151,16 @@ static void status_network(const dfle_landscape *ls, dfle_landscape_status *st)
     st->heads = ls->model != NULL ? ls->heads : 0;
 }
 
+/* Cells a debris flow reaches, on the flow just evaluated. */
+static size_t count_reached(const dfle_landscape *ls)
+{
+    size_t k = 0;
+    if (ls->model != NULL)
+        for (size_t c = 0; c < ls->n; c++)
+            k += !isnan(ls->z[c]) && ls_reach(ls, c) > 0;
+    return k;
+}
+
 int ls_implicit_step(dfle_landscape *ls, double dt, double tol, double quantile,
                      dfle_landscape_status *st, dfle_error *err)
 {
@@ -339,6 +349,7 @@ int ls_evaluate_rates(dfle_landscape *ls, double tol, double quantile,
     if (st != NULL) {
         ls_ratios(ls, tol, quantile, st);
         status_network(ls, st);
+        st->reached = count_reached(ls);
     }
     return DFLE_OK;
 }
