@@ -31,9 +31,9 @@
  *
  * Steady state (doc/landscape.md): in 2D divides migrate and a strict
  * max |dz/dt| criterion may never be met, so a landscape is steady when
- * a fraction `quantile` of its cells has |dz/dt| <= tol U and the
- * receivers have not changed for `stable_steps` steps in a row (the
- * direct method: between two rounds).
+ * a fraction `quantile` (0.95) of its cells has |dz/dt| <= tol U and
+ * at most a fraction rcv_tol of the receivers changed at each of the
+ * last `stable_steps` routings (the direct method: one a round).
  *
  * One object is used by one thread at a time; the library starts no
  * threads, so a run gives the same numbers wherever it runs.  Rates in
@@ -226,7 +226,8 @@ int dfle_landscape_run(dfle_landscape *ls, const dfle_landscape_run_opts *opts,
                        dfle_landscape_result *res, dfle_error *err);
 
 /* One backward-Euler step of dt [yr] (route, erode in stack order,
- * hillslopes); st (may be NULL) receives its figures. */
+ * hillslopes); st (may be NULL) receives its figures (q_ratio: the 0.95
+ * quantile, as the runs' default). */
 int dfle_landscape_step(dfle_landscape *ls, double dt, double tol, dfle_landscape_status *st,
                         dfle_error *err);
 

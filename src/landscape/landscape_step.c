@@ -293,7 +293,7 @@ int dfle_landscape_step(dfle_landscape *ls, double dt, double tol, dfle_landscap
         memset(st, 0, sizeof *st);
     if ((s = ls_update_fields(ls, 0, err)) != DFLE_OK)
         return s;
-    if ((s = ls_implicit_step(ls, dt, tol, 0.99, st, err)) != DFLE_OK)
+    if ((s = ls_implicit_step(ls, dt, tol, 0.95, st, err)) != DFLE_OK)
         return s;
     ls->time += dt;
     return DFLE_OK;
