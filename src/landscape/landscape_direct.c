@@ -81,29 +81,35 @@ static int relax_hillslopes(dfle_landscape *ls, const unsigned char *free_, dfle
         w[k] = ls->o.S_c * ls->len[k];
         step[k] = drow[k] * (long long)nx + dcol[k];
     }
+    /* Only the box around the free cells is swept (a DEM's catchment
+     * may fill a tenth of its grid). */
+    size_t r_lo = ny, r_hi = 0, c_lo = nx, c_hi = 0;
+    for (size_t r = 0; r < ny; r++)
+        for (size_t c = 0; c < nx; c++)
+            if (free_[r * nx + c]) {
+                r_lo = r < r_lo ? r : r_lo, r_hi = r > r_hi ? r : r_hi;
+                c_lo = c < c_lo ? c : c_lo, c_hi = c > c_hi ? c : c_hi;
+            }
+    if (r_lo > r_hi)
+        return DFLE_OK; /* no hillslope cell */
     for (size_t pair = 0; pair <= ls->n_data; pair++) {
         int changed = 0;
         for (int back = 0; back < 2; back++) { /* forward from W, NW, N, NE; back from E, ... */
             const int k0 = back ? 0 : 4;
-            for (size_t q = 0; q < ny; q++) {
-                const size_t r = back ? ny - 1 - q : q;
+            for (size_t q = r_lo; q <= r_hi; q++) {
+                const size_t r = back ? r_lo + r_hi - q : q;
+                const int edge_row = r == 0 || r + 1 == ny;
                 const unsigned char *fr = free_ + r * nx;
                 double *zr = z + r * nx;
-                if (r == 0 || r + 1 == ny || nx < 3) { /* edge rows: bounds checked */
-                    for (size_t p = 0; p < nx; p++) {
-                        const size_t c = back ? nx - 1 - p : p;
-                        if (fr[c])
-                            changed |= relax_cell(ls, z, r, c, k0, drow, dcol, step, w);
-                    }
-                    continue;
-                }
-                if (fr[back ? nx - 1 : 0])
-                    changed |= relax_cell(ls, z, r, back ? nx - 1 : 0, k0, drow, dcol, step, w);
-                for (size_t p = 1; p + 1 < nx; p++) { /* interior: every neighbour exists */
-                    const size_t c = back ? nx - 1 - p : p;
+                for (size_t p = c_lo; p <= c_hi; p++) {
+                    const size_t c = back ? c_lo + c_hi - p : p;
                     double best;
                     if (!fr[c])
                         continue;
+                    if (edge_row || c == 0 || c + 1 == nx) { /* bounds checked */
+                        changed |= relax_cell(ls, z, r, c, k0, drow, dcol, step, w);
+                        continue;
+                    }
                     best = zr[c];
                     for (int k = k0; k < k0 + 4; k++) {
                         const double v = zr[(long long)c + step[k]] + w[k]; /* NaN: never less */
@@ -114,8 +120,6 @@ static int relax_hillslopes(dfle_landscape *ls, const unsigned char *free_, dfle
                         changed = 1;
                     }
                 }
-                if (fr[back ? 0 : nx - 1])
-                    changed |= relax_cell(ls, z, r, back ? 0 : nx - 1, k0, drow, dcol, step, w);
             }
         }
         if (!changed)
