@@ -203,13 +203,13 @@ fuzz-long: all
 memcheck: all $(TEST_BIN) $(GATE_TEST) $(MISSING_TEST)
 	@BUILD=$(BUILD) MEMCHECK=1 sh tests/run-tests.sh
 
-bench: all $(BENCH_BIN)
+bench: all $(BENCH_BIN) $(if $(HAVE_MPICC),$(BUILD)/dfle-mpi)
 	@sh bench/run.sh $(CLI) $(BUILD)/bench
 
 # --- MPI build (doc/ensembles.md): only these rules need mpicc ---
 
 MPI_CLI   := $(BUILD)/dfle-mpi
-MPI_OBJ   := $(BUILD)/obj-mpi/src/cli/main.o $(BUILD)/obj-mpi/src/mpi/dfle_mpi.o
+MPI_OBJ   := $(BUILD)/obj-mpi/src/cli/main.o $(patsubst %.c,$(BUILD)/obj-mpi/%.o,$(wildcard src/mpi/*.c))
 
 $(BUILD)/obj-mpi/%.o: %.c
 	@mkdir -p $(dir $@)

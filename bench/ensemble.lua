@@ -8,31 +8,8 @@
 local n = tonumber(arg and arg[1]) or 400
 local dir = os.getenv("TMPDIR") or "/tmp"
 
-local function g5(workers, out)
-  return dfle.ensemble{
-    params = {                                   -- Table G5
-      M0 = { 1000, 5000 }, gamma = { 0, 1 }, mu = { 100, 1000 }, tau_y = { 100, 600 },
-      k_df = { 5e-5, 1e-3 }, k_e = { 2e-14, 8e-14 }, U = { 1e-4, 1e-3 },
-    },
-    n = n, seed = 1, out = out, workers = workers, resume = false,
-    build = function(p)
-      return dfle.model{
-        U = p.U,
-        fluvial = dfle.fluvial.stochastic_threshold{ k_e = p.k_e },
-        router = dfle.router.empirical{ M0 = p.M0, gamma = p.gamma, mu = p.mu, tau_y = p.tau_y },
-        law = dfle.law.power{ k_df = p.k_df, alpha = 6, beta = 1 },
-      }
-    end,
-    outputs = { "S_df", "A_df", "r2", "S_max_minus_S_ch" },
-  }
-end
-
-local function wall()
-  local h = io.popen("date +%s.%N")
-  local t = tonumber(h:read("l"))
-  h:close()
-  return t
-end
+local here = (arg and arg[0] or ""):match("^(.*)/") or "."
+local g5, wall = dofile(here .. "/g5.lua")
 
 local h = io.popen("nproc")
 local cores = tonumber(h:read("l")) or 1
@@ -41,7 +18,7 @@ local rates = {}
 for _, w in ipairs{ cores, 1 } do
   local t0 = wall()
   local out = dir .. "/dfle-bench-g5-" .. w .. ".csv"
-  local ens = g5(w, out)
+  local ens = g5(n, w, out)
   os.remove(out)
   local dt = wall() - t0
   rates[w] = n / dt

@@ -25,5 +25,9 @@ preload=$(sed -n 's/^#define DFLE_\(GDAL\|NETCDF\)_SONAME "\(.*\)"$/\2/p' \
 "$DFLE" -q "$here/fit.lua"
 "$DFLE" -q "$here/methods.lua"
 "$DFLE" -q "$here/ensemble.lua"
+# dfle-mpi against threads, where `make mpi` built it and mpirun is there.
+if [ -x "$(dirname "$DFLE")/dfle-mpi" ] && command -v mpirun > /dev/null; then
+    sh "$here/mpi.sh" "$(dirname "$DFLE")/dfle-mpi"
+fi
 "$DFLE" -q "$here/laws.lua"
 "$DFLE" -q "$here/invert.lua"

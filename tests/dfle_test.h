@@ -14,6 +14,7 @@
 #include <stddef.h>
 #include <stdint.h>
 #include <stdio.h>
+#include <stdlib.h>
 #include <cmocka.h>
 
 /* Passes when |a - b| <= abs_tol + rel_tol * |b|.  NaN never passes. */
@@ -53,5 +54,22 @@ static inline void dfle_assert_close_impl(double a, double b, double rel,
             _fail(__FILE__, __LINE__);                                        \
         }                                                                     \
     } while (0)
+
+/* The whole of file `path` as a string (free it); the file must exist. */
+static inline char *dfle_test_slurp(const char *path)
+{
+    FILE *fp = fopen(path, "rb");
+    char *s;
+    long n;
+    assert_non_null(fp);
+    fseek(fp, 0, SEEK_END);
+    n = ftell(fp);
+    rewind(fp);
+    s = calloc((size_t)n + 1, 1);
+    assert_non_null(s);
+    assert_int_equal(fread(s, 1, (size_t)n, fp), (size_t)n);
+    fclose(fp);
+    return s;
+}
 
 #endif

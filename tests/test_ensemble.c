@@ -1,7 +1,8 @@
 /*
  * test_ensemble.c - the ensemble file layer (dfle/ensemble.h): streamed
  * rows, resume over a truncated last line, the sorted rewrite, gather of
- * shards, and the index queue (shards, done samples, limit, threads).
+ * shards, and the index queue (shards, done samples, limit, threads,
+ * indices given back).
  */
 #define _XOPEN_SOURCE 700 /* mknod */
 #include "dfle_test.h"
@@ -40,21 +41,6 @@ static void path(char *buf, size_t len, const char *name)
     snprintf(buf, len, "%s/%s", dir, name);
 }
 
-static char *slurp(const char *p)
-{
-    FILE *fp = fopen(p, "rb");
-    char *s;
-    long n;
-    assert_non_null(fp);
-    fseek(fp, 0, SEEK_END);
-    n = ftell(fp);
-    rewind(fp);
-    s = calloc((size_t)n + 1, 1);
-    assert_int_equal(fread(s, 1, (size_t)n, fp), (size_t)n);
-    fclose(fp);
-    return s;
-}
-
 static void row(char *buf, size_t len, size_t i)
 {
     snprintf(buf, len, "%zu,%g,ok,\"\"", i, 0.5 * (double)i);
@@ -86,7 +72,7 @@ static void test_stream_sort_resume(void **state)
     row(r, sizeof r, 7);
     assert_int_equal(dfle_ens_file_append(f, 7, r, &err), DFLE_EINVAL);
     /* rows are on disk, in finishing order, before closing */
-    text = slurp(p);
+    text = dfle_test_slurp(p);
     assert_string_equal(text, META "\n" HEADER "\n4,2,ok,\"\"\n2,1,ok,\"\"\n6,3,ok,\"\"\n");
     free(text);
     assert_ok(dfle_ens_file_close(f, 0, &err), &err);
@@ -105,7 +91,7 @@ static void test_stream_sort_resume(void **state)
             assert_ok(dfle_ens_file_append(f, i, r, &err), &err);
         }
     assert_ok(dfle_ens_file_close(f, 1, &err), &err);
-    text = slurp(p);
+    text = dfle_test_slurp(p);
     assert_string_equal(text, expected);
     free(text);
 
@@ -115,7 +101,7 @@ static void test_stream_sort_resume(void **state)
     assert_ok(dfle_ens_file_open(p, "# other", NULL, HEADER, 6, 0, &f, &err), &err);
     assert_int_equal(dfle_ens_file_ndone(f), 0);
     assert_ok(dfle_ens_file_close(f, 1, &err), &err);
-    text = slurp(p);
+    text = dfle_test_slurp(p);
     assert_string_equal(text, "# other\n" HEADER "\n");
     free(text);
 }
@@ -149,7 +135,7 @@ static void test_comment_lines(void **state)
     row(r, sizeof r, 1);
     assert_ok(dfle_ens_file_append(f, 1, r, &err), &err);
     assert_ok(dfle_ens_file_close(f, 1, &err), &err);
-    text = slurp(p);
+    text = dfle_test_slurp(p);
     assert_string_equal(text, META "\n# dfle: 9\n# units: x=m\n" HEADER
                               "\n1,0.5,ok,\"\"\n3,1.5,ok,\"\"\n");
     free(text);
@@ -166,7 +152,7 @@ static void test_comment_lines(void **state)
     files[0] = p;
     files[1] = q;
     assert_ok(dfle_ens_gather(files, 2, out, NULL, &err), &err);
-    text = slurp(out);
+    text = dfle_test_slurp(out);
     assert_string_equal(text, META "\n# dfle: 9\n# units: x=m\n" HEADER
                               "\n1,0.5,ok,\"\"\n2,1,ok,\"\"\n3,1.5,ok,\"\"\n");
     free(text);
@@ -205,7 +191,7 @@ static void test_gather_shards(void **state)
     path(out, sizeof out, "all.csv");
     assert_ok(dfle_ens_gather(files, 3, out, &nrows, &err), &err);
     assert_int_equal(nrows, 6);
-    text = slurp(out);
+    text = dfle_test_slurp(out);
     assert_string_equal(text, expected);
     free(text);
     /* the same file twice: identical rows are merged */
@@ -266,6 +252,21 @@ static void test_queue_threads_limit(void **state)
     while (dfle_ens_queue_next(q, &i))
         got++;
     assert_int_equal(got, 5);
+    dfle_ens_queue_free(q);
+
+    /* An index given back (its worker lost) comes out again, first, and
+     * counts once within the limit. */
+    assert_ok(dfle_ens_queue_new(10, 0, 0, NULL, 4, &q, &err), &err);
+    assert_true(dfle_ens_queue_next(q, &i) && i == 1);
+    assert_true(dfle_ens_queue_next(q, &i) && i == 2);
+    assert_ok(dfle_ens_queue_give_back(q, 1, &err), &err);
+    assert_true(dfle_ens_queue_next(q, &i) && i == 1);
+    assert_true(dfle_ens_queue_next(q, &i) && i == 3);
+    assert_true(dfle_ens_queue_next(q, &i) && i == 4);
+    assert_false(dfle_ens_queue_next(q, &i));
+    assert_ok(dfle_ens_queue_give_back(q, 4, &err), &err);
+    assert_true(dfle_ens_queue_next(q, &i) && i == 4);
+    assert_false(dfle_ens_queue_next(q, &i));
     dfle_ens_queue_free(q);
     assert_int_equal(dfle_ens_queue_new(10, 5, 4, NULL, 0, &q, &err), DFLE_EINVAL);
 }

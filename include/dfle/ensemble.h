@@ -110,6 +110,10 @@ void dfle_ens_queue_free(dfle_ens_queue *q);
 size_t dfle_ens_queue_total(const dfle_ens_queue *q);
 /* Next index into *index: 1, or 0 when the queue is empty or stopped. */
 int dfle_ens_queue_next(dfle_ens_queue *q, size_t *index);
+/* Give back an index handed out whose sample will not have a row (its
+ * worker was lost): dfle_ens_queue_next hands it out again, before any
+ * other.  Thread-safe.  DFLE_ENOMEM. */
+int dfle_ens_queue_give_back(dfle_ens_queue *q, size_t index, dfle_error *err);
 /* Make every later dfle_ens_queue_next return 0. */
 void dfle_ens_queue_stop(dfle_ens_queue *q);
 

@@ -48,10 +48,24 @@ static const char *progname = "dfle";
  * second Ctrl-C; ensemble rows are whole lines either way. */
 static volatile sig_atomic_t interrupted;
 
+#ifdef DFLE_MPI
+/* dfle-mpi's rank 0 says at once that it stops and what is kept: mpirun
+ * sends SIGTERM to every rank when one has died, and SIGKILL a moment
+ * later, often before the script's own last line can be printed. */
+static char stop_line[2][320]; /* for SIGINT, SIGTERM; empty: say nothing */
+#endif
+
 static void on_interrupt(int sig)
 {
     interrupted = sig;
     signal(sig, SIG_DFL);
+#ifdef DFLE_MPI
+    {
+        const char *line = stop_line[sig == SIGTERM];
+        ssize_t w = write(STDERR_FILENO, line, strlen(line));
+        (void)w;
+    }
+#endif
 }
 
 static void catch_interrupts(void)
@@ -103,9 +117,17 @@ static void usage(FILE *out)
             "options:\n"
             "  -q, --quiet    no progress bar, no notes (warnings and errors still show)\n"
             "  --verbose      also say what each run did and each file written\n"
+#ifdef DFLE_MPI
+            "  -j N           dfle.ensemble workers in each rank (default: the rank's\n"
+            "                 share of its node's cores)\n"
+#else
             "  -j N           dfle.ensemble workers (default: all cores)\n"
+#endif
             "  --shard i/n    run shard i of n of each dfle.ensemble (1 <= i <= n);\n"
             "                 --shard slurm takes i, n from SLURM_ARRAY_TASK_*\n"
+#ifdef DFLE_MPI
+            "  --rank-timeout S  take a rank silent for S seconds as lost (default 60)\n"
+#endif
             "  -h, --help     show this help and exit\n"
             "  -v, --version  show the version and exit\n"
             "  --             stop handling options\n"
@@ -133,6 +155,7 @@ typedef struct cli {
     dfle_progress_bar bar;
     dfle_lua_progress hooks;
     dfle_lua_ensemble_host ens; /* --- ensembles (doc/ensembles.md) --- */
+    double rank_timeout;        /* dfle-mpi: --rank-timeout [s]          */
     double ens_last_draw;
     int ens_drawn;
 } cli;
@@ -283,6 +306,7 @@ static void ens_progress_end(void *ud)
     c->ens_drawn = 0;
 }
 
+
 /* "i/n" with 1 <= i <= n, or "slurm": SLURM_ARRAY_TASK_ID (from
  * SLURM_ARRAY_TASK_MIN) of SLURM_ARRAY_TASK_COUNT. */
 static int parse_shard(const char *s, size_t *i, size_t *n)
@@ -335,6 +359,23 @@ static void cli_note(void *ud, int level, const char *line)
     fprintf(stderr, "%s: %s\n", progname, line);
     fflush(stderr);
 }
+
+#ifdef DFLE_MPI
+/* dfle-mpi's lines: warnings (a rank lost) always shown, like Lua's;
+ * notes (what each rank ran) with --verbose. */
+static void mpi_tell(void *ud, int warning, const char *line)
+{
+    cli *c = ud;
+    if (!warning) {
+        cli_note(c, DFLE_LUA_DETAIL, line);
+        return;
+    }
+    if (c->bar.drawn || c->ens_drawn)
+        fputs("\r\033[K", stderr);
+    fprintf(stderr, "%s: warning: %s\n", progname, line);
+    fflush(stderr);
+}
+#endif
 
 /* Runs protected: everything that can raise happens here. */
 static int pmain(lua_State *L)
@@ -425,6 +466,18 @@ int main(int argc, char **argv)
                         progname, v);
                 return 2;
             }
+#ifdef DFLE_MPI
+        } else if (strcmp(a, "--rank-timeout") == 0) {
+            const char *v = i + 1 < argc ? argv[++i] : "";
+            char *end;
+            double t = strtod(v, &end);
+            if (end == v || *end != '\0' || !(t >= 1 && t <= 1e6)) {
+                fprintf(stderr, "%s: --rank-timeout needs a number of seconds, 1 to 1e6 (got '%s')\n",
+                        progname, v);
+                return 2;
+            }
+            c.rank_timeout = t;
+#endif
         } else if (strcmp(a, "--") == 0) {
             i++;
             break;
@@ -448,17 +501,34 @@ int main(int argc, char **argv)
 
 #ifdef DFLE_MPI /* ranks > 0 serve ensembles; rank 0 runs the script */
     {
-        int size, rank = dfle_mpi_init(&size);
+        char msg[DFLE_ERROR_MSG_MAX];
+        int size = 1, rank = 0, cores = 0;
+        if (dfle_mpi_init(c.rank_timeout, &rank, &size, &cores, msg, sizeof msg) != 0) {
+            if (rank == 0)
+                fprintf(stderr, "%s: %s\n", progname, msg);
+            dfle_mpi_finish(0);
+            return EXIT_FAILURE;
+        }
         c.ens.open_state = open_worker;
         c.ens.ud = &c;
+        c.ens.cores = cores; /* this rank's share of its node */
         if (rank > 0) {
             gsl_set_error_handler_off();
             status = dfle_mpi_worker_loop(&c.ens);
-            dfle_mpi_finish(rank);
+            dfle_mpi_finish(0);
             return status;
         }
-        c.ens.remote = dfle_mpi_remote;
-        dfle_mpi_set_host(&c.ens);
+        if (size > 1 && dfle_mpi_serve(&c.ens, mpi_tell, &c, msg, sizeof msg) != 0) {
+            fprintf(stderr, "%s: %s\n", progname, msg);
+            dfle_mpi_finish(0);
+            return EXIT_FAILURE;
+        }
+        for (int k = 0; k < 2 && size > 1; k++)
+            snprintf(stop_line[k], sizeof stop_line[k],
+                     "%s: rank 0 got %s (mpirun sends it to every rank when one has died, "
+                     "and on Ctrl-C): stopping; the ensemble rows written so far are kept, "
+                     "whole, and running the script again resumes\n",
+                     progname, k ? "SIGTERM" : "SIGINT");
     }
 #endif
     /* GSL aborts on its errors by default; dfle checks every status instead,
@@ -501,7 +571,7 @@ int main(int argc, char **argv)
     }
     lua_close(L);
 #ifdef DFLE_MPI
-    dfle_mpi_finish(0);
+    dfle_mpi_finish(interrupted != 0);
 #endif
     return status;
 }

@@ -9,6 +9,7 @@
 
 #include "dfle/file.h"
 
+#include <assert.h>
 #include <errno.h>
 #include <fcntl.h>
 #include <sys/file.h>
@@ -33,6 +34,9 @@ struct dfle_ens_queue {
     const dfle_ens_file *done;
     size_t total;
     int stopped;
+    /* Indices given back (a worker lost before their rows), handed out
+     * again before the rest. */
+    size_t *back, nback, capback;
     pthread_mutex_t lock;
 };
 
@@ -523,6 +527,7 @@ void dfle_ens_queue_free(dfle_ens_queue *q)
     if (q == NULL)
         return;
     pthread_mutex_destroy(&q->lock);
+    free(q->back);
     free(q);
 }
 
@@ -532,7 +537,12 @@ int dfle_ens_queue_next(dfle_ens_queue *q, size_t *index)
 {
     int got = 0;
     pthread_mutex_lock(&q->lock);
-    while (!q->stopped && q->handed < q->total && q->next <= q->n) {
+    if (!q->stopped && q->nback > 0) {
+        *index = q->back[--q->nback];
+        q->handed++;
+        got = 1;
+    }
+    while (!got && !q->stopped && q->handed < q->total && q->next <= q->n) {
         size_t i = q->next++;
         if (dfle_ens_in_shard(i, q->shard_i, q->shard_n) &&
             (q->done == NULL || !dfle_ens_file_done(q->done, i))) {
@@ -544,6 +554,29 @@ int dfle_ens_queue_next(dfle_ens_queue *q, size_t *index)
     }
     pthread_mutex_unlock(&q->lock);
     return got;
+}
+
+int dfle_ens_queue_give_back(dfle_ens_queue *q, size_t index, dfle_error *err)
+{
+    int st = DFLE_OK;
+    pthread_mutex_lock(&q->lock);
+    if (q->nback == q->capback) {
+        size_t cap = q->capback > 0 ? 2 * q->capback : 16;
+        size_t *b = realloc(q->back, cap * sizeof *b);
+        if (b == NULL) {
+            st = dfle_error_set(err, DFLE_ENOMEM, "ensemble: out of memory");
+        } else {
+            q->back = b;
+            q->capback = cap;
+        }
+    }
+    if (st == DFLE_OK) {
+        assert(q->handed > 0 && index >= 1 && index <= q->n);
+        q->back[q->nback++] = index;
+        q->handed--;
+    }
+    pthread_mutex_unlock(&q->lock);
+    return st;
 }
 
 void dfle_ens_queue_stop(dfle_ens_queue *q)

@@ -1,219 +1,623 @@
 /*
- * dfle_mpi.c - dynamic sharing of ensemble samples across MPI ranks.
+ * dfle_mpi.c - dfle-mpi's start-up, and rank 0's side: a thread that
+ * serves the other ranks while the script runs.
  *
- * Protocol (all messages between rank 0 and one other rank r):
- *   0 -> r  TAG_CMD  "E <call>\n<meta>\n<header>": run the script's
- *                    <call>-th dfle.ensemble; "Q": quit.
- *   r -> 0  TAG_REQ  "R" (ready), "W<f><row>" (a row; f = '1' if the
- *                    sample failed, '0' if not), "X<message>" (failed).
- *   0 -> r  TAG_IDX  one unsigned long long: the next sample, 0 = none.
- * Every TAG_REQ message gets exactly one TAG_IDX answer, so a rank that
- * fails mid-way is answered 0 and goes back to waiting for commands.
- * Rank 0 only coordinates and writes; samples run on ranks 1..K-1.
+ * Rank 0 runs the script.  At each dfle.ensemble its own worker threads
+ * run samples as in the plain build, and the service thread shares the
+ * same queue and file with the other ranks, each running samples on
+ * threads of its own (dfle_mpi_worker.c).  Messages (text, through
+ * dfle_mpi_link.c, so no rank ever spins in a blocking MPI call):
+ *
+ *   0 -> r  "E <seq> <call> <workers> <total>\n<meta>\n<header>"
+ *                   run ensemble <seq>: the script's <call>-th
+ *                   dfle.ensemble (<workers>: the table's, 0 = not given)
+ *           "I <seq> <index> ..."   samples to run
+ *           "S <seq>"  take no more samples of <seq> (its end, or a stop)
+ *           "H"        heartbeat
+ *           "Q [1]"    quit (1: a rank was lost, leave without MPI_Finalize)
+ *   r -> 0  "R <seq> <want>\n<f><row>\n..."   rows (f = 1: a failed
+ *                   sample), and a request for <want> more indices
+ *           "X <seq> <message>"   the rank failed (its replay, say)
+ *           "D <seq> <rows> <threads> <cpu>"  its threads have ended and
+ *                   every row is sent (<cpu>: seconds the rank used on it)
+ *           "H"        heartbeat
+ *
+ * A rank asks for about two indices per thread ahead, so its threads
+ * never wait for an answer.  Rank 0 ends an ensemble when the queue is
+ * empty and no rank holds an index without a row (or at once when it
+ * stops: an error, an interrupt); messages of an ended ensemble are
+ * dropped by their <seq>.  Before it announces ensemble k + 1 every rank
+ * that took part in k has been sent "S k", so a rank has at most one
+ * ensemble waiting while it finishes the last one.
+ *
+ * Lost ranks: every rank says something at least every dfle_link_beat
+ * seconds.  Rank 0 takes a rank silent for the timeout (--rank-timeout)
+ * as lost: the indices it held go back to the queue (the others run
+ * them; having no row, a resumed run would too), its later messages are
+ * dropped and it is told to quit.  Ranks waiting on a silent rank 0
+ * stop the job with a message (dfle_mpi_worker.c).  Under a plain
+ * `mpirun` a rank that dies ends the whole job (the others get SIGTERM):
+ * rank 0 then stops as on any interrupt, and the rows written, whole
+ * lines, are kept.
  */
+/* sched_getaffinity and the CPU_* macros. */
+#define _GNU_SOURCE
+
 #include "mpi/dfle_mpi.h"
 
 #include <mpi.h>
+#include <pthread.h>
+#include <sched.h>
+#include <stdarg.h>
 #include <stdio.h>
 #include <stdlib.h>
 #include <string.h>
 #include <time.h>
+#include <unistd.h>
 
-#include <lua.h>
+#include "mpi/dfle_mpi_link.h"
 
-enum { TAG_CMD = 1, TAG_REQ = 2, TAG_IDX = 3 };
+enum { P_IDLE, P_BUSY, P_LOST };
 
-static int nranks = 1;
-static const dfle_lua_ensemble_host *rank0_host;
+/* Rank 0's view of another rank. */
+typedef struct peer {
+    int state;
+    unsigned seq;          /* the ensemble it was told to run (P_BUSY) */
+    double heard, said;    /* when it last sent us, and we it, anything [s] */
+    size_t want;           /* indices it asked for and was not given yet */
+    size_t *given;         /* indices it holds without a row */
+    size_t ngiven, capgiven;
+} peer;
 
-int dfle_mpi_init(int *size)
-{
-    int rank = 0;
-    MPI_Init(NULL, NULL);
-    MPI_Comm_rank(MPI_COMM_WORLD, &rank);
-    MPI_Comm_size(MPI_COMM_WORLD, &nranks);
-    *size = nranks;
-    return rank;
-}
-
-void dfle_mpi_set_host(const dfle_lua_ensemble_host *host) { rank0_host = host; }
-
-/* Receive a whole message of unknown length from `src` with `tag`
- * (NUL-terminated, malloc'd; out of memory aborts the job).  *from:
- * the sender. */
-static char *recv_text(int src, int tag, int *from)
-{
-    MPI_Status st;
-    int n;
-    char *buf;
-    MPI_Probe(src, tag, MPI_COMM_WORLD, &st);
-    MPI_Get_count(&st, MPI_CHAR, &n);
-    buf = malloc((size_t)n + 1);
-    if (buf == NULL) {
-        fprintf(stderr, "dfle-mpi: out of memory receiving a message\n");
-        MPI_Abort(MPI_COMM_WORLD, 1);
-        return NULL;
-    }
-    MPI_Recv(buf, n, MPI_CHAR, st.MPI_SOURCE, tag, MPI_COMM_WORLD, &st);
-    buf[n] = '\0';
-    *from = st.MPI_SOURCE;
-    return buf;
-}
-
-static void send_text(const char *s, int dst, int tag)
-{
-    MPI_Send(s, (int)strlen(s), MPI_CHAR, dst, tag, MPI_COMM_WORLD);
-}
-
-static double now(void)
-{
-    struct timespec ts;
-    clock_gettime(CLOCK_MONOTONIC, &ts);
-    return (double)ts.tv_sec + 1e-9 * (double)ts.tv_nsec;
-}
-
-int dfle_mpi_remote(void *ud, long long call, const char *meta, const char *header,
-                    dfle_ens_file *file, dfle_ens_queue *queue, size_t total, size_t *done,
-                    char *msg, size_t msglen)
-{
-    size_t len = strlen(meta) + strlen(header) + 32, failed = 0;
+/* The service: rank 0's state shared by its main thread (the script)
+ * and the service thread, under `lock`. */
+static struct service {
+    pthread_t tid;
+    pthread_mutex_t lock;
+    pthread_cond_t wake; /* CLOCK_MONOTONIC */
+    int started;
+    /* set by the main thread */
+    int quit;              /* 1: finish, 2: leave at once (torn down) */
+    int stop, fresh;       /* fresh: `cmd` is still to be announced */
     char *cmd;
-    int active = nranks - 1, error = 0;
-    double t0 = now();
+    dfle_ens_file *file;
+    dfle_ens_queue *queue;
+    unsigned seq;
+    /* set by the service thread */
+    int active;   /* an ensemble is shared (begin .. poll's last call)   */
+    int finished; /* ... and the service no longer touches file, queue  */
+    int error;
+    int exhausted; /* the queue had nothing for a rank that asked       */
+    size_t done, failed;
+    char msg[DFLE_ERROR_MSG_MAX];
+    char *notes;     /* lines for the main thread to print: each starts
+                      * with 'W' (a warning) or 'N' (a note)             */
+    size_t nnotes;
+    peer *peers;
+    char (*nodes)[MPI_MAX_PROCESSOR_NAME]; /* each rank's node          */
+    void (*tell)(void *ud, int warning, const char *line);
+    void *tell_ud;
+} S = {.lock = PTHREAD_MUTEX_INITIALIZER};
+
+/* ------------------------------------------------------------------ */
+/* Start-up (every rank).                                              */
+
+/* The processors this rank may use (its binding), shared among the
+ * ranks of its node whose bindings overlap it: a rank bound to 4 cores
+ * alone runs 4 workers; 3 unbound ranks on 2 cores run 1 each. */
+static int share_of_node(void)
+{
+    cpu_set_t mine, both, *all;
+    MPI_Comm node;
+    int n, sharing = 0, count;
+
+    if (sched_getaffinity(0, sizeof mine, &mine) != 0) {
+        long c = sysconf(_SC_NPROCESSORS_ONLN);
+        CPU_ZERO(&mine);
+        for (long k = 0; k < c && k < CPU_SETSIZE; k++)
+            CPU_SET((int)k, &mine);
+    }
+    MPI_Comm_split_type(MPI_COMM_WORLD, MPI_COMM_TYPE_SHARED, 0, MPI_INFO_NULL, &node);
+    MPI_Comm_size(node, &n);
+    all = malloc((size_t)n * sizeof *all);
+    if (all == NULL) {
+        fprintf(stderr, "dfle-mpi: out of memory at start-up\n");
+        MPI_Abort(MPI_COMM_WORLD, 1);
+        return 1;
+    }
+    MPI_Allgather(&mine, (int)sizeof mine, MPI_BYTE, all, (int)sizeof mine, MPI_BYTE, node);
+    for (int k = 0; k < n; k++) {
+        CPU_AND(&both, &mine, &all[k]);
+        sharing += CPU_COUNT(&both) > 0;
+    }
+    free(all);
+    MPI_Comm_free(&node);
+    count = CPU_COUNT(&mine) / (sharing > 0 ? sharing : 1);
+    return count > 0 ? count : 1;
+}
+
+int dfle_mpi_init(double timeout, int *rank, int *size, int *cores, char *msg, size_t msglen)
+{
+    char name[MPI_MAX_PROCESSOR_NAME];
+    int provided = 0, len = 0;
+
+    MPI_Init_thread(NULL, NULL, MPI_THREAD_SERIALIZED, &provided);
+    MPI_Comm_rank(MPI_COMM_WORLD, rank);
+    MPI_Comm_size(MPI_COMM_WORLD, size);
+    dfle_link_rank = *rank;
+    dfle_link_size = *size;
+    dfle_link_timeout = timeout > 0 ? timeout : 60;
+    dfle_link_beat = dfle_link_timeout / 4 < 1 ? dfle_link_timeout / 4 : 1;
+    *cores = share_of_node();
+    memset(name, 0, sizeof name);
+    MPI_Get_processor_name(name, &len);
+    if (*rank == 0) {
+        S.nodes = calloc((size_t)*size, sizeof *S.nodes);
+        S.peers = calloc((size_t)*size, sizeof *S.peers);
+        if (S.nodes == NULL || S.peers == NULL) {
+            fprintf(stderr, "dfle-mpi: out of memory at start-up\n");
+            MPI_Abort(MPI_COMM_WORLD, 1);
+        }
+    }
+    MPI_Gather(name, MPI_MAX_PROCESSOR_NAME, MPI_CHAR, S.nodes, MPI_MAX_PROCESSOR_NAME, MPI_CHAR,
+               0, MPI_COMM_WORLD);
+    /* Rank 0 serves the others from a second thread. */
+    if (*size > 1 && provided < MPI_THREAD_SERIALIZED) {
+        snprintf(msg, msglen, "this MPI library cannot be called from a second thread "
+                              "(MPI_THREAD_SERIALIZED), which dfle-mpi needs on rank 0");
+        return -1;
+    }
+    return 0;
+}
+
+/* ------------------------------------------------------------------ */
+/* The service thread (rank 0); everything here runs under S.lock.     */
+
+static void note(int warning, const char *fmt, ...) __attribute__((format(printf, 2, 3)));
+
+/* A line for the main thread (flush_notes); dropped if out of memory. */
+static void note(int warning, const char *fmt, ...)
+{
+    char line[DFLE_ERROR_MSG_MAX];
+    size_t len;
+    char *p;
+    va_list ap;
+    va_start(ap, fmt);
+    vsnprintf(line + 1, sizeof line - 1, fmt, ap);
+    va_end(ap);
+    line[0] = warning ? 'W' : 'N';
+    len = strlen(line);
+    p = realloc(S.notes, S.nnotes + len + 2);
+    if (p == NULL)
+        return;
+    S.notes = p;
+    memcpy(S.notes + S.nnotes, line, len);
+    S.nnotes += len;
+    S.notes[S.nnotes++] = '\n';
+    S.notes[S.nnotes] = '\0';
+}
+
+static void say(int r, const char *text)
+{
+    dfle_link_post_str(r, text);
+    S.peers[r].said = dfle_link_now();
+}
+
+static void set_error(const char *fmt, ...) __attribute__((format(printf, 1, 2)));
+
+static void set_error(const char *fmt, ...)
+{
+    va_list ap;
+    if (S.error)
+        return;
+    S.error = 1;
+    va_start(ap, fmt);
+    vsnprintf(S.msg, sizeof S.msg, fmt, ap);
+    va_end(ap);
+    if (S.queue != NULL)
+        dfle_ens_queue_stop(S.queue);
+}
+
+static int in_ensemble(const peer *p) { return p->state == P_BUSY && p->seq == S.seq; }
+
+static void give(peer *p, size_t index)
+{
+    if (p->ngiven == p->capgiven) {
+        size_t cap = p->capgiven > 0 ? 2 * p->capgiven : 16;
+        size_t *g = realloc(p->given, cap * sizeof *g);
+        if (g == NULL) {
+            fprintf(stderr, "dfle-mpi: out of memory handing out samples\n");
+            MPI_Abort(MPI_COMM_WORLD, 1);
+            return;
+        }
+        p->given = g;
+        p->capgiven = cap;
+    }
+    p->given[p->ngiven++] = index;
+}
+
+/* Remove `index` from what p holds; 0 if it did not hold it. */
+static int take_back(peer *p, size_t index)
+{
+    for (size_t k = 0; k < p->ngiven; k++)
+        if (p->given[k] == index) {
+            p->given[k] = p->given[--p->ngiven];
+            return 1;
+        }
+    return 0;
+}
+
+/* The shared ensemble is over for the others: no more indices, rows
+ * of it dropped from now on, and the main thread may close the file. */
+static void end_ensemble(void)
+{
+    char text[32];
+    snprintf(text, sizeof text, "S %u", S.seq);
+    for (int r = 1; r < dfle_link_size; r++)
+        if (in_ensemble(&S.peers[r])) {
+            say(r, text);
+            S.peers[r].ngiven = 0;
+            S.peers[r].want = 0;
+        }
+    S.finished = 1;
+    S.file = NULL;
+    S.queue = NULL;
+}
+
+/* The indices p holds go back to the queue; how many did. */
+static size_t release(peer *p)
+{
+    size_t back = 0;
+    if (S.active && !S.finished && in_ensemble(p)) {
+        for (size_t k = 0; k < p->ngiven; k++) {
+            dfle_error err;
+            if (dfle_ens_queue_give_back(S.queue, p->given[k], &err) != DFLE_OK)
+                set_error("%s", err.msg);
+            else
+                back++;
+        }
+        S.exhausted = S.exhausted && back == 0;
+    }
+    p->ngiven = 0;
+    p->want = 0;
+    return back;
+}
+
+static void lose(int r, const char *why)
+{
+    peer *p = &S.peers[r];
+    size_t back;
+    int others = 0;
+
+    if (p->state == P_LOST)
+        return;
+    back = release(p);
+    p->state = P_LOST;
+    dfle_link_lost = 1;
+    say(r, "Q 1"); /* if it is alive after all, it stops; if not, no harm */
+    dfle_link_forget(r);
+    for (int k = 1; k < dfle_link_size; k++)
+        others += in_ensemble(&S.peers[k]);
+    if (back > 0 && others > 0)
+        note(1, "rank %d (%s) %s: taken as lost; its %zu sample%s go%s to the other ranks", r,
+             S.nodes[r], why, back, back == 1 ? "" : "s", back == 1 ? "es" : "");
+    else
+        note(1, "rank %d (%s) %s: taken as lost", r, S.nodes[r], why);
+    if (back > 0 && others == 0)
+        set_error("rank %d (%s) was lost holding %zu sample%s, and no other rank is left to "
+                  "run them",
+                  r, S.nodes[r], back, back == 1 ? "" : "s");
+}
+
+/* "R <seq> <want>\n<f><row>\n...": rows to append, and a request. */
+static void handle_rows(peer *p, char *m)
+{
+    unsigned seq = 0;
+    size_t want = 0;
+    char *line = strchr(m, '\n');
+
+    if (sscanf(m, "R %u %zu", &seq, &want) != 2 || !S.active || S.finished || !in_ensemble(p) ||
+        seq != S.seq)
+        return; /* an ended ensemble's */
+    p->want += want;
+    while (line != NULL && line[1] != '\0') {
+        char *row = line + 2, *end = strchr(row, '\n');
+        int failed = line[1] == '1';
+        size_t index = (size_t)strtoull(row, NULL, 10);
+        dfle_error err;
+        if (end != NULL)
+            *end = '\0';
+        if (take_back(p, index)) {
+            if (dfle_ens_file_append(S.file, index, row, &err) != DFLE_OK) {
+                set_error("%s", err.msg);
+            } else {
+                S.done++;
+                S.failed += (size_t)failed;
+            }
+        }
+        line = end;
+    }
+}
+
+static void handle(int r, char *m)
+{
+    peer *p = &S.peers[r];
+    unsigned seq = 0;
+
+    if (r < 1 || r >= dfle_link_size || p->state == P_LOST)
+        return;
+    p->heard = dfle_link_now();
+    switch (m[0]) {
+    case 'R':
+        handle_rows(p, m);
+        break;
+    case 'X':
+        if (sscanf(m, "X %u", &seq) == 1 && S.active && !S.finished && in_ensemble(p) &&
+            seq == S.seq) {
+            const char *text = strchr(m + 2, ' ');
+            set_error("rank %d (%s): %s", r, S.nodes[r], text != NULL ? text + 1 : "failed");
+        }
+        break;
+    case 'D': {
+        size_t ran = 0;
+        double cpu = 0;
+        int threads = 0;
+        if (sscanf(m, "D %u %zu %d %lf", &seq, &ran, &threads, &cpu) == 4 &&
+            p->state == P_BUSY && p->seq == seq) {
+            /* Before the end (its threads failed): what it held goes back. */
+            release(p);
+            p->state = P_IDLE;
+            note(0, "rank %d (%s): %zu sample%s on %d thread%s, %.2f s of CPU", r, S.nodes[r],
+                 ran, ran == 1 ? "" : "s", threads, threads == 1 ? "" : "s", cpu);
+        }
+        break;
+    }
+    default: /* "H" */
+        break;
+    }
+}
+
+/* Hand out what the ranks asked for. */
+static void serve_wants(void)
+{
+    for (int r = 1; r < dfle_link_size; r++) {
+        peer *p = &S.peers[r];
+        char text[32 + 21 * 64];
+        size_t len, n = 0, index;
+        if (!in_ensemble(p) || p->want == 0)
+            continue;
+        len = (size_t)snprintf(text, sizeof text, "I %u", S.seq);
+        /* At most 64 indices a message: want is about two per thread. */
+        while (p->want > 0 && n < 64 && dfle_ens_queue_next(S.queue, &index)) {
+            len += (size_t)snprintf(text + len, sizeof text - len, " %zu", index);
+            give(p, index);
+            p->want--;
+            n++;
+        }
+        if (p->want > 0 && n < 64)
+            S.exhausted = 1;
+        if (n > 0)
+            say(r, text);
+    }
+}
+
+static void announce(void)
+{
+    int busy = 0;
+    for (int r = 1; r < dfle_link_size; r++) {
+        peer *p = &S.peers[r];
+        if (p->state == P_LOST)
+            continue;
+        say(r, S.cmd);
+        p->state = P_BUSY;
+        p->seq = S.seq;
+        p->want = 0;
+        p->ngiven = 0;
+        busy++;
+    }
+    free(S.cmd);
+    S.cmd = NULL;
+    S.fresh = 0;
+    S.exhausted = 0;
+    if (busy == 0)
+        end_ensemble();
+}
+
+/* One round: messages in, indices out, the ensemble's end, heartbeats,
+ * silent ranks.  Returns whether anything arrived. */
+static int serve_round(void)
+{
+    int arrived = 0, from;
+    double now;
+    char *m;
+
+    if (S.fresh)
+        announce();
+    /* Bounded, so that a flood cannot starve the checks below. */
+    while (arrived < 1000) {
+        m = dfle_link_take(DFLE_LINK_ANY, dfle_link_timeout, &from);
+        if (m == NULL && from < 0)
+            break;
+        arrived++;
+        if (m == NULL)
+            lose(from, "stopped half-way through a message");
+        else
+            handle(from, m);
+        free(m);
+    }
+    if (S.active && !S.finished) {
+        int held = 0;
+        if (!S.stop && !S.error)
+            serve_wants();
+        for (int r = 1; r < dfle_link_size; r++)
+            held += in_ensemble(&S.peers[r]) && S.peers[r].ngiven > 0;
+        if (S.stop || S.error || (S.exhausted && held == 0))
+            end_ensemble();
+    }
+    now = dfle_link_now();
+    for (int r = 1; r < dfle_link_size; r++) {
+        peer *p = &S.peers[r];
+        if (p->state == P_LOST)
+            continue;
+        if (now - p->heard > dfle_link_timeout) {
+            char why[64];
+            snprintf(why, sizeof why, "has been silent for %.0f s", now - p->heard);
+            lose(r, why);
+        } else if (now - p->said > dfle_link_beat) {
+            say(r, "H");
+        }
+    }
+    dfle_link_progress();
+    return arrived > 0;
+}
+
+static void *service_main(void *arg)
+{
+    double pause = DFLE_LINK_PAUSE_MIN, t0;
+    (void)arg;
+    pthread_mutex_lock(&S.lock);
+    while (!S.quit) {
+        struct timespec ts;
+        long ns;
+        pause = serve_round() ? DFLE_LINK_PAUSE_MIN
+                              : dfle_link_backoff(pause, S.active && !S.finished ? 2e-3 : 5e-2);
+        clock_gettime(CLOCK_MONOTONIC, &ts);
+        ns = ts.tv_nsec + (long)(pause * 1e9);
+        ts.tv_sec += ns / 1000000000L;
+        ts.tv_nsec = ns % 1000000000L;
+        if (!S.quit && !S.fresh && !(S.stop && S.active && !S.finished))
+            pthread_cond_timedwait(&S.wake, &S.lock, &ts);
+    }
+    for (int r = 1; r < dfle_link_size; r++)
+        if (S.peers[r].state != P_LOST)
+            say(r, dfle_link_lost ? "Q 1" : "Q");
+    /* Let the quits go out (a rank that died meanwhile gets up to the
+     * timeout), unless the job is being torn down. */
+    t0 = dfle_link_now();
+    while (S.quit == 1 && dfle_link_progress() > 0 && dfle_link_now() - t0 < dfle_link_timeout)
+        dfle_link_nap(1e-3);
+    pthread_mutex_unlock(&S.lock);
+    return NULL;
+}
+
+/* ------------------------------------------------------------------ */
+/* The host's hooks (rank 0's main thread).                            */
+
+static void flush_notes(void)
+{
+    char *notes, *line, *save = NULL;
+    pthread_mutex_lock(&S.lock);
+    notes = S.notes;
+    S.notes = NULL;
+    S.nnotes = 0;
+    pthread_mutex_unlock(&S.lock);
+    for (line = notes != NULL ? strtok_r(notes, "\n", &save) : NULL; line != NULL;
+         line = strtok_r(NULL, "\n", &save))
+        S.tell(S.tell_ud, line[0] == 'W', line + 1);
+    free(notes);
+}
+
+static int remote_begin(void *ud, long long call, int workers, size_t total, const char *meta,
+                        const char *header, dfle_ens_file *file, dfle_ens_queue *queue,
+                        char *msg, size_t msglen)
+{
+    size_t len = strlen(meta) + strlen(header) + 96;
+    char *cmd = malloc(len);
+    int live = 0;
 
     (void)ud;
-    *done = 0;
-    if (nranks <= 1)
-        return 0;
-    cmd = malloc(len);
     if (cmd == NULL) {
         snprintf(msg, msglen, "out of memory");
         return -1;
     }
-    snprintf(cmd, len, "E %lld\n%s\n%s", call, meta, header);
-    for (int r = 1; r < nranks; r++)
-        send_text(cmd, r, TAG_CMD);
-    free(cmd);
-    while (active > 0) {
-        int from;
-        unsigned long long next = 0;
-        size_t i;
-        char *m = recv_text(MPI_ANY_SOURCE, TAG_REQ, &from);
-        if (m == NULL) {
-            if (!error)
-                snprintf(msg, msglen, "out of memory");
-            error = 1;
-        } else if (m[0] == 'W') {
-            dfle_error err;
-            i = (size_t)strtoull(m + 2, NULL, 10);
-            if (dfle_ens_file_append(file, i, m + 2, &err) != DFLE_OK) {
-                if (!error)
-                    snprintf(msg, msglen, "%s", err.msg);
-                error = 1;
-            } else {
-                (*done)++;
-                failed += m[1] == '1';
-            }
-        } else if (m[0] == 'X') {
-            if (!error)
-                snprintf(msg, msglen, "rank %d: %s", from, m + 1);
-            error = 1;
-        }
-        free(m);
-        if (error)
-            dfle_ens_queue_stop(queue);
-        if (dfle_ens_queue_next(queue, &i))
-            next = i;
-        else
-            active--;
-        MPI_Send(&next, 1, MPI_UNSIGNED_LONG_LONG, from, TAG_IDX, MPI_COMM_WORLD);
-        if (rank0_host != NULL && rank0_host->progress != NULL)
-            rank0_host->progress(rank0_host->ud, *done, total, failed, now() - t0);
+    pthread_mutex_lock(&S.lock);
+    for (int r = 1; r < dfle_link_size; r++)
+        live += S.peers[r].state != P_LOST;
+    if (live == 0) {
+        pthread_mutex_unlock(&S.lock);
+        free(cmd);
+        return 0; /* every other rank was lost: this one alone */
     }
-    if (rank0_host != NULL && rank0_host->progress_end != NULL)
-        rank0_host->progress_end(rank0_host->ud);
-    return error ? -1 : 1;
+    S.seq++;
+    snprintf(cmd, len, "E %u %lld %d %zu\n%s\n%s", S.seq, call, workers, total, meta, header);
+    S.cmd = cmd;
+    S.fresh = 1;
+    S.file = file;
+    S.queue = queue;
+    S.active = 1;
+    S.finished = S.stop = S.error = 0;
+    S.done = S.failed = 0;
+    S.msg[0] = '\0';
+    pthread_cond_signal(&S.wake);
+    pthread_mutex_unlock(&S.lock);
+    return 1;
 }
 
-/* A worker rank's side of one ensemble: the message it owes rank 0. */
-typedef struct link {
-    char *pending; /* "W..." row to send with the next request, or NULL */
-    int owes;      /* a request is due (the last answer was an index)   */
-} link;
-
-static int link_next(void *ud, size_t *index)
+static int remote_poll(void *ud, int stop, size_t *done, size_t *failed, char *msg,
+                       size_t msglen)
 {
-    link *lk = ud;
-    unsigned long long i;
-    send_text(lk->pending != NULL ? lk->pending : "R", 0, TAG_REQ);
-    free(lk->pending);
-    lk->pending = NULL;
-    MPI_Recv(&i, 1, MPI_UNSIGNED_LONG_LONG, 0, TAG_IDX, MPI_COMM_WORLD, MPI_STATUS_IGNORE);
-    lk->owes = i != 0;
-    *index = (size_t)i;
-    return i != 0;
+    int r;
+    (void)ud;
+    pthread_mutex_lock(&S.lock);
+    if (stop && !S.stop) {
+        S.stop = 1;
+        pthread_cond_signal(&S.wake);
+    }
+    *done = S.done;
+    *failed = S.failed;
+    r = !S.finished ? 1 : S.error ? -1 : 0;
+    if (r < 0)
+        snprintf(msg, msglen, "%s", S.msg);
+    if (r <= 0)
+        S.active = 0;
+    pthread_mutex_unlock(&S.lock);
+    flush_notes();
+    return r;
 }
 
-static int link_put(void *ud, size_t index, const char *row, int failed, char *msg,
-                    size_t msglen)
+int dfle_mpi_serve(dfle_lua_ensemble_host *host,
+                   void (*tell)(void *ud, int warning, const char *line), void *ud, char *msg,
+                   size_t msglen)
 {
-    link *lk = ud;
-    size_t n = strlen(row);
-    (void)index;
-    lk->pending = malloc(n + 3);
-    if (lk->pending == NULL) {
-        snprintf(msg, msglen, "out of memory");
+    pthread_condattr_t ca;
+    double now = dfle_link_now();
+
+    S.tell = tell;
+    S.tell_ud = ud;
+    for (int r = 1; r < dfle_link_size; r++)
+        S.peers[r].heard = S.peers[r].said = now;
+    pthread_condattr_init(&ca);
+    pthread_condattr_setclock(&ca, CLOCK_MONOTONIC);
+    pthread_cond_init(&S.wake, &ca);
+    pthread_condattr_destroy(&ca);
+    if (pthread_create(&S.tid, NULL, service_main, NULL) != 0) {
+        snprintf(msg, msglen, "cannot start the thread that serves the other ranks");
         return -1;
     }
-    lk->pending[0] = 'W';
-    lk->pending[1] = failed ? '1' : '0';
-    memcpy(lk->pending + 2, row, n + 1);
+    S.started = 1;
+    host->remote_begin = remote_begin;
+    host->remote_poll = remote_poll;
     return 0;
 }
 
-int dfle_mpi_worker_loop(const dfle_lua_ensemble_host *host)
+void dfle_mpi_finish(int torn_down)
 {
-    for (;;) {
-        int from, nargs = 0;
-        char *cmd = recv_text(0, TAG_CMD, &from), *meta, *header;
-        char msg[DFLE_ERROR_MSG_MAX + 1];
-        long long call;
-        link lk = {NULL, 1};
-        lua_State *L;
-
-        if (cmd == NULL || cmd[0] != 'E') {
-            free(cmd);
-            return 0; /* "Q" */
-        }
-        call = strtoll(cmd + 2, NULL, 10);
-        meta = strchr(cmd, '\n');
-        header = meta != NULL ? strchr(meta + 1, '\n') : NULL;
-        msg[0] = 'X';
-        msg[1] = '\0';
-        L = host->open_state(host->ud, &nargs, msg + 1, sizeof msg - 1);
-        if (L != NULL && meta != NULL && header != NULL) {
-            *meta++ = '\0';
-            *header++ = '\0';
-            if (dfle_lua_ensemble_serve(L, nargs, call, host, meta, header, link_next, link_put,
-                                        &lk, msg + 1, sizeof msg - 1) == 0)
-                lk.owes = 0;
-        }
-        if (L != NULL)
-            lua_close(L);
-        if (lk.owes) {
-            unsigned long long i;
-            send_text(msg, 0, TAG_REQ);
-            MPI_Recv(&i, 1, MPI_UNSIGNED_LONG_LONG, 0, TAG_IDX, MPI_COMM_WORLD, MPI_STATUS_IGNORE);
-        }
-        free(lk.pending);
-        free(cmd);
+    if (S.started) {
+        pthread_mutex_lock(&S.lock);
+        S.quit = torn_down ? 2 : 1;
+        pthread_cond_signal(&S.wake);
+        pthread_mutex_unlock(&S.lock);
+        pthread_join(S.tid, NULL);
+        flush_notes();
+        S.started = 0;
     }
-}
-
-void dfle_mpi_finish(int rank)
-{
-    if (rank == 0)
-        for (int r = 1; r < nranks; r++)
-            send_text("Q", r, TAG_CMD);
-    MPI_Finalize();
+    for (int r = 0; S.peers != NULL && r < dfle_link_size; r++)
+        free(S.peers[r].given);
+    free(S.peers);
+    free(S.nodes);
+    S.peers = NULL;
+    S.nodes = NULL;
+    /* MPI_Finalize waits for every rank: not for one that is gone. */
+    if (!torn_down && !dfle_link_lost)
+        MPI_Finalize();
 }

@@ -95,7 +95,7 @@ static int l_ensemble(lua_State *L)
     const dfle_lua_ensemble_host *host = dfle_lua_ens_host(L);
     lua_Integer call;
     spec s;
-    int ctx, nw, role;
+    int ctx, nw, role, remote = 0;
     run_box *box;
     dfle_error err;
     size_t total, ran = 0;
@@ -135,31 +135,18 @@ static int l_ensemble(lua_State *L)
         dfle_lua_note(L, DFLE_LUA_NOTE, "ensemble %s: all %zu rows were done before; nothing to run",
                       path, dfle_ens_file_ndone(box->file));
 
-    nw = host != NULL && host->workers > 0 ? host->workers : s.workers > 0 ? s.workers : dfle_lua_ens_cores();
+    nw = dfle_lua_par_workers(host, s.workers, host != NULL ? host->cores : 0);
     if (host == NULL || host->open_state == NULL || role == DFLE_LUA_PAR_NESTED)
         nw = 1;
     if ((size_t)nw > total)
         nw = (int)(total > 0 ? total : 1);
 
-    if (host != NULL && host->remote != NULL && total > 0 && role == DFLE_LUA_PAR_RUN) {
-        char msg[DFLE_ERROR_MSG_MAX];
-        size_t done = 0;
-        int r = host->remote(host->ud, (long long)call, lua_tostring(L, -2), lua_tostring(L, -1),
-                             box->file, box->queue, total, &done, msg, sizeof msg);
-        if (r < 0) {
-            dfle_ens_file_close(box->file, 1, NULL);
-            box->file = NULL;
-            return luaL_error(L, "dfle.ensemble: %s (%d rows written are kept; run again to "
-                                 "resume)", msg, (int)done);
-        }
-        if (r > 0) {
-            ran = done;
-            nw = 0; /* done remotely */
-        }
-    }
-    if (nw == 0) {
-        /* the samples ran remotely */
-    } else if (nw <= 1) {
+    /* Other processes (MPI ranks) share the queue; this one then runs
+     * its share on worker threads, never in the calling state, so that
+     * its main thread stays free to serve them (the pool starts them). */
+    remote = host != NULL && host->remote_begin != NULL && host->open_state != NULL &&
+             total > 0 && role == DFLE_LUA_PAR_RUN;
+    if (nw <= 1 && !remote) {
         size_t i, failed = 0;
         double t0 = dfle_lua_ens_now();
         while (!dfle_lua_interrupted(L) && dfle_ens_queue_next(box->queue, &i)) {
@@ -190,22 +177,30 @@ static int l_ensemble(lua_State *L)
         pl.file = box->file;
         pl.queue = box->queue;
         pl.interrupt = dfle_lua_get_interrupt(L);
+        pl.remote = remote;
+        pl.table_workers = s.workers;
         dfle_lua_ens_run_threads(L, &pl, nw, total);
-        ran = pl.done;
+        ran = pl.done + pl.rdone;
         if (pl.error) {
             dfle_ens_file_close(box->file, 1, NULL);
             box->file = NULL;
             return luaL_error(L, "dfle.ensemble: %s (%d rows written are kept; run again to "
-                                 "resume)", pl.msg, (int)pl.done);
+                                 "resume)", pl.msg, (int)ran);
         }
     }
     {
         dfle_ens_file *f = box->file;
         size_t kept = dfle_ens_file_ndone(f);
+        int cut_short = dfle_lua_interrupted(L) && ran < total;
         box->file = NULL;
-        if (dfle_ens_file_close(f, 1, &err) != DFLE_OK)
+        /* Cut short, the rows stay as written (whole lines, in the order
+         * they finished; the resumed run sorts them): the sorted rewrite
+         * syncs the disk, which on a busy machine takes longer than the
+         * moment between the SIGTERM and the SIGKILL with which mpirun
+         * ends a job, and the message below must get out first. */
+        if (dfle_ens_file_close(f, !cut_short, &err) != DFLE_OK)
             return luaL_error(L, "dfle.ensemble: %s", err.msg);
-        if (dfle_lua_interrupted(L) && ran < total) {
+        if (cut_short) {
             dfle_lua_set_interrupt_note(L, "dfle.ensemble stopped taking samples; %d finished "
                                            "rows are in %s, and running the script again "
                                            "resumes it", (int)kept, path);

@@ -26,18 +26,39 @@ typedef struct dfle_lua_ensemble_host {
     /* Progress of an ensemble (main thread only; may be NULL). */
     void (*progress)(void *ud, size_t done, size_t total, size_t failed, double elapsed);
     void (*progress_end)(void *ud);
-    /* Run the samples of the script's `call`-th dfle.ensemble on other
-     * processes (the MPI build): take indices from `queue`, append the
-     * rows to `file`, count them in *done.  Returns 1 when it ran them,
-     * 0 to let the caller run them locally, -1 on failure (msg).  May
-     * be NULL. */
-    int (*remote)(void *ud, long long call, const char *meta, const char *header,
-                  dfle_ens_file *file, dfle_ens_queue *queue, size_t total, size_t *done,
-                  char *msg, size_t msglen);
+    /* Share the samples of the script's `call`-th dfle.ensemble with
+     * other processes (the MPI build) while this one runs its own
+     * worker threads: they take indices from `queue` and their rows go
+     * to `file`.  `workers` is the table's `workers` (0: not given),
+     * `total` the samples to run.  begin returns 1 when others take
+     * part, 0 when there are none (run here alone), -1 on failure
+     * (msg).  Then the main thread calls poll about every 0.1 s, and
+     * after its own threads have ended, until it returns 0 (all
+     * finished) or -1 (finished with a failure, msg): *done and
+     * *failed receive the rows the others have written so far; `stop`
+     * (an error or an interrupt here) asks them to take no more
+     * samples, and the caller no longer waits for theirs.  A remote
+     * failure stops `queue` itself.  Either may be NULL (no MPI). */
+    int (*remote_begin)(void *ud, long long call, int workers, size_t total,
+                        const char *meta, const char *header, dfle_ens_file *file,
+                        dfle_ens_queue *queue, char *msg, size_t msglen);
+    int (*remote_poll)(void *ud, int stop, size_t *done, size_t *failed, char *msg,
+                       size_t msglen);
     void *ud;
     int workers;            /* -j N; 0: not given                          */
+    int cores;              /* ensemble workers when neither -j nor the
+                             * table says: this process's share of its
+                             * node (an MPI rank's); 0: all cores.  An
+                             * inversion, which other ranks sit out, uses
+                             * all cores. */
     size_t shard_i, shard_n; /* --shard i/n; shard_n = 0: whole ensemble   */
 } dfle_lua_ensemble_host;
+
+/* Worker threads for a parallel call (in each process): -j, then the
+ * table's `workers` (0: not given), then `cores` (host->cores for an
+ * ensemble, shared with other processes; 0), then all online cores.
+ * host may be NULL. */
+int dfle_lua_par_workers(const dfle_lua_ensemble_host *host, int table_workers, int cores);
 
 /* Install (or with NULL remove) the host of state L; h must outlive L. */
 void dfle_lua_set_ensemble_host(lua_State *L, const dfle_lua_ensemble_host *h);

@@ -59,6 +59,12 @@ typedef struct pool {
     /* The main state's interrupt flag (dfle_lua_set_interrupt), or NULL:
      * once it is up, no worker takes another sample. */
     const volatile sig_atomic_t *interrupt;
+    /* Other processes may share the queue (host->remote_begin): set,
+     * the pool asks, and if they take part its main thread polls them
+     * while the threads run, and after. */
+    int remote;
+    int table_workers;     /* the table's `workers` (0: not given)  */
+    size_t rdone, rfailed; /* their rows so far (main thread only) */
 } pool;
 
 /* The kinds of parallel call; each counts its calls separately. */
@@ -105,7 +111,6 @@ void dfle_lua_ens_read_spec(lua_State *L, int arg, const char *fn, spec *s,
 int dfle_lua_ens_sample_row(lua_State *L, int ctx, size_t i);
 void dfle_lua_ens_push_result(lua_State *L, const char *fn, const char *path, size_t shard_i,
                               size_t shard_n, lua_Integer ran);
-int dfle_lua_ens_cores(void);
 /* Set __index of the result metatable (at the top): ens:write_netcdf. */
 void dfle_lua_ens_result_methods(lua_State *L);
 

@@ -1,9 +1,12 @@
 /*
  * lua_ensemble_pool.c - worker threads, each with a Lua state of its
  * own made by the host, replaying the script up to its ensemble call and
- * then running samples from a shared queue (lua_ensemble.c).  The replay
- * itself (dfle_lua_par_open, dfle_lua_par_replay) serves dfle.invert's
- * workers too (src/lua/invert/lua_invert_pool.c).
+ * then running samples from a shared queue (lua_ensemble.c); in the MPI
+ * build the host shares that queue with other processes meanwhile, and
+ * the pool's main thread polls them.  The replay itself
+ * (dfle_lua_par_open, dfle_lua_par_replay) serves dfle.invert's workers
+ * too (src/lua/invert/lua_invert_pool.c), and the serving of a remote
+ * feed (dfle_lua_ensemble_serve) the threads of other MPI ranks.
  */
 #include <math.h>
 #include <pthread.h>
@@ -230,20 +233,41 @@ static void *worker_thread(void *arg)
     return NULL;
 }
 
-int dfle_lua_ens_cores(void)
+int dfle_lua_par_workers(const dfle_lua_ensemble_host *host, int table_workers, int cores)
 {
-    long c = sysconf(_SC_NPROCESSORS_ONLN);
+    long c;
+    if (host != NULL && host->workers > 0)
+        return host->workers;
+    if (table_workers > 0)
+        return table_workers;
+    if (cores > 0)
+        return cores;
+    c = sysconf(_SC_NPROCESSORS_ONLN);
     return c > 0 ? (int)c : 1;
 }
 
-/* Run the queue on `nw` threads; returns 0 or raises the first error. */
+/* Run the queue on `nw` threads, and with the other processes that
+ * share it (pl->remote) until they too have finished; the first error
+ * is left in pl->error and pl->msg. */
 void dfle_lua_ens_run_threads(lua_State *L, pool *pl, int nw, size_t total)
 {
     pthread_t *tid = lua_newuserdatauv(L, (size_t)nw * sizeof *tid, 0);
     const dfle_lua_ensemble_host *h = pl->host;
     double t0 = dfle_lua_ens_now();
-    int started = 0;
+    int started = 0, remote = 0;
 
+    /* From here on nothing raises until the other processes are done
+     * with the file and the queue (remote_poll returned 0 or -1). */
+    if (pl->remote) {
+        remote = h->remote_begin(h->ud, (long long)pl->target, pl->table_workers, total,
+                                 pl->meta, pl->header, pl->file, pl->queue, pl->msg,
+                                 sizeof pl->msg);
+        if (remote < 0) {
+            pl->error = 1;
+            lua_pop(L, 1);
+            return;
+        }
+    }
     pthread_mutex_init(&pl->lock, NULL);
     pthread_cond_init(&pl->cond, NULL);
     pl->active = nw;
@@ -256,23 +280,38 @@ void dfle_lua_ens_run_threads(lua_State *L, pool *pl, int nw, size_t total)
         pl->error = 1;
         snprintf(pl->msg, sizeof pl->msg, "cannot start worker threads");
     }
-    while (pl->active > 0) {
+    while (pl->active > 0 || remote) {
         struct timespec ts;
         size_t done = pl->done, failed = pl->failed;
+        int stop = pl->error;
+        /* Wake often once only the other processes are left: their end
+         * is seen by polling, not signalled. */
+        long wait_ns = pl->active > 0 ? 100000000L : 5000000L;
         pthread_mutex_unlock(&pl->lock);
-        /* Interrupted: no new samples; those running finish and count. */
-        if (dfle_lua_interrupted(L))
+        /* Interrupted: no new samples; those running here finish and
+         * count, the other processes' are not waited for. */
+        if (dfle_lua_interrupted(L)) {
             dfle_ens_queue_stop(pl->queue);
+            stop = 1;
+        }
+        if (remote) {
+            char msg[DFLE_ERROR_MSG_MAX];
+            int r = h->remote_poll(h->ud, stop, &pl->rdone, &pl->rfailed, msg, sizeof msg);
+            if (r < 0)
+                pool_fail(pl, msg);
+            remote = r > 0;
+        }
         if (h->progress != NULL)
-            h->progress(h->ud, done, total, failed, dfle_lua_ens_now() - t0);
+            h->progress(h->ud, done + pl->rdone, total, failed + pl->rfailed,
+                        dfle_lua_ens_now() - t0);
         pthread_mutex_lock(&pl->lock);
         clock_gettime(CLOCK_REALTIME, &ts);
-        ts.tv_nsec += 100000000L;
+        ts.tv_nsec += wait_ns;
         if (ts.tv_nsec >= 1000000000L) {
             ts.tv_sec++;
             ts.tv_nsec -= 1000000000L;
         }
-        if (pl->active > 0)
+        if (pl->active > 0 || remote)
             pthread_cond_timedwait(&pl->cond, &pl->lock, &ts);
     }
     pthread_mutex_unlock(&pl->lock);
@@ -284,4 +323,3 @@ void dfle_lua_ens_run_threads(lua_State *L, pool *pl, int nw, size_t total)
     pthread_mutex_destroy(&pl->lock);
     lua_pop(L, 1);
 }
-

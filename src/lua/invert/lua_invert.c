@@ -137,9 +137,7 @@ static int l_invert(lua_State *L)
         lsq_idx = lua_gettop(L);
     }
     if (R->steps > 0 && R->have < R->steps + 1) {
-        int nw = host != NULL && host->workers > 0 ? host->workers
-                 : R->workers > 0                  ? R->workers
-                                                   : dfle_lua_ens_cores();
+        int nw = dfle_lua_par_workers(host, R->workers, 0);
         if (host == NULL || host->open_state == NULL || R->nested)
             nw = 1;
         if (inv_sample(L, ctx, R, nw, call, msg, sizeof msg) != 0) {
