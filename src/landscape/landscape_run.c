@@ -181,11 +181,18 @@ static int run_direct(dfle_landscape *ls, const dfle_landscape_run_opts *o,
                                       "callback");
         }
         if (rounds >= o->max_steps || (rounds > 0 && rounds - fewest_at >= DIRECT_STALL)) {
+            const char *why = rounds >= o->max_steps ? "reached max_steps"
+                                                     : "stopped approaching a fixed network";
             *stalled = 1;
-            return dfle_error_set(err, DFLE_EFIT, "the direct rounds stopped approaching a "
-                                  "fixed network after %zu rounds (%zu cells changed receiver "
-                                  "in the last, %zu allowed; the fewest, %zu, in round %zu)",
-                                  rounds, ls->rcv_changes,
+            if (ls->stable >= o->stable_steps) /* the network held; the rates did not */
+                return dfle_error_set(err, DFLE_EFIT, "the direct rounds %s after %zu rounds: "
+                                      "the network is stable but %.3g%% of the cells have "
+                                      "|dz/dt| > tol U (allowed %.3g%%; cells below divides "
+                                      "that flip)", why, rounds, 100 * st->frac_above,
+                                      100 * (1 - o->quantile));
+            return dfle_error_set(err, DFLE_EFIT, "the direct rounds %s after %zu rounds (%zu "
+                                  "cells changed receiver in the last, %zu allowed; the "
+                                  "fewest, %zu, in round %zu)", why, rounds, ls->rcv_changes,
                                   (size_t)floor(ls->rcv_tol * (double)ls->n_data), fewest,
                                   fewest_at);
         }
