@@ -14,9 +14,10 @@ local function model(rt)
   }
 end
 
--- A router of its own, not the model's: rt:route(m) with the model's own
--- router marks the model's flow stale, so each call would route twice
--- (once to evaluate the model for its slopes, once asked).
+-- A router of its own, not the model's, so that the model's cached flow
+-- stays as it is (rt:route(m) with the model's own router marks it
+-- stale; either way each call routes once: it reads the model's slopes
+-- without evaluating the model).
 local m = model(dfle.router.process{ M0 = 200, eta = 60, mu2 = 0.62, D = 5e-6 })
 m:get("S")
 local rt = dfle.router.process{ M0 = 200, eta = 60, mu2 = 0.62, D = 5e-6 }

@@ -9,13 +9,16 @@ if [ -z "${DFLE_DATA_DIR:-}" ]; then
     DFLE_DATA_DIR="$(cd "$here/../.." && pwd)/shared/data"
 fi
 export DFLE_DATA_DIR
-echo "dfle benchmarks on $(uname -m), $(nproc) cores, $(date -u +%Y-%m-%d)"
+# The load average: on a shared machine, wall-clock ratios (threads, ranks)
+# mean little when it exceeds the cores.
+echo "dfle benchmarks on $(uname -m), $(nproc) cores, $(date -u +%Y-%m-%d), load average $(cut -d' ' -f1 /proc/loadavg 2>/dev/null || echo '?')"
 # Start-up, beside the same with GDAL and libnetcdf preloaded (as when
 # they were linked): their sonames as this build loads them.
 preload=$(sed -n 's/^#define DFLE_\(GDAL\|NETCDF\)_SONAME "\(.*\)"$/\2/p' \
           "$BIN/../gen/extlib_names.h" 2> /dev/null | tr '\n' ' ')
 "$BIN/startup" "$DFLE" "$preload" "$(command -v lua5.4)"
 "$DFLE" -q "$here/steady_state.lua"
+"$BIN/direct"
 "$BIN/process"
 "$DFLE" -q "$here/process.lua"
 "$DFLE" -q "$here/dem.lua"
@@ -25,6 +28,7 @@ preload=$(sed -n 's/^#define DFLE_\(GDAL\|NETCDF\)_SONAME "\(.*\)"$/\2/p' \
 "$DFLE" -q "$here/fit.lua"
 "$DFLE" -q "$here/methods.lua"
 "$DFLE" -q "$here/ensemble.lua"
+"$BIN/pawn"
 # dfle-mpi against threads, where `make mpi` built it and mpirun is there.
 if [ -x "$(dirname "$DFLE")/dfle-mpi" ] && command -v mpirun > /dev/null; then
     sh "$here/mpi.sh" "$(dirname "$DFLE")/dfle-mpi"

@@ -17,6 +17,8 @@
 #include <stdlib.h>
 #include <cmocka.h>
 
+#include "dfle/law.h"
+
 /* Passes when |a - b| <= abs_tol + rel_tol * |b|.  NaN never passes. */
 #define assert_close(a, b, rel_tol, abs_tol)                                  \
     dfle_assert_close_impl((a), (b), (rel_tol), (abs_tol), #a, #b,            \
@@ -54,6 +56,20 @@ static inline void dfle_assert_close_impl(double a, double b, double rel,
             _fail(__FILE__, __LINE__);                                        \
         }                                                                     \
     } while (0)
+
+/* `law` without its rate_dlnS op: a second handle on the same state
+ * (which stays law's: free this one first) whose ops lack the
+ * derivative, so the node solvers take the difference path with it.
+ * `ops` holds the copied table and must outlive the handle. */
+static inline dfle_law *dfle_test_without_rate_dlnS(dfle_law *law, dfle_law_ops *ops)
+{
+    dfle_law *out = NULL;
+    *ops = *dfle_law_get_ops(law);
+    ops->rate_dlnS = NULL;
+    ops->destroy = NULL;
+    assert_int_equal(dfle_law_new(ops, dfle_law_state(law), &out, NULL), 0);
+    return out;
+}
 
 /* The whole of file `path` as a string (free it); the file must exist. */
 static inline char *dfle_test_slurp(const char *path)

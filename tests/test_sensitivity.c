@@ -498,6 +498,10 @@ static void test_pawn_errors(void **state)
     assert_int_equal(dfle_pawn(5, 2, xs, y, &o, &r, &err), DFLE_EINVAL);
     assert_msg_contains(err.msg, "conf");
     o.conf = 0.9;
+    o.threads = DFLE_PAWN_MAX_THREADS + 1;
+    assert_int_equal(dfle_pawn(5, 2, xs, y, &o, &r, &err), DFLE_EINVAL);
+    assert_msg_contains(err.msg, "threads");
+    o.threads = 2;
     assert_int_equal(dfle_pawn(5, 2, xs, y, &o, NULL, &err), DFLE_EINVAL);
     assert_ok(dfle_pawn(5, 2, xs, y, &o, &r, &err), &err);
     dfle_pawn_release(&r);
@@ -659,6 +663,135 @@ static void test_bootstrap_reproducible(void **state)
 }
 
 /* ---------------------------------------------------------------- */
+/* One pass per input, and threads: the same numbers                */
+/* ---------------------------------------------------------------- */
+
+/* Everything two results hold, bit for bit. */
+static void assert_same_result(const dfle_pawn_result *a, const dfle_pawn_result *b)
+{
+    const size_t D = a->D, S = a->S;
+    assert_int_equal(a->N, b->N);
+    assert_int_equal(D, b->D);
+    assert_int_equal(S, b->S);
+    assert_memory_equal(a->index, b->index, D * DFLE_PAWN_NSTATS * sizeof *a->index);
+    assert_memory_equal(a->edges, b->edges, D * (S + 1) * sizeof *a->edges);
+    assert_memory_equal(a->ks, b->ks, D * S * sizeof *a->ks);
+    assert_memory_equal(a->count, b->count, D * S * sizeof *a->count);
+    assert_memory_equal(a->ks_h, b->ks_h, D * S * sizeof *a->ks_h);
+    assert_memory_equal(a->ks_lcm, b->ks_lcm, D * S * sizeof *a->ks_lcm);
+    assert_int_equal(a->bootstrap, b->bootstrap);
+    if (a->bootstrap > 0) {
+        assert_memory_equal(a->lo, b->lo, D * DFLE_PAWN_NSTATS * sizeof *a->lo);
+        assert_memory_equal(a->hi, b->hi, D * DFLE_PAWN_NSTATS * sizeof *a->hi);
+    }
+}
+
+/* PAWN of D synthetic inputs (and the output, column D) with options o. */
+static void run_on(double **cols, size_t N, size_t D, const dfle_pawn_opts *o,
+                   dfle_pawn_result *r)
+{
+    const double *xs[4];
+    dfle_error err;
+    for (size_t d = 0; d < D; d++)
+        xs[d] = cols[d];
+    assert_ok(dfle_pawn(N, D, xs, cols[D], o, r, &err), &err);
+}
+
+/* The slices of every input found in one pass (the default) and in a pass
+ * per slice give the same result, bootstrap included: continuous data,
+ * ties in x and y, more slices than rows, both KS regimes. */
+static void check_fused(size_t N, size_t D, size_t S, int ties, size_t B)
+{
+    double *cols[4];
+    dfle_rng *rng;
+    dfle_error err;
+    dfle_pawn_opts o;
+    dfle_pawn_result fused, ref;
+
+    assert_true(D <= 3);
+    assert_ok(dfle_rng_new(11, &rng, &err), &err);
+    for (size_t d = 0; d <= D; d++) {
+        cols[d] = malloc(N * sizeof *cols[d]);
+        assert_non_null(cols[d]);
+    }
+    for (size_t i = 0; i < N; i++) {
+        double y = 0.0;
+        for (size_t d = 0; d < D; d++) {
+            double u = dfle_rng_uniform(rng);
+            cols[d][i] = ties ? floor(u * 9.0) : u;
+            y += (double)(d + 1) * u * u;
+        }
+        y += 0.3 * dfle_rng_uniform(rng);
+        cols[D][i] = ties ? floor(y * 5.0) : y;
+    }
+    dfle_pawn_opts_default(&o);
+    o.S = S;
+    o.bootstrap = B;
+    o.seed = 5;
+    run_on(cols, N, D, &o, &fused);
+    o.per_slice = 1;
+    run_on(cols, N, D, &o, &ref);
+    assert_same_result(&fused, &ref);
+    dfle_pawn_release(&fused);
+    dfle_pawn_release(&ref);
+    for (size_t d = 0; d <= D; d++)
+        free(cols[d]);
+    dfle_rng_free(rng);
+}
+
+static void test_one_pass_per_input_equals_per_slice(void **state)
+{
+    dataset ds;
+    dfle_pawn_opts o;
+    dfle_pawn_result fused, ref;
+    dfle_error err;
+    (void)state;
+    check_fused(997, 3, 10, 0, 20);
+    check_fused(600, 2, 7, 1, 20);
+    check_fused(40, 2, 90, 1, 10);  /* more slices than rows: most are empty */
+    check_fused(300, 1, 1, 0, 5);   /* one slice */
+    check_fused(12000, 2, 5, 0, 3); /* the floating-point KS regime */
+    check_fused(10001, 1, 4, 1, 2);
+    /* and the SALib case with ties and an empty slice */
+    load(&ds, salib("ties_N1001.csv"), ties_names);
+    dfle_pawn_opts_default(&o);
+    o.bootstrap = 30;
+    assert_ok(dfle_pawn(ds.csv->nrows, 3, ds.x, ds.y, &o, &fused, &err), &err);
+    o.per_slice = 1;
+    assert_ok(dfle_pawn(ds.csv->nrows, 3, ds.x, ds.y, &o, &ref, &err), &err);
+    assert_same_result(&fused, &ref);
+    dfle_pawn_release(&fused);
+    dfle_pawn_release(&ref);
+    dfle_csv_free(ds.csv);
+}
+
+/* Bootstrap replicates spread over threads give what one thread gives,
+ * bit for bit, for any count (more threads than replicates included). */
+static void test_bootstrap_threads_identical(void **state)
+{
+    static const size_t counts[] = {2, 3, 7, 64};
+    dataset ds;
+    dfle_pawn_opts o;
+    dfle_pawn_result one, many;
+    dfle_error err;
+    (void)state;
+    load(&ds, salib("ties_N1001.csv"), ties_names);
+    dfle_pawn_opts_default(&o);
+    o.S = 7;
+    o.bootstrap = 41;
+    o.seed = 123;
+    assert_ok(dfle_pawn(ds.csv->nrows, 3, ds.x, ds.y, &o, &one, &err), &err);
+    for (size_t k = 0; k < sizeof counts / sizeof counts[0]; k++) {
+        o.threads = counts[k];
+        assert_ok(dfle_pawn(ds.csv->nrows, 3, ds.x, ds.y, &o, &many, &err), &err);
+        assert_same_result(&one, &many);
+        dfle_pawn_release(&many);
+    }
+    dfle_pawn_release(&one);
+    dfle_csv_free(ds.csv);
+}
+
+/* ---------------------------------------------------------------- */
 /* CSV reader                                                       */
 /* ---------------------------------------------------------------- */
 
@@ -785,6 +918,8 @@ int main(void)
         cmocka_unit_test(test_bootstrap_covers_estimate),
         cmocka_unit_test(test_bootstrap_is_row_resampling),
         cmocka_unit_test(test_bootstrap_reproducible),
+        cmocka_unit_test(test_one_pass_per_input_equals_per_slice),
+        cmocka_unit_test(test_bootstrap_threads_identical),
         cmocka_unit_test(test_csv_basic),
         cmocka_unit_test(test_csv_text_column),
         cmocka_unit_test(test_csv_hostile_bytes),

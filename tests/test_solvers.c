@@ -8,6 +8,8 @@
 #include "dfle_test.h"
 #include "dfle/analysis.h"
 #include "dfle/analytical.h"
+#include "dfle/law_excess_stress.h"
+#include "dfle/law_inertial.h"
 #include "dfle/law_power.h"
 #include "dfle/model.h"
 #include "dfle/solver.h"
@@ -104,16 +106,23 @@ static void methods_agree(const parts *p, double U, double rel)
     free(ref);
 }
 
+/* Fig. 9: Table G1 fluvial law, the empirical router and Eq. (6) with
+ * alpha = 6, beta = 1, on a 5 m grid. */
+static void make_fig9(parts *p)
+{
+    dfle_empirical_opts eo;
+    make_channel(p, 5.0);
+    make_fluvial(p);
+    dfle_empirical_opts_default(&eo);
+    assert_int_equal(dfle_router_new_empirical(&eo, &p->rt, NULL), DFLE_OK);
+    make_law(p, 1e-4, 6, 1);
+}
+
 static void fig9_defaults(void **state)
 {
     parts p = {0};
-    dfle_empirical_opts eo;
     (void)state;
-    make_channel(&p, 5.0);
-    make_fluvial(&p);
-    dfle_empirical_opts_default(&eo);
-    assert_int_equal(dfle_router_new_empirical(&eo, &p.rt, NULL), DFLE_OK);
-    make_law(&p, 1e-4, 6, 1);
+    make_fig9(&p);
     methods_agree(&p, 5e-4, 5e-3);
     parts_free(&p);
 }
@@ -361,6 +370,165 @@ static void records_land_on_their_times(void **state)
     parts_free(&p);
 }
 
+/* One steady state of p by `method`, into S (n values); returns the
+ * one-node erosions per solved node it took. */
+static double solve_counted(const parts *p, dfle_law *law, double U, int method, double *S)
+{
+    dfle_model_opts mo;
+    dfle_model *m;
+    dfle_run_opts ro;
+    dfle_run_result res;
+    dfle_error err;
+    size_t n;
+    double per_node;
+    dfle_model_opts_default(&mo);
+    mo.channel = p->ch, mo.fluvial = p->fl, mo.router = p->rt, mo.law = law, mo.U = U;
+    assert_ok(dfle_model_new(&mo, &m, &err), &err);
+    n = dfle_model_size(m);
+    dfle_run_opts_default(&ro);
+    ro.method = method;
+    assert_ok(dfle_solver_run(m, &ro, &res, &err), &err);
+    assert_true(res.converged && !res.fallback);
+    memcpy(S, dfle_model_field(m, DFLE_FIELD_S, &err), n * sizeof *S);
+    per_node = (double)dfle_model_node_evaluations(m) / (double)(n - 1);
+    dfle_model_free(m);
+    return per_node;
+}
+
+/* The Newton path (the law's rate_dlnS and the router's node_flow_dlnS)
+ * and the difference path (the same law without the op) solve the same
+ * equations: the direct steady states agree to the tolerance of the
+ * difference path (1e-10 relative in S; Newton's own error is below
+ * 1e-12), the implicit ones to what 1e-10 per step leaves after the
+ * steps; the Newton path takes at most `bound` one-node erosions per
+ * node of a direct steady state. */
+static void paths_agree(const parts *p, double U, double bound)
+{
+    const size_t n = dfle_channel_size(p->ch);
+    dfle_law_ops ops;
+    dfle_law *plain = dfle_test_without_rate_dlnS(p->law, &ops);
+    double *S = malloc(2 * n * sizeof *S), *S0 = S + n, per[2], d = 0;
+    for (int method = DFLE_METHOD_IMPLICIT; method <= DFLE_METHOD_DIRECT; method++) {
+        per[0] = solve_counted(p, p->law, U, method, S);
+        per[1] = solve_counted(p, plain, U, method, S0);
+        d = 0;
+        for (size_t i = 0; i + 1 < n; i++) {
+            d = fmax(d, fabs(S[i] / S0[i] - 1));
+            assert_close(S[i], S0[i], method == DFLE_METHOD_DIRECT ? 2e-10 : 1e-8, 0);
+        }
+        print_message("%s: slopes within %.2g; one-node erosions per node %.2f (Newton) "
+                      "against %.2f\n", dfle_method_name(method), d, per[0], per[1]);
+        assert_true(per[0] <= per[1]); /* equal when no step was needed */
+        if (method == DFLE_METHOD_DIRECT)
+            assert_true(per[0] < per[1] && per[0] <= bound);
+    }
+    free(S);
+    dfle_law_free(plain);
+}
+
+static void newton_and_difference_paths_agree(void **state)
+{
+    parts p = {0};
+    dfle_empirical_opts eo;
+    dfle_inertial_law_opts io;
+    dfle_excess_stress_law_opts xo;
+    (void)state;
+    /* Fig. 9 (the bound is the figure make bench reports: 2.15). */
+    make_fig9(&p);
+    paths_agree(&p, 5e-4, 2.3);
+    /* Stock and Dietrich's law: E_df jumps to 0 where the flow stops. */
+    dfle_law_free(p.law);
+    dfle_inertial_law_opts_default(&io);
+    io.k = 3e-7, io.alpha = 1.5; /* as in examples/custom_laws.lua */
+    assert_int_equal(dfle_law_new_inertial(&io, &p.law, NULL), DFLE_OK);
+    paths_agree(&p, 5e-4, 3.0);
+    /* A threshold law on tau (as in examples/custom_laws.lua). */
+    dfle_law_free(p.law);
+    dfle_excess_stress_law_opts_default(&xo);
+    xo.k = 2e-9, xo.tau_c = 400, xo.p = 1.5;
+    assert_int_equal(dfle_law_new_excess_stress(&xo, &p.law, NULL), DFLE_OK);
+    paths_agree(&p, 5e-4, 3.0);
+    parts_free(&p);
+    /* Debris flows alone with tau_y = 0 (Eq. 19: ln E linear in ln S). */
+    make_channel(&p, 10.0);
+    dfle_empirical_opts_default(&eo);
+    eo.tau_y = 0;
+    assert_int_equal(dfle_router_new_empirical(&eo, &p.rt, NULL), DFLE_OK);
+    make_law(&p, 1e-4, 6, 1);
+    paths_agree(&p, 5e-4, 2.3);
+    parts_free(&p);
+    /* n_s < 1 and alpha = 12; and the high corner of Table G3. */
+    make_channel(&p, 10.0);
+    assert_int_equal(dfle_fluvial_new_stream_power(2e-4, 0.35, 0.6, &p.fl, NULL), DFLE_OK);
+    dfle_empirical_opts_default(&eo);
+    assert_int_equal(dfle_router_new_empirical(&eo, &p.rt, NULL), DFLE_OK);
+    make_law(&p, 1e-4, 12, 0.5);
+    paths_agree(&p, 5e-4, 3.0);
+    dfle_fluvial_free(p.fl);
+    make_fluvial(&p);
+    dfle_router_free(p.rt);
+    eo.M0 = 3000, eo.gamma = 1.0, eo.mu = 500, eo.tau_y = 600;
+    assert_int_equal(dfle_router_new_empirical(&eo, &p.rt, NULL), DFLE_OK);
+    dfle_law_free(p.law);
+    make_law(&p, 2e-4, 8, 3);
+    paths_agree(&p, 5e-4, 3.0);
+    parts_free(&p);
+}
+
+/* A derivative op that is broken: NaN or infinite (unusable), or wrong
+ * but positive (the law's part negated, or left out: the model still
+ * adds the fluvial law's n_s E_f), by bad_kind. */
+static int bad_kind;
+static int bad_rate_dlnS(void *state, const dfle_law_ctx *ctx, const double *F, const double *E,
+                         const dfle_flow_dlnS *d, double *dE, dfle_error *err)
+{
+    static const double factor[] = {NAN, INFINITY, -1.0, 0.0};
+    (void)state, (void)F, (void)d, (void)err;
+    for (size_t i = 0; i < ctx->n; i++)
+        dE[i] = factor[bad_kind] * E[i];
+    return DFLE_OK;
+}
+
+/* Newton's safeguards: with a derivative that is unusable at every slope
+ * each node solve falls back to doubling and bisection; with one that is
+ * wrong, the check against the secant of the values stops it from
+ * accepting a slope on the derivative's word.  Either way the solve
+ * finds the root the values-only path finds (to that path's tolerance),
+ * in a bounded number of evaluations. */
+static void newton_survives_a_bad_derivative(void **state)
+{
+    parts p = {0};
+    dfle_law_ops plain_ops, bad_ops;
+    dfle_law *plain, *bad;
+    size_t n;
+    double *S, *S0;
+    (void)state;
+    make_fig9(&p);
+    n = dfle_channel_size(p.ch);
+    S = malloc(2 * n * sizeof *S), S0 = S + n;
+    plain = dfle_test_without_rate_dlnS(p.law, &plain_ops);
+    bad_ops = plain_ops;
+    bad_ops.rate_dlnS = bad_rate_dlnS;
+    assert_int_equal(dfle_law_new(&bad_ops, dfle_law_state(p.law), &bad, NULL), DFLE_OK);
+    (void)solve_counted(&p, plain, 5e-4, DFLE_METHOD_DIRECT, S0);
+    for (bad_kind = 0; bad_kind < 4; bad_kind++) {
+        double per = solve_counted(&p, bad, 5e-4, DFLE_METHOD_DIRECT, S);
+        for (size_t i = 0; i + 1 < n; i++)
+            assert_close(S[i], S0[i], 2e-10, 0);
+        print_message("bad derivative %d: %.1f one-node erosions per node\n", bad_kind, per);
+        /* Bisection of a bracket found by doubling takes tens of
+         * evaluations per node, far below the 200 a solve may take; a
+         * wrong derivative still speeds the solve up now and then. */
+        assert_true(per < 60);
+        if (bad_kind < 2)
+            assert_true(per > 6.61);
+    }
+    dfle_law_free(bad);
+    dfle_law_free(plain);
+    free(S);
+    parts_free(&p);
+}
+
 int main(void)
 {
     const struct CMUnitTest tests[] = {
@@ -372,6 +540,8 @@ int main(void)
         cmocka_unit_test(uplift_step_transient),
         cmocka_unit_test(direct_falls_back_and_says_why),
         cmocka_unit_test(records_land_on_their_times),
+        cmocka_unit_test(newton_and_difference_paths_agree),
+        cmocka_unit_test(newton_survives_a_bad_derivative),
     };
     return cmocka_run_group_tests(tests, NULL, NULL);
 }

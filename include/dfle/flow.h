@@ -51,6 +51,19 @@ typedef struct dfle_flow {
     void *integrand_state; /* first argument of integrand               */
 } dfle_flow;
 
+/* How the bulk flow at one node answers that node's own slope S: the
+ * derivatives with respect to ln S, of ln X for the fields that are
+ * positive where a flow is (M, Q, h, v, t_p, tau) and of Theta itself
+ * (which reaches 0 where the flow stops, so has no logarithm there).  A
+ * field that does not move with S has 0 (M, Q and t_p depend on the
+ * drainage area alone in the empirical router).  Filled by a router's
+ * node_flow_dlnS op (router.h), read by a law's rate_dlnS op (law.h):
+ * with both, the node solvers take Newton steps in ln S. */
+typedef struct dfle_flow_dlnS {
+    double M, Q, h, v, t_p, tau; /* d ln X / d ln S [-] */
+    double Theta;                /* d Theta / d ln S [-] */
+} dfle_flow_dlnS;
+
 /* Doubles a flow's arrays take per node (M, Q, h, v, t_p, tau, Theta,
  * reach, integral): the size of the block dfle_flow_bind carves. */
 #define DFLE_FLOW_ARRAYS 9

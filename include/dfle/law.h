@@ -59,6 +59,16 @@ typedef struct dfle_law_ops {
     size_t (*params)(const void *state, dfle_param *out, size_t cap);
     /* Optional.  Release the state. */
     void (*destroy)(void *state);
+    /* Optional.  dE[0..n) = d E_df / d ln S [m/yr]: the derivative of
+     * E[0..n), what rate just gave for ctx->S and F, where the flow's
+     * fields move with ln S as d[j] says for node j (flow.h), or stay as
+     * they are when d is NULL (a flow routed rarely: its cached factor
+     * stands and only the slope moves).  0 wherever E is 0 by the rate's
+     * own rules (S <= 0, F = 0).  With it (and, for a router routed
+     * every step, the router's node_flow_dlnS) the node solvers take
+     * Newton steps in ln S; without it they difference E. */
+    int (*rate_dlnS)(void *state, const dfle_law_ctx *ctx, const double *F, const double *E,
+                     const dfle_flow_dlnS *d, double *dE, dfle_error *err);
 } dfle_law_ops;
 
 typedef struct dfle_law dfle_law;
@@ -72,6 +82,12 @@ int dfle_law_flow_factor(dfle_law *law, const dfle_law_ctx *ctx, double *F,
                          dfle_error *err);
 int dfle_law_rate(dfle_law *law, const dfle_law_ctx *ctx, const double *F,
                   double *E, dfle_error *err);
+
+/* The rate_dlnS op, or DFLE_ESTATE (with a message) if the law has none
+ * (dfle_law_has_rate_dlnS says which). */
+int dfle_law_rate_dlnS(dfle_law *law, const dfle_law_ctx *ctx, const double *F,
+                       const double *E, const dfle_flow_dlnS *d, double *dE, dfle_error *err);
+int dfle_law_has_rate_dlnS(const dfle_law *law);
 
 /* The parameters (param.h), up to cap of them; returns how many there
  * are, or (size_t)-1 when the law has no params op (a law written in Lua

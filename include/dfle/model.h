@@ -110,6 +110,11 @@ size_t dfle_model_size(const dfle_model *m);
  * stochastic-threshold law. */
 int dfle_model_init_fluvial_steady(dfle_model *m, const dfle_fluvial *fl,
                                    dfle_error *err);
+/* The slopes [-] of the current z into S (n values), exactly as an
+ * evaluation computes them (a base level repeats its largest donor's),
+ * without routing or evaluating anything else: for a caller that routes
+ * a router itself over the profile. */
+void dfle_model_slopes(dfle_model *m, double *S);
 /* Forget the routed flow: the next evaluation routes again.  Needed when
  * the model's router was used directly (its memory of the last routing
  * no longer matches the model's cached flow). */
@@ -198,6 +203,18 @@ int dfle_model_celerity(dfle_model *m, const double **c, dfle_error *err);
  * routers the cached Eq. (11) factor is used. */
 int dfle_model_node_erosion(dfle_model *m, size_t i, double S, double flows, double *E,
                             int *goes_on, dfle_error *err);
+/* The same E, and *dE = dE/d ln S [m/yr] (S dE/dS), when every part can
+ * give it: the fluvial law always, the erosion law through its rate_dlnS
+ * op and, for a router routed every step, the router through its
+ * node_flow_dlnS op (routed rarely, the flow is held: only S moves).
+ * dfle_model_node_dlnS says whether they can; when they cannot, *dE is
+ * NaN and E is what dfle_model_node_erosion gives. */
+int dfle_model_node_erosion_dlnS(dfle_model *m, size_t i, double S, double flows, double *E,
+                                 double *dE, int *goes_on, dfle_error *err);
+int dfle_model_node_dlnS(const dfle_model *m);
+/* One-node erosions evaluated (either function above) since creation:
+ * what a node solve costs, counted by the model (laws must not count). */
+size_t dfle_model_node_evaluations(const dfle_model *m);
 
 /* What the model is, into a record (record.h): a section per component
  * ("channel" with its kind, params and n, x_outlet [m], A_head and

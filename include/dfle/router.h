@@ -55,6 +55,13 @@ typedef struct dfle_router_ops {
     size_t (*params)(const void *state, dfle_param *out, size_t cap);
     /* Optional.  Release the state. */
     void (*destroy)(void *state);
+    /* Optional, with node_flow: what node_flow does, and in *d how that
+     * flow answers S (flow.h: d ln h / d ln S and so on; all 0 where
+     * S <= 0).  Where the flow stops (*goes_on = 0, Theta = 0) d->Theta
+     * is 0, like Theta.  With it (and the law's rate_dlnS) the node
+     * solvers take Newton steps in ln S; without it they difference E. */
+    int (*node_flow_dlnS)(void *state, const dfle_network *net, size_t i, double S,
+                          dfle_flow *node, dfle_flow_dlnS *d, int *goes_on, dfle_error *err);
 } dfle_router_ops;
 
 typedef struct dfle_router dfle_router;
@@ -81,6 +88,13 @@ int dfle_router_needs_reroute(dfle_router *rt, size_t n, const double *S_routed,
  * none.  *goes_on receives its verdict. */
 int dfle_router_node_flow(dfle_router *rt, const dfle_network *net, size_t i,
                           double S, dfle_flow *node, int *goes_on, dfle_error *err);
+
+/* The node_flow_dlnS op, or DFLE_ESTATE (with a message) if the router
+ * has none (dfle_router_has_node_flow_dlnS says which). */
+int dfle_router_node_flow_dlnS(dfle_router *rt, const dfle_network *net, size_t i, double S,
+                               dfle_flow *node, dfle_flow_dlnS *d, int *goes_on,
+                               dfle_error *err);
+int dfle_router_has_node_flow_dlnS(const dfle_router *rt);
 
 /* The parameters (param.h), up to cap of them; returns how many there
  * are, or (size_t)-1 when the router has no params op (a router written

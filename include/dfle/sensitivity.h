@@ -30,6 +30,8 @@
  * table (its own quantile edges included), and report for every index
  * the percentile interval: numpy-linear quantiles at (1 - conf)/2 and
  * (1 + conf)/2 of the B replicate values (NaN replicates left out).
+ * Replicate b is always the b-th block of N draws, so the intervals do
+ * not depend on opts.threads, which spreads the replicates over threads.
  */
 #ifndef DFLE_SENSITIVITY_H
 #define DFLE_SENSITIVITY_H
@@ -58,6 +60,9 @@ enum dfle_pawn_stat {
  * fraction h / lcm. */
 #define DFLE_PAWN_EXACT_MAX_N 10000
 
+/* The most bootstrap threads dfle_pawn starts (each has O(N + S) scratch). */
+#define DFLE_PAWN_MAX_THREADS 4096
+
 /* "minimum", "mean", "median", "maximum", "CV", "stdev" (NULL otherwise). */
 const char *dfle_pawn_stat_name(int stat);
 
@@ -68,6 +73,17 @@ typedef struct dfle_pawn_opts {
     unsigned long seed;       /* bootstrap seed, 0 .. 2^32 - 1 (default 1)  */
     const char *const *names; /* D input names for messages (may be NULL)   */
     const char *output;       /* output name for messages (may be NULL)     */
+    size_t threads;           /* threads for the bootstrap replicates, the
+                               * calling one included, at most
+                               * DFLE_PAWN_MAX_THREADS; 0 or 1: the calling
+                               * thread alone (default 1).  The library
+                               * starts threads - 1 pthreads for the call and
+                               * joins them before it returns; the results
+                               * are the same, bit for bit, for any count  */
+    int per_slice;            /* 1: a pass over the rows per slice (the
+                               * reference algorithm, for tests and
+                               * benchmarks; the same results); 0: one pass
+                               * per input for all its slices (default)     */
 } dfle_pawn_opts;
 
 void dfle_pawn_opts_default(dfle_pawn_opts *opts);

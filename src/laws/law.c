@@ -59,6 +59,17 @@ int dfle_law_rate(dfle_law *law, const dfle_law_ctx *ctx, const double *F,
     return law->ops->rate(law->state, ctx, F, E, err);
 }
 
+int dfle_law_rate_dlnS(dfle_law *law, const dfle_law_ctx *ctx, const double *F,
+                       const double *E, const dfle_flow_dlnS *d, double *dE, dfle_error *err)
+{
+    if (law->ops->rate_dlnS == NULL)
+        return dfle_error_set(err, DFLE_ESTATE,
+                              "law.%s cannot say how its rate answers the slope", law->ops->name);
+    return law->ops->rate_dlnS(law->state, ctx, F, E, d, dE, err);
+}
+
+int dfle_law_has_rate_dlnS(const dfle_law *law) { return law->ops->rate_dlnS != NULL; }
+
 size_t dfle_law_params(const dfle_law *law, dfle_param *out, size_t cap)
 {
     if (law->ops->params == NULL)

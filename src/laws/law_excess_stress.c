@@ -48,6 +48,23 @@ static int excess_rate(void *state, const dfle_law_ctx *ctx, const double *F, do
     return DFLE_OK;
 }
 
+/* d E_df / d ln S.  E = k (tau - tau_c)^p moves only through tau:
+ * d ln E = p tau d ln tau / (tau - tau_c), finite wherever E > 0 (for
+ * p < 1 it grows without bound as tau -> tau_c, where E -> 0).  A flow
+ * held fixed (d NULL) leaves E where it is: 0. */
+static int excess_rate_dlnS(void *state, const dfle_law_ctx *ctx, const double *F,
+                            const double *E, const dfle_flow_dlnS *d, double *dE, dfle_error *err)
+{
+    const excess_law *el = state;
+    const dfle_flow *fl = ctx->flow;
+    (void)F, (void)err;
+    for (size_t i = 0; i < ctx->n; i++)
+        dE[i] = E[i] == 0 || d == NULL
+                    ? 0.0
+                    : E[i] * el->opts.p * fl->tau[i] * d[i].tau / (fl->tau[i] - el->opts.tau_c);
+    return DFLE_OK;
+}
+
 static size_t excess_params(const void *state, dfle_param *out, size_t cap)
 {
     const dfle_excess_stress_law_opts *o = &((const excess_law *)state)->opts;
@@ -66,6 +83,7 @@ static const dfle_law_ops excess_ops = {
     .integrand = NULL, /* tau is not a function of (h, v, lambda) alone */
     .params = excess_params,
     .destroy = excess_destroy,
+    .rate_dlnS = excess_rate_dlnS,
 };
 
 int dfle_law_new_excess_stress(const dfle_excess_stress_law_opts *o, dfle_law **out,

@@ -61,6 +61,27 @@ static int inertial_rate(void *state, const dfle_law_ctx *ctx, const double *F, 
     return DFLE_OK;
 }
 
+/* d E_df / d ln S.  E = k S^alpha F with F = t_p rho_s (D v / h)^2
+ * (while Theta > 0): d ln E = alpha + d ln t_p + 2 d ln v - 2 d ln h.
+ * F drops to 0 where the flow stops, a jump the solvers bracket.  A flow
+ * held fixed (d NULL), or a time-resolved one's Eq. (11) sum, leaves
+ * alpha E. */
+static int inertial_rate_dlnS(void *state, const dfle_law_ctx *ctx, const double *F,
+                              const double *E, const dfle_flow_dlnS *d, double *dE,
+                              dfle_error *err)
+{
+    const double alpha = ((const inertial_law *)state)->opts.alpha;
+    const int bulk = d != NULL && !ctx->flow->time_resolved;
+    (void)F, (void)err;
+    for (size_t i = 0; i < ctx->n; i++) {
+        double g = alpha;
+        if (bulk)
+            g += d[i].t_p + 2.0 * (d[i].v - d[i].h);
+        dE[i] = E[i] == 0 ? 0.0 : g * E[i];
+    }
+    return DFLE_OK;
+}
+
 static int inertial_integrand(void *state, double h, double v, double lambda, double *g,
                               dfle_error *err)
 {
@@ -88,6 +109,7 @@ static const dfle_law_ops inertial_ops = {
     .integrand = inertial_integrand,
     .params = inertial_params,
     .destroy = inertial_destroy,
+    .rate_dlnS = inertial_rate_dlnS,
 };
 
 int dfle_law_new_inertial(const dfle_inertial_law_opts *o, dfle_law **out, dfle_error *err)

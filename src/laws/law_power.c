@@ -76,6 +76,32 @@ static int power_rate(void *state, const dfle_law_ctx *ctx, const double *F,
     return DFLE_OK;
 }
 
+/* d E_df / d ln S.  E = k_df S^alpha F with F = t_p h^beta Theta moving
+ * with the flow: d ln E = alpha + d ln t_p + beta d ln h + dTheta/Theta.
+ * Where E > 0, Theta > 0 too, and E dTheta/Theta = k_df S^alpha t_p h^beta
+ * dTheta stays finite as Theta -> 0.  A flow held fixed (d NULL), or the
+ * Eq. (11) sum of a time-resolved one, leaves alpha E. */
+static int power_rate_dlnS(void *state, const dfle_law_ctx *ctx, const double *F,
+                           const double *E, const dfle_flow_dlnS *d, double *dE, dfle_error *err)
+{
+    const power_law *pl = state;
+    const dfle_flow *fl = ctx->flow;
+    const double alpha = pl->opts.alpha, beta = pl->opts.beta;
+    const int bulk = d != NULL && !fl->time_resolved;
+    (void)F, (void)err;
+    for (size_t i = 0; i < ctx->n; i++) {
+        double g = alpha;
+        if (E[i] == 0) {
+            dE[i] = 0.0;
+            continue;
+        }
+        if (bulk)
+            g += d[i].t_p + beta * d[i].h + d[i].Theta / fl->Theta[i];
+        dE[i] = g * E[i];
+    }
+    return DFLE_OK;
+}
+
 static int power_integrand(void *state, double h, double v, double lambda, double *g,
                            dfle_error *err)
 {
@@ -104,6 +130,7 @@ static const dfle_law_ops power_ops = {
     .integrand = power_integrand,
     .params = power_params,
     .destroy = power_destroy,
+    .rate_dlnS = power_rate_dlnS,
 };
 
 int dfle_law_new_power(const dfle_power_law_opts *o, dfle_law **out,

@@ -191,30 +191,47 @@ static int check_finite(const dfle_model *m, dfle_error *err)
     return DFLE_OK;
 }
 
-int dfle_model_evaluate(dfle_model *m, dfle_error *err)
+/* Step 1: slopes of the current z into S; returns how many non-base
+ * nodes have S <= 0.  The domain must be in sync. */
+static size_t slopes_of(const dfle_model *m, double *S)
 {
     const size_t n = m->n;
-    const size_t *recv, *base;
+    const size_t *recv = dfle_network_receivers(m->net), *base;
     size_t nonpositive = 0, n_base;
-    double sum = 0.0;
-    int st;
 
-    dfle_model_sync_domain(m);
-    recv = dfle_network_receivers(m->net);
     base = dfle_network_bases(m->net, &n_base);
     /* Branch-free over all nodes: a base node is its own receiver, so its
      * slope comes out 0 (counted, then taken back) and is then replaced
      * by its donor's. */
     for (size_t i = 0; i < n; i++) {
-        m->S[i] = (m->z[i] - m->z[recv[i]]) * m->inv_len[i];
-        nonpositive += !(m->S[i] > 0);
+        S[i] = (m->z[i] - m->z[recv[i]]) * m->inv_len[i];
+        nonpositive += !(S[i] > 0);
     }
     for (size_t k = 0; k < n_base; k++) {
         const size_t i = base[k], d = dfle_network_base_donor(m->net, i);
-        nonpositive -= !(m->S[i] > 0);
-        m->S[i] = d != NO_NODE ? m->S[d] : 0.0;
+        nonpositive -= !(S[i] > 0);
+        S[i] = d != NO_NODE ? S[d] : 0.0;
     }
-    m->nonpositive = nonpositive;
+    return nonpositive;
+}
+
+void dfle_model_slopes(dfle_model *m, double *S)
+{
+    dfle_model_sync_domain(m);
+    (void)slopes_of(m, S);
+}
+
+int dfle_model_evaluate(dfle_model *m, dfle_error *err)
+{
+    const size_t n = m->n;
+    const size_t *base;
+    size_t n_base;
+    double sum = 0.0;
+    int st;
+
+    dfle_model_sync_domain(m);
+    base = dfle_network_bases(m->net, &n_base);
+    m->nonpositive = slopes_of(m, m->S);
 
     if (m->fl != NULL) {
         const double n_s = dfle_fluvial_n(m->fl);
@@ -339,28 +356,41 @@ static dfle_flow flow_at(const dfle_flow *f, size_t i)
     return v;
 }
 
-int dfle_model_node_erosion(dfle_model *m, size_t i, double S, double flows, double *E,
-                            int *goes_on, dfle_error *err)
+/* E_f + E_df at node i for slope S, and d(E_f + E_df)/d ln S into *dE
+ * when dE is set (the caller has checked dfle_model_node_dlnS). */
+static int node_erosion(dfle_model *m, size_t i, double S, double flows, double *E, double *dE,
+                        int *goes_on, dfle_error *err)
 {
-    double e = 0.0;
+    double e = 0.0, de = 0.0;
     assert(i < m->n);
     *goes_on = 0;
+    m->node_evaluations++;
     dfle_model_sync_domain(m); /* K A^m of the current shape and scales */
     if (!(S > 0)) { /* no erosion up a reverse slope (model.h) */
         *E = 0.0;
+        if (dE != NULL)
+            *dE = 0.0;
         return DFLE_OK;
     }
-    if (m->fl != NULL)
-        e = m->KAm[i] * pow(S, dfle_fluvial_n(m->fl));
+    if (m->fl != NULL) {
+        const double n_s = dfle_fluvial_n(m->fl);
+        e = m->KAm[i] * pow(S, n_s);
+        de = n_s * e; /* E_f = K A^m S^n_s */
+    }
     if (flows > 0 && m->rt != NULL) {
         dfle_law_ctx ctx = {.n = 1, .S = &S, .A = dfle_network_A(m->net) + i,
                             .w = dfle_network_w(m->net) + i};
         dfle_flow view; /* lives as long as ctx: rate may read the flow */
-        double F, Edf;
+        dfle_flow_dlnS dflow, *dp = NULL;
+        double F, Edf, dEdf = 0.0;
         int st;
         if (dfle_router_is_local(m->rt)) {
             /* The flow at this node follows its slope: re-evaluate it. */
-            st = dfle_router_node_flow(m->rt, m->net, i, S, &m->node, goes_on, err);
+            if (dE != NULL)
+                st = dfle_router_node_flow_dlnS(m->rt, m->net, i, S, &m->node, dp = &dflow,
+                                                goes_on, err);
+            else
+                st = dfle_router_node_flow(m->rt, m->net, i, S, &m->node, goes_on, err);
             if (st != DFLE_OK)
                 return st;
             m->node.runout_end = 1;
@@ -373,6 +403,8 @@ int dfle_model_node_erosion(dfle_model *m, size_t i, double S, double flows, dou
             *goes_on = m->flow.reach[i] > 0;
             if (!*goes_on) {
                 *E = e;
+                if (dE != NULL)
+                    *dE = de;
                 return DFLE_OK;
             }
             ctx.flow = &view;
@@ -380,15 +412,47 @@ int dfle_model_node_erosion(dfle_model *m, size_t i, double S, double flows, dou
         }
         if ((st = dfle_law_rate(m->law, &ctx, &F, &Edf, err)) != DFLE_OK)
             return st;
-        if (m->combine != DFLE_DF_ANY)
-            Edf *= combine_factor(m, flows, dfle_network_A(m->net)[i]);
-        if (m->df_scale != NULL || m->channel != NULL)
-            Edf *= node_df_scale(m, i);
+        if (dE != NULL &&
+            (st = dfle_law_rate_dlnS(m->law, &ctx, &F, &Edf, dp, &dEdf, err)) != DFLE_OK)
+            return st;
+        /* The combine rule and the scales are constants in S: they
+         * multiply E_df and its derivative alike. */
+        if (m->combine != DFLE_DF_ANY) {
+            const double c = combine_factor(m, flows, dfle_network_A(m->net)[i]);
+            Edf *= c, dEdf *= c;
+        }
+        if (m->df_scale != NULL || m->channel != NULL) {
+            const double c = node_df_scale(m, i);
+            Edf *= c, dEdf *= c;
+        }
         e += Edf;
+        de += dEdf;
     }
     if (!isfinite(e))
         return dfle_error_set(err, DFLE_ENUMERIC,
                               "model: erosion is not finite at node %zu for S = %g", i + 1, S);
     *E = e;
+    if (dE != NULL)
+        *dE = de;
     return DFLE_OK;
 }
+
+int dfle_model_node_erosion(dfle_model *m, size_t i, double S, double flows, double *E,
+                            int *goes_on, dfle_error *err)
+{
+    return node_erosion(m, i, S, flows, E, NULL, goes_on, err);
+}
+
+int dfle_model_node_dlnS(const dfle_model *m) { return m->node_dlnS; }
+
+int dfle_model_node_erosion_dlnS(dfle_model *m, size_t i, double S, double flows, double *E,
+                                 double *dE, int *goes_on, dfle_error *err)
+{
+    if (!m->node_dlnS) {
+        *dE = NAN;
+        return node_erosion(m, i, S, flows, E, NULL, goes_on, err);
+    }
+    return node_erosion(m, i, S, flows, E, dE, goes_on, err);
+}
+
+size_t dfle_model_node_evaluations(const dfle_model *m) { return m->node_evaluations; }

@@ -98,6 +98,23 @@ int dfle_router_node_flow(dfle_router *rt, const dfle_network *net, size_t i,
     return st;
 }
 
+int dfle_router_node_flow_dlnS(dfle_router *rt, const dfle_network *net, size_t i, double S,
+                               dfle_flow *node, dfle_flow_dlnS *d, int *goes_on,
+                               dfle_error *err)
+{
+    *goes_on = 0;
+    if (rt->ops->node_flow_dlnS == NULL)
+        return dfle_error_set(err, DFLE_ESTATE,
+                              "router.%s cannot say how the flow at one node answers its slope",
+                              rt->ops->name);
+    return rt->ops->node_flow_dlnS(rt->state, net, i, S, node, d, goes_on, err);
+}
+
+int dfle_router_has_node_flow_dlnS(const dfle_router *rt)
+{
+    return rt->ops->node_flow_dlnS != NULL;
+}
+
 size_t dfle_router_params(const dfle_router *rt, dfle_param *out, size_t cap)
 {
     if (rt->ops->params == NULL)

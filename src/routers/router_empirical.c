@@ -223,10 +223,28 @@ static int empirical_route(void *state, const dfle_network *net,
     return isfinite(chk) ? DFLE_OK : check_finite(flow, S, err);
 }
 
-static int empirical_node_flow(void *state, const dfle_network *net, size_t i, double S,
-                               dfle_flow *node, int *goes_on, dfle_error *err)
+/* How the flow empirical_at put in node j answers ln S at node i.
+ * h = (h3_coef / S)^(1/3): d ln h = -1/3, and v = Q / (w h): +1/3.  The
+ * hydraulic radius R_h = w h / (w + 2 h) follows h with the weight
+ * w / (w + 2 h); tau = rho_b g R_h sin(atan S) adds
+ * d ln sin(atan S) / d ln S = 1 / (1 + S^2); Theta = 1 - tau_y / tau
+ * moves by (tau_y / tau) d ln tau.  M, Q and t_p depend on A alone. */
+static void empirical_dlnS(const empirical *e, const double *w, size_t i, double S,
+                           const dfle_flow *flow, size_t j, dfle_flow_dlnS *d)
 {
-    empirical *e = state;
+    const double h = flow->h[j];
+    d->M = d->Q = d->t_p = 0.0;
+    d->h = -1.0 / 3.0;
+    d->v = 1.0 / 3.0;
+    d->tau = d->h * w[i] / (w[i] + 2.0 * h) + 1.0 / (1.0 + S * S);
+    d->Theta = e->opts.tau_y / flow->tau[j] * d->tau;
+}
+
+/* node_flow, and node_flow_dlnS when d is set. */
+static int empirical_node(empirical *e, const dfle_network *net, size_t i, double S,
+                          dfle_flow *node, dfle_flow_dlnS *d, int *goes_on, dfle_error *err)
+{
+    const double *w = dfle_network_w(net);
     int st;
     *goes_on = 0;
     if ((st = ensure_cache(e, net, err)) != DFLE_OK)
@@ -235,16 +253,36 @@ static int empirical_node_flow(void *state, const dfle_network *net, size_t i, d
     node->time_resolved = 0;
     if (!(S > 0)) {
         zero_node(node, 0);
+        if (d != NULL)
+            *d = (dfle_flow_dlnS){0};
         return DFLE_OK;
     }
-    if (empirical_at(e, dfle_network_w(net), i, S, node, 0) < e->opts.tau_y) {
+    if (empirical_at(e, w, i, S, node, 0) < e->opts.tau_y) {
         node->Theta[0] = 0.0; /* arriving, it stops here: no erosion */
         node->reach[0] = 0.0;
-        return DFLE_OK;
+    } else {
+        node->reach[0] = 1.0;
+        *goes_on = 1;
     }
-    node->reach[0] = 1.0;
-    *goes_on = 1;
+    if (d != NULL) {
+        empirical_dlnS(e, w, i, S, node, 0, d);
+        if (!*goes_on)
+            d->Theta = 0.0; /* Theta is held at 0 below tau_y */
+    }
     return DFLE_OK;
+}
+
+static int empirical_node_flow(void *state, const dfle_network *net, size_t i, double S,
+                               dfle_flow *node, int *goes_on, dfle_error *err)
+{
+    return empirical_node(state, net, i, S, node, NULL, goes_on, err);
+}
+
+static int empirical_node_flow_dlnS(void *state, const dfle_network *net, size_t i, double S,
+                                    dfle_flow *node, dfle_flow_dlnS *d, int *goes_on,
+                                    dfle_error *err)
+{
+    return empirical_node(state, net, i, S, node, d, goes_on, err);
 }
 
 static size_t empirical_params(const void *state, dfle_param *out, size_t cap)
@@ -275,6 +313,7 @@ static const dfle_router_ops empirical_ops = {
     .node_flow = empirical_node_flow,
     .params = empirical_params,
     .destroy = empirical_destroy,
+    .node_flow_dlnS = empirical_node_flow_dlnS,
 };
 
 #define POSITIVE(field)                                                       \

@@ -63,14 +63,16 @@ static int solve_local(dfle_model *m, direct_work *w, dfle_error *err)
 {
     const size_t n = dfle_model_size(m);
     const size_t *stack = dfle_model_stack(m), *recv = dfle_model_receivers(m);
-    const double *S0 = dfle_model_field(m, DFLE_FIELD_S, err);
+    const double *L = dfle_model_flow_length(m), *z = dfle_model_z(m);
     const unsigned char *source = dfle_network_sources(dfle_model_network(m));
     const int has_flow = dfle_model_router(m) != NULL;
 
-    if (S0 == NULL)
-        return err != NULL ? err->code : DFLE_ESTATE;
+    /* The profile as it is gives the heads their first guess (the root
+     * does not depend on it); every other node starts from the slope
+     * solved just above it.  Nothing here needs the profile's flow, so
+     * it is not routed. */
     for (size_t i = 0; i < n; i++) {
-        w->guess[i] = S0[i];
+        w->guess[i] = (z[i] - z[recv[i]]) / L[i];
         w->reach[i] = has_flow && source[i];
     }
     for (size_t k = n; k-- > 0;) {
@@ -102,9 +104,13 @@ static int solve_rounds(dfle_model *m, const dfle_run_opts *o, direct_work *w, s
         const double *Sm;
         double change = 0.0;
         int st;
-        dfle_model_invalidate_flow(m); /* route over this profile */
-        if ((st = dfle_model_evaluate(m, err)) != DFLE_OK)
-            return st;
+        /* Route over this profile (the first round's was routed by the
+         * caller). */
+        if (*rounds > 1) {
+            dfle_model_invalidate_flow(m);
+            if ((st = dfle_model_evaluate(m, err)) != DFLE_OK)
+                return st;
+        }
         Sm = dfle_model_field(m, DFLE_FIELD_S, err);
         for (size_t i = 0; i < n; i++) {
             double s_new;
@@ -146,13 +152,20 @@ static int direct_solve(dfle_model *m, const dfle_run_opts *o, direct_work *w,
     int st;
 
     res->method = DFLE_METHOD_DIRECT;
-    if ((st = dfle_model_evaluate(m, err)) != DFLE_OK)
-        return st;
     memcpy(w->z_save, dfle_model_z(m), n * sizeof *w->z_save); /* to fall back from */
-    if (rt == NULL || dfle_router_is_local(rt))
+    if (rt == NULL || dfle_router_is_local(rt)) {
+        /* The local pass needs only the head slopes of the starting
+         * state, not its flow: nothing is routed before it. */
         st = solve_local(m, w, &why);
-    else
+    } else {
+        /* The first round's routing, over the starting profile; an error
+         * here (a law the router cannot use) is the run's, not a reason
+         * to fall back. */
+        dfle_model_invalidate_flow(m);
+        if ((st = dfle_model_evaluate(m, err)) != DFLE_OK)
+            return st;
         st = solve_rounds(m, o, w, &rounds, &why);
+    }
     res->iterations = rounds;
     if (st == DFLE_OK) {
         if ((st = dfle_model_evaluate(m, err)) != DFLE_OK)

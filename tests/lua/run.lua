@@ -68,6 +68,18 @@ function T.eq(a, b, msg)
     end
 end
 
+-- Two arrays of numbers equal bit for bit (-0.0 is not 0.0), naming the
+-- first index where they differ.
+function T.bits_equal(a, b, what)
+    what = what or "arrays"
+    T.eq(#a, #b, what .. ": length")
+    for i = 1, #a do
+        if string.pack("d", a[i]) ~= string.pack("d", b[i]) then
+            fail(string.format("%s: index %d: %.17g vs %.17g", what, i, a[i], b[i]), 2)
+        end
+    end
+end
+
 -- |a - b| <= abs + rel |b|; NaN never passes.
 function T.close(a, b, rel, abs, msg)
     rel, abs = rel or 1e-9, abs or 0

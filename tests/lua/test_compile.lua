@@ -27,14 +27,7 @@ local function pair(def)
     return dfle.law.define(a), dfle.law.define(b)
 end
 
-local function bits_equal(a, b, what)
-    T.eq(#a, #b, what .. ": length")
-    for i = 1, #a do
-        if string.pack("d", a[i]) ~= string.pack("d", b[i]) then
-            T.fail(string.format("%s: node %d: compiled %.17g, Lua %.17g", what, i, a[i], b[i]))
-        end
-    end
-end
+local bits_equal = T.bits_equal
 
 local function steady_z(law, method, router)
     local m = dfle.model{ channel = channel(), law = law, router = router }
@@ -194,12 +187,13 @@ local replayed = {
 local with_constant = { "+", "-", "*", "/", "%", "//", "^", "math.fmod", "math.max",
                         "math.min", "math.log (base)", "math.atan (2)" }
 
--- Replay fn at every (x, y) and compare both replays with fn run by Lua.
-local function check_replay(what, fn, xs, ys)
-    local cols, points = replay(fn, xs, ys)
+-- Replay fn at every (x, y) and compare both replays with fn run by Lua
+-- (with params p, read as inputs, if given).
+local function check_replay(what, fn, xs, ys, p)
+    local cols, points = replay(fn, xs, ys, p)
     T.ok(cols ~= nil, what .. ": not compiled (" .. tostring(points) .. ")")
     for i = 1, #xs do
-        local want = fn(xs[i], ys[i])
+        local want = fn(xs[i], ys[i], p)
         for _, got in ipairs{ cols[i], points[i] } do
             if not same_bits(got, want) then
                 T.fail(string.format("%s at x = %s, y = %s: replayed %s, Lua %s", what,
@@ -229,12 +223,29 @@ tests["every replayed operation equals Lua bit for bit, operands of every sign a
         end
     end
     T.eq(n, 34, "operations checked")
+    -- The same with the constant a float param, read as an input of the
+    -- program (a law's params are, so that laws can share programs).
+    for _, what in ipairs(with_constant) do
+        local op = replayed[what]
+        for _, k in ipairs(operands) do
+            local p = { k = k }
+            check_replay(what .. " param " .. T.fmt(k) .. " second",
+                         function(x, y, q) return op(x, q.k) end, xs, ys, p)
+            check_replay(what .. " param " .. T.fmt(k) .. " first",
+                         function(x, y, q) return op(q.k, x) end, xs, ys, p)
+        end
+    end
     -- The cases that were wrong: Lua's % floors (both operands negative
     -- keep fmod's result), and an integer result has no -0.
     T.eq(string.pack("<d", replay(function(x, y) return x % y end, { -5.5 }, { -2.0 })[1]),
          string.pack("<d", -1.5))
     T.eq(string.pack("<d", replay(function(x) return math.floor(x) end, { -0.0 }, { 0.0 })[1]),
          string.pack("<d", 0.0))
+    -- A param read as an input is no key: p[p.k] is another field for
+    -- each k (here p[3], set), so the function is traced with k as a
+    -- constant, and p[3] guarded.
+    check_replay("p[p.k]", function(x, y, q) return (q[q.k] or 1) * x end, { 2, -1 }, { 2, 0 },
+                 { k = 3.0, [3] = 5.0 })
 end
 
 -- The way the bug showed: a law compiled (and checked against Lua on its
@@ -327,6 +338,13 @@ local refused = {
     { "calls math.random", function(c, p) return c.S * (1 + 0 * math.random()) end },
     { "it reads the table the upvalue 't'",
       (function() local t = { 1 } return function(c, p) return t[1] * c.S end end)() },
+    -- values no guard could watch: the real length of p, string methods
+    -- (string.len may be replaced after the trace)
+    { "takes the length of p", function(c, p) return #p * c.S end },
+    { "calls a string method", function(c, p) return ("ab"):len() * c.S end },
+    -- a computed key names another field for each value (p[c.S] is p[1]
+    -- where S = 1, nil elsewhere)
+    { "indexes p with a computed value", function(c, p) return (p[c.S] or 1) * c.S end },
 }
 
 tests["what cannot be recorded runs as Lua, says why, and gives the same values"] = function()
@@ -449,6 +467,12 @@ tests["the tracer leaves the script's environment as it was"] = function()
     local c = pair{ rate = function(c, p) return helper(c.S) + dfle_test_none_such * 0 end }
     pcall(e_df, c)
     T.ok(_ENV == env and getmetatable(_G) == mt, "environment restored")
+    local smt = getmetatable("")
+    local s = pair{ rate = function(c, p) return ("ab"):len() * c.S end }
+    e_df(s)
+    T.eq(getmetatable(""), smt)
+    T.eq(smt.__index, string, "strings' methods restored")
+    T.eq(("ab"):upper(), "AB")
     T.eq(sqrt, math.sqrt, "upvalue restored")
     T.eq(helper(4), 4)
 end

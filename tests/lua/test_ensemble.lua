@@ -125,6 +125,42 @@ tests["pawn(ens, {outputs}) equals dfle.pawn on the file"] = function()
     local plain = dfle.pawn{ data = { x = { 1, 2, 3, 4 }, y = { 1, 2, 3, 5 } }, inputs = { "x" },
                              output = "y", S = 2 }
     T.ok(plain.x.median ~= nil)
+    -- the bootstrap runs on the ensemble's workers, or on threads =, with
+    -- the same intervals
+    T.eq(ens.workers, 1)
+    local b1, i1 = dfle.pawn(ens, { outputs = { "A_df" }, S = 5, bootstrap = 30 })
+    local b3, i3 = dfle.pawn(ens, { outputs = { "A_df" }, S = 5, bootstrap = 30, threads = 3 })
+    T.eq(i1.A_df.threads, 1)
+    T.eq(i3.A_df.threads, 3)
+    for _, x in ipairs{ "U", "k_df" } do
+        T.eq(b3.A_df[x].ci.median.lo, b1.A_df[x].ci.median.lo)
+        T.eq(b3.A_df[x].ci.CV.hi, b1.A_df[x].ci.CV.hi)
+    end
+    done()
+end
+
+tests["CLI: dfle.pawn's bootstrap runs on -j threads, with the same intervals"] = function()
+    local dir, done = scratch()
+    T.write_file(dir .. "/sweep.lua", [[
+local ens = dfle.ensemble{
+  params = { k_df = {5e-5, 1e-3, log = true}, U = {1e-4, 1e-3} },
+  n = 12, seed = 4, out = arg[1],
+  build = function(p)
+    return dfle.model{ channel = dfle.channel{ dx = 20 }, U = p.U, law = dfle.law.power{ k_df = p.k_df } }
+  end,
+  outputs = { "S_df", "A_df" },
+}
+local si, info = dfle.pawn(ens, { outputs = { "S_df" }, S = 3, bootstrap = 20 })
+local _, plain = dfle.pawn{ data = { x = { 1, 2, 3, 4 }, y = { 1, 2, 3, 5 } }, inputs = { "x" },
+                            output = "y", S = 2, bootstrap = 5 }
+print(("threads=%d plain=%d workers=%d lo=%a"):format(info.S_df.threads, plain.threads, ens.workers,
+                                                      si.S_df.U.ci.median.lo))
+]])
+    local one = run(dir, "-j 1", "a.csv")
+    local three = run(dir, "-j 3", "b.csv")
+    T.has(one, "threads=1 plain=1 workers=1")
+    T.has(three, "threads=3 plain=3 workers=3")
+    T.eq(three:match("lo=(%S+)"), one:match("lo=(%S+)"))
     done()
 end
 

@@ -406,6 +406,25 @@ tests["router.define: a Lua empirical router matches the built-in one, every met
     for i = 1, #r0.h do T.close(r.h[i], r0.h[i], 1e-12, 0, "h at " .. i) end
 end
 
+tests["router.define: rt:route(m) with the model's own router routes once"] = function()
+    local calls = 0
+    local rt = dfle.router.define{
+        name = "counted",
+        flow = function(c, p)
+            calls = calls + 1
+            c.h, c.v, c.t_p, c.tau = 1, 1, 100, 1000
+            return true
+        end,
+    }
+    local m = dfle.model{ channel = small_channel(), router = rt }
+    rt:route(m)             -- the model not evaluated yet: its slopes alone are needed
+    local route = calls
+    calls = 0
+    m:get("S")              -- an evaluation routes the model's flow once
+    T.ok(calls > 0)
+    T.eq(route, calls)
+end
+
 tests["router.define: errors in flow() carry the user's line, every method"] = function()
     local flow = function(c, p)
         if c.S < 0.3 then error("no relation for gentle slopes") end

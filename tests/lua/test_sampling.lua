@@ -256,6 +256,32 @@ tests["pawn: bootstrap intervals, reproducible, covering influential inputs"] = 
     T.eq(dfle.pawn{ file = opts.file, inputs = { "x1" }, output = "y" }.x1.ci, nil, "no ci without bootstrap")
 end
 
+tests["pawn: bootstrap on any number of threads gives the same intervals, bit for bit"] = function()
+    local opts = { file = SALIB .. "ties_N1001.csv", inputs = { "k1", "k2", "u3" }, output = "y",
+                   S = 10, bootstrap = 60, seed = 8, threads = 1 }
+    local one, info = dfle.pawn(opts)
+    T.eq(info.threads, 1)
+    for _, n in ipairs{ 2, 5, 64 } do
+        opts.threads = n
+        local many, info_n = dfle.pawn(opts)
+        T.eq(info_n.threads, n)
+        for _, name in ipairs{ "k1", "k2", "u3" } do
+            for _, k in ipairs(STATS) do
+                for _, end_ in ipairs{ "lo", "hi" } do
+                    local a, b = one[name].ci[k][end_], many[name].ci[k][end_]
+                    T.ok(string.pack("d", a) == string.pack("d", b),
+                         ("%s %s %s with %d threads: %s vs %s"):format(name, k, end_, n, a, b))
+                end
+            end
+        end
+    end
+    opts.threads = nil
+    local _, dflt = dfle.pawn(opts)
+    T.ok(dflt.threads >= 1, "default: every core")
+    T.raises_here(function() opts.threads = 0 return dfle.pawn(opts) end, "threads")
+    T.raises_here(function() opts.threads = 1.5 return dfle.pawn(opts) end, "threads")
+end
+
 tests["pawn: non-finite values are errors, or dropped with drop_nan"] = function()
     local data = { a = { 1, 2, 3, 4, 5, 6 }, b = { 6, 5, 4, 3, 2, 1 }, y = { 1, 4, 9, 0 / 0, 25, 36 } }
     T.raises_here(function() return dfle.pawn{ data = data, inputs = { "a", "b" }, output = "y", S = 2 } end,

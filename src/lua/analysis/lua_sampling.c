@@ -7,8 +7,13 @@
  *   design[i].k_df, ...; names = {"alpha", "gamma", "k_df"}
  *
  *   local si, info = dfle.pawn{ file = "runs.csv", inputs = {"x1", "x2"},
- *       output = "y", S = 10, bootstrap = 1000, conf = 0.95, seed = 1 }
+ *       output = "y", S = 10, bootstrap = 1000, conf = 0.95, seed = 1,
+ *       threads = 4 }
  *   si.x1.median, si.x1.ci.median.lo, ...
+ *
+ * The bootstrap runs on `threads` threads (default: all cores; the
+ * ensemble layer passes the command's -j), with the same results for any
+ * number.
  *
  * Parameters given as a keyed table have no order in Lua, so the design's
  * dimensions are the names in byte order (strcmp) unless `order` lists
@@ -473,14 +478,15 @@ static void push_pawn_input(lua_State *L, const dfle_pawn_result *r, size_t d)
 }
 
 /* dfle.pawn{ file = | data =, inputs = {...}, output =, S = 10,
- *            bootstrap = 0, conf = 0.95, seed = 1, drop_nan = false }
+ *            bootstrap = 0, conf = 0.95, seed = 1, drop_nan = false,
+ *            threads = cores }
  *   -> {[input] = {minimum, mean, median, maximum, CV, stdev, ks, count,
- *                  edges, ci}}, info {N, dropped, S, bootstrap, conf} */
+ *                  edges, ci}}, info {N, dropped, S, bootstrap, conf, threads} */
 static int l_pawn(lua_State *L)
 {
-    double S = 10, nboot = 0, conf = 0.95, seed = 1;
-    const dfle_lua_param numeric[] = {
-        {"S", &S}, {"bootstrap", &nboot}, {"conf", &conf}, {"seed", &seed}};
+    double S = 10, nboot = 0, conf = 0.95, seed = 1, threads = dfle_lua_cores();
+    const dfle_lua_param numeric[] = {{"S", &S},       {"bootstrap", &nboot}, {"conf", &conf},
+                                      {"seed", &seed}, {"threads", &threads}};
     static const char *const other[] = {"file", "data", "inputs", "output", "drop_nan", NULL};
     const char **names, *output, *file = NULL;
     const double **xs;
@@ -496,11 +502,13 @@ static int l_pawn(lua_State *L)
     check_options_table(L, "pawn",
                         "{file = | data =, inputs = {...}, output =, S = 10, ...}");
     lua_settop(L, 1);
-    dfle_lua_read_params(L, 1, "pawn", numeric, 4, other);
+    dfle_lua_read_params(L, 1, "pawn", numeric, 5, other);
     dfle_pawn_opts_default(&o);
     o.S = (size_t)dfle_lua_check_whole(L, S, "pawn", "S (slices)", 1, 1e6);
     o.bootstrap = (size_t)dfle_lua_check_whole(L, nboot, "pawn", "bootstrap", 0, 1e7);
     o.seed = (unsigned long)dfle_lua_check_whole(L, seed, "pawn", "seed", 0, 4294967295.0);
+    o.threads = (size_t)dfle_lua_check_whole(L, threads, "pawn", "threads", 1,
+                                             DFLE_PAWN_MAX_THREADS);
     if (!(conf > 0.0 && conf < 1.0))
         luaL_error(L, "dfle.pawn: conf (confidence level) must be in (0, 1) (got %s)",
                    dfle_lua_number_text(L, conf));
@@ -586,7 +594,9 @@ static int l_pawn(lua_State *L)
         push_pawn_input(L, res, d);
         lua_setfield(L, -2, names[d]);
     }
-    lua_createtable(L, 0, 5);
+    lua_createtable(L, 0, 6);
+    lua_pushinteger(L, (lua_Integer)o.threads);
+    lua_setfield(L, -2, "threads");
     lua_pushinteger(L, (lua_Integer)kept);
     lua_setfield(L, -2, "N");
     lua_pushinteger(L, (lua_Integer)(t.N - kept));

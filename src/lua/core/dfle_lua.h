@@ -357,6 +357,10 @@ void dfle_lua_push_module(lua_State *L);
 unsigned long *dfle_lua_epoch(lua_State *L);
 void dfle_lua_touch(lua_State *L);
 
+/* Processors online (at least 1): the default number of ensemble workers
+ * and PAWN bootstrap threads. */
+int dfle_lua_cores(void);
+
 /* Each binding file adds its functions to the module table on the stack. */
 void dfle_lua_open_channel(lua_State *L);
 void dfle_lua_open_fluvial(lua_State *L);
@@ -378,6 +382,6 @@ void dfle_lua_open_dem(lua_State *L);
 void dfle_lua_open_landscape(lua_State *L);
 void dfle_lua_open_ensemble(lua_State *L); /* after sampling: wraps dfle.pawn */
 void dfle_lua_open_invert(lua_State *L);   /* after plot: adds dfle.plot.corner, ... */
-void dfle_lua_open_trace_hook(lua_State *L); /* a test hook, in the registry */
+void dfle_lua_open_trace_hook(lua_State *L); /* the cache of compiled laws; test hooks */
 
 #endif

@@ -12,6 +12,7 @@
 #include <signal.h>
 #include <stdarg.h>
 #include <stdio.h>
+#include <unistd.h>
 
 /* Registry keys: their addresses are the keys. */
 static const char module_key = 'm';
@@ -89,6 +90,12 @@ unsigned long *dfle_lua_epoch(lua_State *L)
 }
 
 void dfle_lua_touch(lua_State *L) { ++*dfle_lua_epoch(L); }
+
+int dfle_lua_cores(void)
+{
+    long c = sysconf(_SC_NPROCESSORS_ONLN);
+    return c > 0 ? (int)c : 1;
+}
 
 void dfle_lua_set_interrupt(lua_State *L, const volatile sig_atomic_t *flag)
 {

@@ -10,6 +10,12 @@
  * (a refused function, a non-finite value, an area not in the frequency
  * memo yet) it hands back with TRY_LUA, and the Lua sweep does it, with
  * its own error messages.  law:compiled() reports the state.
+ *
+ * A program comes from the state's cache (lua_trace_cache.c) when an
+ * earlier law traced the same function and its guards hold for this law;
+ * that program was checked against Lua when it was traced, and is not
+ * checked again.  Otherwise the function is traced and checked, and once
+ * the check has passed the program goes into the cache.
  */
 #include "lua/define/lua_law_compiled.h"
 
@@ -28,6 +34,42 @@ static unsigned op_fields(const lua_law *ll, int op)
     return (1u << N_IN) - 1;
 }
 
+/* The program of the function at fslot for spec: from the cache, or
+ * traced now (*fresh = 1: it must be checked against Lua before it is
+ * trusted or cached).  Leaves its guard table (or nil) on top of T. */
+static dfle_trace_prog *get_program(lua_law *ll, int fslot, const dfle_trace_spec *spec,
+                                    int *fresh, char *why, size_t why_len)
+{
+    lua_State *T = ll->sh.T;
+    dfle_trace_prog *p = NULL;
+    lua_settop(T, SLOT_COUNT);
+    if (ll->cache) {
+        if ((p = dfle_trace_cache_find(T, fslot, SLOT_PARAMS, spec)) != NULL) {
+            *fresh = 0;
+            return p;
+        }
+        lua_pop(T, 1);
+    }
+    *fresh = 1;
+    return dfle_trace_compile(T, fslot, SLOT_PARAMS, spec, why, why_len);
+}
+
+/* A check against Lua has run (counted for the tests and the bench). */
+static void count_check(lua_law *ll)
+{
+    dfle_trace_stats *st = dfle_trace_stats_of(ll->sh.T);
+    if (st != NULL)
+        st->checked++;
+}
+
+/* The spec of op's function (fields it may read; float params as inputs
+ * when programs are shared). */
+static dfle_trace_spec op_spec(const lua_law *ll, int op)
+{
+    const dfle_trace_spec spec = {N_IN, ll_field_names, op_fields(ll, op), 0, ll->cache};
+    return spec;
+}
+
 /* Run `op` through its compiled form, compiling it first if need be.
  * Returns TRY_LUA when the Lua sweep must do it instead: the function
  * cannot be compiled, a value is not finite (so that Lua reports it the
@@ -41,6 +83,8 @@ int ll_compiled_sweep(lua_law *ll, int op, const dfle_law_ctx *ctx, const double
     const double *src[N_IN];
     const double *val;
     double *dst = out;
+    const int fslot = op == OP_FACTOR ? SLOT_FACTOR : SLOT_RATE;
+    const dfle_trace_spec spec = op_spec(ll, op);
     dfle_trace_prog *p;
     unsigned used;
     int verify = 0;
@@ -55,10 +99,8 @@ int ll_compiled_sweep(lua_law *ll, int op, const dfle_law_ctx *ctx, const double
         ll->seen[op] = *ll->epoch;
     }
     if (ll->prog[op] == NULL) {
-        const dfle_trace_spec spec = {N_IN, ll_field_names, op_fields(ll, op), 0};
-        lua_settop(T, SLOT_COUNT);
-        ll->prog[op] = dfle_trace_compile(T, op == OP_FACTOR ? SLOT_FACTOR : SLOT_RATE,
-                                          SLOT_PARAMS, &spec, ll->why[op], sizeof ll->why[op]);
+        ll->prog[op] = get_program(ll, fslot, &spec, &ll->unchecked[op], ll->why[op],
+                                   sizeof ll->why[op]);
         lua_replace(T, SLOT_GUARDS_FACTOR + op);
         if (ll->prog[op] == NULL) {
             ll->cstate[op] = -1;
@@ -66,9 +108,11 @@ int ll_compiled_sweep(lua_law *ll, int op, const dfle_law_ctx *ctx, const double
         }
         ll->cstate[op] = 1;
         ll->seen[op] = *ll->epoch;
-        verify = 1;
     }
     p = ll->prog[op];
+    /* A new program is checked on the first call it completes (a call
+     * handed to Lua before that, for a value not finite, does not count). */
+    verify = ll->unchecked[op];
     if (verify) {
         if (n > ll->scratch_cap) {
             double *s = realloc(ll->scratch, n * sizeof *s);
@@ -103,9 +147,16 @@ int ll_compiled_sweep(lua_law *ll, int op, const dfle_law_ctx *ctx, const double
     }
     if (verify) {
         int st = ll_interpreted_sweep(ll, op, ctx, F_in, out, err);
-        if (st != DFLE_OK)
+        size_t i;
+        if (st != DFLE_OK) {
+            /* No check happened: trace (and check) again next time. */
+            dfle_trace_free(p);
+            ll->prog[op] = NULL;
+            ll->cstate[op] = 0;
             return st;
-        for (size_t i = 0; i < n; i++) {
+        }
+        count_check(ll);
+        for (i = 0; i < n; i++) {
             if (memcmp(&out[i], &dst[i], sizeof *dst) != 0) {
                 snprintf(ll->why[op], sizeof ll->why[op],
                          "its compiled form gave %.17g where Lua gives %.17g (node %zu)", dst[i],
@@ -115,6 +166,11 @@ int ll_compiled_sweep(lua_law *ll, int op, const dfle_law_ctx *ctx, const double
                 ll->cstate[op] = -1;
                 break;
             }
+        }
+        ll->unchecked[op] = 0;
+        if (i == n && ll->cache) {
+            lua_settop(T, SLOT_COUNT);
+            dfle_trace_cache_put(T, fslot, SLOT_PARAMS, &spec, p, SLOT_GUARDS_FACTOR + op);
         }
     }
     return DFLE_OK;
@@ -129,10 +185,11 @@ int ll_compiled_integrand(lua_law *ll, double h, double v, double lambda, double
                           dfle_error *err)
 {
     static const char *const names[] = {"h", "v", "lambda"};
+    const dfle_trace_spec spec = {3, names, 7u, 1, ll->cache};
     lua_State *T = ll->sh.T;
     const double in[3] = {h, v, lambda};
     double gc, gl;
-    int st;
+    int st, fresh;
 
     if (ll->gprog != NULL && ll->gseen != *ll->epoch) {
         lua_settop(T, SLOT_COUNT);
@@ -143,10 +200,7 @@ int ll_compiled_integrand(lua_law *ll, double h, double v, double lambda, double
         ll->gseen = *ll->epoch;
     }
     if (ll->gprog == NULL) {
-        const dfle_trace_spec spec = {3, names, 7u, 1};
-        lua_settop(T, SLOT_COUNT);
-        ll->gprog = dfle_trace_compile(T, SLOT_INTEGRAND, SLOT_PARAMS, &spec, ll->gwhy,
-                                       sizeof ll->gwhy);
+        ll->gprog = get_program(ll, SLOT_INTEGRAND, &spec, &fresh, ll->gwhy, sizeof ll->gwhy);
         lua_replace(T, SLOT_GUARDS_G);
         if (ll->gprog == NULL) {
             ll->gstate = -1;
@@ -154,7 +208,7 @@ int ll_compiled_integrand(lua_law *ll, double h, double v, double lambda, double
         }
         ll->gstate = 1;
         ll->gseen = *ll->epoch;
-        ll->gverify = G_VERIFY_CALLS;
+        ll->gverify = fresh ? G_VERIFY_CALLS : 0;
     }
     gc = dfle_trace_eval(ll->gprog, in);
     if (!isfinite(gc))
@@ -163,9 +217,9 @@ int ll_compiled_integrand(lua_law *ll, double h, double v, double lambda, double
         *g = gc;
         return DFLE_OK;
     }
-    ll->gverify--;
     if ((st = ll_lua_integrand(ll, h, v, lambda, &gl, err)) != DFLE_OK)
-        return st;
+        return st; /* this call is not a check: gverify stays */
+    ll->gverify--;
     if (memcmp(&gc, &gl, sizeof gc) != 0) {
         snprintf(ll->gwhy, sizeof ll->gwhy,
                  "its compiled form gave %.17g where Lua gives %.17g (h = %g, v = %g, "
@@ -173,6 +227,12 @@ int ll_compiled_integrand(lua_law *ll, double h, double v, double lambda, double
         dfle_trace_free(ll->gprog);
         ll->gprog = NULL;
         ll->gstate = -1;
+    } else if (ll->gverify == 0) {
+        count_check(ll); /* all G_VERIFY_CALLS agreed */
+        if (ll->cache) {
+            lua_settop(T, SLOT_COUNT);
+            dfle_trace_cache_put(T, SLOT_INTEGRAND, SLOT_PARAMS, &spec, ll->gprog, SLOT_GUARDS_G);
+        }
     }
     *g = gl;
     return DFLE_OK;

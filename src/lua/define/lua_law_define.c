@@ -162,12 +162,26 @@ static void move_function(lua_State *L, lua_State *T, const char *key, int requi
     lua_xmove(L, T, 1);
 }
 
+/* Optional boolean `key` of the definition at index 1 (default true). */
+static int opt_flag(lua_State *L, const char *key)
+{
+    int t, v = 1;
+    if ((t = lua_getfield(L, 1, key)) != LUA_TNIL) {
+        if (t != LUA_TBOOLEAN)
+            luaL_error(L, "dfle.law.define: '%s' must be a boolean, got %s", key,
+                       dfle_lua_typename(L, -1));
+        v = lua_toboolean(L, -1);
+    }
+    lua_pop(L, 1);
+    return v;
+}
+
 /* dfle.law.define{ name =, params =, rate =, factor =, integrand =,
- * frequency =, compile = } -> dfle.law */
+ * frequency =, compile =, cache = } -> dfle.law */
 static int l_law_define(lua_State *L)
 {
     static const char *const keys[] = {"name", "params", "rate", "factor", "integrand",
-                                       "frequency", "compile", NULL};
+                                       "frequency", "compile", "cache", NULL};
     static const dfle_lua_shell_def def = {
         .kind = "law", .tname = DFLE_LUA_LAW, .object_size = sizeof(dfle_lua_law),
         .state_size = sizeof(lua_law), .keys = keys, .stack = 2 * SLOT_COUNT,
@@ -178,14 +192,8 @@ static int l_law_define(lua_State *L)
     double g[3] = {0, 0, 0};
     int t;
 
-    ll->compile = 1;
-    if ((t = lua_getfield(L, 1, "compile")) != LUA_TNIL) {
-        if (t != LUA_TBOOLEAN)
-            luaL_error(L, "dfle.law.define: 'compile' must be a boolean, got %s",
-                       dfle_lua_typename(L, -1));
-        ll->compile = lua_toboolean(L, -1);
-    }
-    lua_pop(L, 1);
+    ll->compile = opt_flag(L, "compile");
+    ll->cache = opt_flag(L, "cache");
     move_function(L, T, "rate", 1);
     move_function(L, T, "factor", 0);
     if ((t = lua_getfield(L, 1, "integrand")) == LUA_TFUNCTION) {

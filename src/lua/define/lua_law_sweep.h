@@ -80,11 +80,13 @@ typedef struct lua_law {
     /* Compiled forms (lua_trace.h) of factor and rate per op, and of the
      * integrand: cstate 0 = not tried yet, 1 = compiled, -1 = runs as Lua
      * (why[] says why).  seen[] is the epoch at which the program's
-     * guards last held. */
-    int compile;
+     * guards last held.  cache: programs come from and go to the
+     * state's cache (lua_trace_cache.c), with float params as inputs. */
+    int compile, cache;
     unsigned long *epoch;
     dfle_trace_prog *prog[N_OPS];
     int cstate[N_OPS];
+    int unchecked[N_OPS]; /* traced, not yet checked against Lua */
     unsigned long seen[N_OPS];
     char why[N_OPS][160];
     dfle_trace_prog *gprog;

@@ -32,6 +32,7 @@
 #include <string.h>
 #include <unistd.h>
 
+#include "dfle/sensitivity.h"
 #include "lua/ensemble/lua_ensemble_internal.h"
 
 /* The counts of the result table at res into rec's current section, and
@@ -95,7 +96,7 @@ static int l_ensemble(lua_State *L)
     const dfle_lua_ensemble_host *host = dfle_lua_ens_host(L);
     lua_Integer call;
     spec s;
-    int ctx, nw, role, remote = 0;
+    int ctx, nw, role, remote = 0, workers;
     run_box *box;
     dfle_error err;
     size_t total, ran = 0;
@@ -138,6 +139,7 @@ static int l_ensemble(lua_State *L)
     nw = dfle_lua_par_workers(host, s.workers, host != NULL ? host->cores : 0);
     if (host == NULL || host->open_state == NULL || role == DFLE_LUA_PAR_NESTED)
         nw = 1;
+    workers = nw;
     if ((size_t)nw > total)
         nw = (int)(total > 0 ? total : 1);
 
@@ -211,6 +213,8 @@ static int l_ensemble(lua_State *L)
                   ran == 1 ? "" : "s", dfle_lua_ens_now() - started);
     dfle_lua_ens_push_result(L, "ensemble", path, host ? host->shard_i : 0, host ? host->shard_n : 0,
                 (lua_Integer)ran);
+    lua_pushinteger(L, workers); /* dfle.pawn(ens) runs its bootstrap on as many */
+    lua_setfield(L, -2, "workers");
     ensemble_record(L, ctx, lua_gettop(L), path, nw);
     return 1;
 }
@@ -275,6 +279,23 @@ static int l_gather(lua_State *L)
     return 1;
 }
 
+/* The bootstrap threads of a dfle.pawn call that gives none: the
+ * command's -j, else (for an ensemble) the workers it ran with (at idx,
+ * or 0); 0: dfle.pawn's own default, every core. */
+static lua_Integer default_threads(lua_State *L, int ens)
+{
+    const dfle_lua_ensemble_host *host = dfle_lua_ens_host(L);
+    lua_Integer n = 0;
+    if (host != NULL && host->workers > 0)
+        return host->workers;
+    if (ens != 0 && lua_getfield(L, ens, "workers") == LUA_TNUMBER)
+        n = lua_tointeger(L, -1);
+    if (ens != 0)
+        lua_pop(L, 1);
+    /* a result the script has changed may hold anything there */
+    return n >= 1 && n <= DFLE_PAWN_MAX_THREADS ? n : 0;
+}
+
 /* The plain dfle.pawn (upvalue 1 of l_pawn_ensemble) on the nargs values
  * on top of the stack, leaving nres results; its errors get the
  * script's position here (called from C, they carry none). */
@@ -309,14 +330,15 @@ static void check_names(lua_State *L, int idx, const char *what)
     }
 }
 
-/* dfle.pawn(ens, {outputs =, inputs =, S =, ...}): PAWN of each output
- * on the rows with status "ok"; anything else goes to the plain
- * dfle.pawn. */
+/* dfle.pawn(ens, {outputs =, inputs =, S =, ..., threads =}): PAWN of each
+ * output on the rows with status "ok"; anything else goes to the plain
+ * dfle.pawn.  Both get the -j of the command as their default threads. */
 static int l_pawn_ensemble(lua_State *L)
 {
     static const char *const keys[] = {"outputs", "inputs", NULL};
-    double S = 10, boot = 0, conf = 0.95, seed = 1;
-    const dfle_lua_param nums[] = {{"S", &S}, {"bootstrap", &boot}, {"conf", &conf}, {"seed", &seed}};
+    double S = 10, boot = 0, conf = 0.95, seed = 1, threads = -1; /* -1: not given */
+    const dfle_lua_param nums[] = {{"S", &S},       {"bootstrap", &boot}, {"conf", &conf},
+                                   {"seed", &seed}, {"threads", &threads}};
     int data, outs, ins, si, info, okrows, is_ens = 0;
     lua_Integer count, k = 0;
 
@@ -326,11 +348,31 @@ static int l_pawn_ensemble(lua_State *L)
         lua_pop(L, 2);
     }
     if (!is_ens) {
+        lua_Integer n = default_threads(L, 0);
+        if (n > 0 && lua_type(L, 1) == LUA_TTABLE &&
+            lua_getfield(L, 1, "threads") == LUA_TNIL) {
+            /* a copy with threads = -j: the script's table stays as it was */
+            lua_newtable(L);
+            lua_pushnil(L);
+            while (lua_next(L, 1) != 0) {
+                lua_pushvalue(L, -2);
+                lua_insert(L, -2);
+                lua_rawset(L, -4);
+            }
+            lua_pushinteger(L, n);
+            lua_setfield(L, -2, "threads");
+            lua_replace(L, 1);
+            lua_pop(L, 1);
+        } else if (n > 0 && lua_type(L, 1) == LUA_TTABLE) {
+            lua_pop(L, 1);
+        }
         plain_pawn(L, lua_gettop(L), LUA_MULTRET);
         return lua_gettop(L);
     }
     lua_settop(L, 2);
-    dfle_lua_read_params(L, 2, "pawn", nums, 4, keys);
+    dfle_lua_read_params(L, 2, "pawn", nums, 5, keys);
+    if (threads == -1 && default_threads(L, 1) > 0)
+        threads = (double)default_threads(L, 1);
     /* The result is a plain table the script may have changed: every
      * part used is checked before it is used. */
     lua_getfield(L, 1, "data");
@@ -423,6 +465,8 @@ static int l_pawn_ensemble(lua_State *L)
         lua_pushnumber(L, boot), lua_setfield(L, base + 1, "bootstrap");
         lua_pushnumber(L, conf), lua_setfield(L, base + 1, "conf");
         lua_pushnumber(L, seed), lua_setfield(L, base + 1, "seed");
+        if (threads != -1)
+            lua_pushnumber(L, threads), lua_setfield(L, base + 1, "threads");
         plain_pawn(L, 1, 2);
         lua_rawgeti(L, outs, o);
         lua_insert(L, -2);

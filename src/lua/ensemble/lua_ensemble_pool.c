@@ -14,7 +14,6 @@
 #include <stdlib.h>
 #include <string.h>
 #include <time.h>
-#include <unistd.h>
 
 #include "lua/ensemble/lua_ensemble_internal.h"
 
@@ -235,15 +234,13 @@ static void *worker_thread(void *arg)
 
 int dfle_lua_par_workers(const dfle_lua_ensemble_host *host, int table_workers, int cores)
 {
-    long c;
     if (host != NULL && host->workers > 0)
         return host->workers;
     if (table_workers > 0)
         return table_workers;
     if (cores > 0)
         return cores;
-    c = sysconf(_SC_NPROCESSORS_ONLN);
-    return c > 0 ? (int)c : 1;
+    return dfle_lua_cores();
 }
 
 /* Run the queue on `nw` threads, and with the other processes that

@@ -90,8 +90,7 @@ static int l_router_route(lua_State *L)
     const dfle_network *net = dfle_model_network(m);
     const size_t n = dfle_model_size(m);
     const dfle_process_report *rep;
-    const double *S;
-    double *block, *times = NULL;
+    double *S, *block, *times = NULL;
     size_t ntimes = 0;
     dfle_flow flow;
     dfle_error err;
@@ -106,11 +105,15 @@ static int l_router_route(lua_State *L)
     }
     if (dfle_model_law(m) == NULL)
         luaL_error(L, "dfle.router:route: the model has no erosion law (router = false)");
-    S = dfle_lua_model_field(L, 2, DFLE_FIELD_S, "dfle.router:route");
-    /* The flow's arrays live in a userdata: nothing to free if we raise. */
-    block = lua_newuserdatauv(L, DFLE_FLOW_ARRAYS * n * sizeof *block, 0);
+    /* The flow's arrays and the slopes live in a userdata: nothing to
+     * free if we raise.  The slopes alone, not an evaluation of the
+     * model: that would route the model's router (this one, often) over
+     * the same profile first. */
+    block = lua_newuserdatauv(L, (DFLE_FLOW_ARRAYS + 1) * n * sizeof *block, 0);
     memset(block, 0, DFLE_FLOW_ARRAYS * n * sizeof *block);
     dfle_flow_bind(&flow, block, n);
+    S = block + DFLE_FLOW_ARRAYS * n;
+    dfle_model_slopes(m, S);
     flow.integrand = dfle_law_get_ops(dfle_model_law(m))->integrand;
     flow.integrand_state = dfle_law_state(dfle_model_law(m));
     if (times != NULL && dfle_router_process_set_snapshots(rt, ntimes, times, &err) != DFLE_OK)

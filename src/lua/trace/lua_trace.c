@@ -23,7 +23,14 @@
  *  - side effects: writes to proxies raise, and SETUPVAL in the
  *    bytecode refuses the function (a counter in an upvalue);
  *  - values read from outside (params, globals, upvalues, math.pi) are
- *    recorded as guards the caller re-checks (lua_trace.h);
+ *    recorded as guards the caller re-checks (lua_trace.h); a float param
+ *    may instead be an input (T_PARAM) whose value each law binds, and is
+ *    then opaque to the function: anything but arithmetic on it refuses;
+ *  - what no guard could watch is refused: the length of a proxy (#p), a
+ *    computed key (p[c.h]: another field for each value),
+ *    string methods (strings' __index refuses during the trace), and any
+ *    metatable debug.setmetatable gave nil, booleans, numbers or
+ *    functions;
  *  - calls: only Lua functions (vetted the same way) and the pure math
  *    functions listed below, recognised by their C address as found in
  *    a fresh luaopen_math table, so a replaced math.sqrt is not trusted;
@@ -58,18 +65,21 @@
 /* The trace in progress: a userdata with user values 1 = guards table,
  * 2 = swaps table, 3 = cache (vetted functions, proxies), 4 = the original
  * of each stand-in (an upvalue cell shared by two functions already holds
- * one when the second is vetted). */
+ * one when the second is vetted), 5 = the node of each param read as an
+ * input (key -> node index). */
 typedef struct tracer {
     int active;
     int n;
     int n_guards, n_swaps, depth;
+    int symbolic; /* float params are inputs (T_PARAM), not constants */
+    int n_params; /* params read as inputs                           */
     const dfle_trace_spec *spec;
     int field_node[DFLE_TRACE_MAX_INPUTS];
     char why[160];
     tnode node[MAX_NODES];
 } tracer;
 
-enum { UV_GUARDS = 1, UV_SWAPS, UV_CACHE, UV_ORIG, N_UV = UV_ORIG };
+enum { UV_GUARDS = 1, UV_SWAPS, UV_CACHE, UV_ORIG, UV_PARAMS, N_UV = UV_PARAMS };
 
 typedef struct { tracer *t; int idx; } node_ud;
 
@@ -442,7 +452,35 @@ static void stand_in(lua_State *L, tracer *t, int tidx, int idx, const char *wha
 /* What a proxy stands for, and how names read from it are reported. */
 enum { PROXY_ENV, PROXY_MATH, PROXY_PARAMS };
 static const char *const proxy_prefix[] = {"the global '", "math.", "p."};
+static const char *const proxy_table[] = {"the global table", "math", "p"};
 static const char *const proxy_suffix[] = {"'", "", ""};
+
+/* A float param read as an input (the value at 3, its key at 2, in a
+ * proxy_index call): one T_PARAM node per key and trace, guarded as
+ * G_PARAM with that node's index.  The program then serves every law
+ * whose param is a float, whatever its value (lua_trace_cache.c); a
+ * function that does more with the value than arithmetic (compares it,
+ * loops to it) is refused, and dfle_trace_compile traces it again with
+ * the value as a constant. */
+static int param_input(lua_State *L, tracer *t)
+{
+    int node;
+    lua_getiuservalue(L, lua_upvalueindex(1), UV_PARAMS); /* 4 */
+    lua_pushvalue(L, 2);
+    if (lua_rawget(L, 4) == LUA_TNUMBER) { /* 5 */
+        node = (int)lua_tointeger(L, 5);
+    } else {
+        node = add_node(L, t, T_PARAM, t->n_params, 0, lua_tonumber(L, 3), 0);
+        lua_pushinteger(L, node); /* 6 */
+        add_guard(L, t, lua_upvalueindex(1), G_PARAM, lua_upvalueindex(2), 2, 6);
+        lua_pushvalue(L, 2);
+        lua_pushinteger(L, node);
+        lua_rawset(L, 4);
+        t->n_params++;
+    }
+    push_node(L, lua_upvalueindex(1), node);
+    return 1;
+}
 
 /* __index of a proxy: upvalues 1 = tracer, 2 = the real table, 3 = its
  * PROXY_ kind.  The value read is guarded, then replaced by its stand-in. */
@@ -454,6 +492,10 @@ static int proxy_index(lua_State *L)
     if (!t->active)
         return luaL_error(L, "dfle: a compiled law's environment was used after its trace");
     lua_settop(L, 2);
+    /* A key computed from a flow field or a param input (p[c.h]) names a
+     * different field for each value, and no guard could watch which. */
+    if (luaL_testudata(L, 2, NODE_MT) != NULL)
+        return refuse(L, t, "it indexes %s with a computed value", proxy_table[kind]);
     lua_pushvalue(L, 2);
     lua_rawget(L, lua_upvalueindex(2)); /* 3: the real value */
     snprintf(what, sizeof what, "%s%s%s", proxy_prefix[kind],
@@ -463,6 +505,9 @@ static int proxy_index(lua_State *L)
      * not be nil for it. */
     if (lua_isnil(L, 3) && lua_getmetatable(L, lua_upvalueindex(2)))
         return refuse(L, t, "it reads %s, which is not set, from a table with a metatable", what);
+    if (kind == PROXY_PARAMS && t->symbolic && lua_type(L, 3) == LUA_TNUMBER &&
+        !lua_isinteger(L, 3))
+        return param_input(L, t);
     add_guard(L, t, lua_upvalueindex(1), G_FIELD, lua_upvalueindex(2), 2, 3);
     stand_in(L, t, lua_upvalueindex(1), 3, what);
     lua_settop(L, 3);
@@ -478,12 +523,22 @@ static int proxy_newindex(lua_State *L)
                   lua_type(L, 2) == LUA_TSTRING ? lua_tostring(L, 2) : "?", proxy_suffix[kind]);
 }
 
+/* __len of a proxy: upvalues 1 = tracer, 2 = its PROXY_ kind.  The proxy
+ * itself is empty, and the real table's length is a value no guard would
+ * watch. */
+static int proxy_len(lua_State *L)
+{
+    tracer *t = tracer_at(L, lua_upvalueindex(1));
+    return refuse(L, t, "it takes the length of %s",
+                  proxy_table[lua_tointeger(L, lua_upvalueindex(2))]);
+}
+
 /* Push a new proxy of the table at `real`. */
 static void push_proxy(lua_State *L, int tidx, int real, int kind)
 {
     real = lua_absindex(L, real);
     lua_createtable(L, 0, 0);
-    lua_createtable(L, 0, 2);
+    lua_createtable(L, 0, 3);
     lua_pushvalue(L, tidx);
     lua_pushvalue(L, real);
     lua_pushinteger(L, kind);
@@ -493,6 +548,10 @@ static void push_proxy(lua_State *L, int tidx, int real, int kind)
     lua_pushinteger(L, kind);
     lua_pushcclosure(L, proxy_newindex, 2);
     lua_setfield(L, -2, "__newindex");
+    lua_pushvalue(L, tidx);
+    lua_pushinteger(L, kind);
+    lua_pushcclosure(L, proxy_len, 2);
+    lua_setfield(L, -2, "__len");
     lua_setmetatable(L, -2);
 }
 
@@ -629,6 +688,78 @@ static int c_newindex(lua_State *L)
     return refuse(L, tracer_at(L, lua_upvalueindex(1)), "it assigns to a field of c");
 }
 
+/* Strings' __index during a trace: upvalue 1 = the tracer. */
+static int string_method(lua_State *L)
+{
+    return refuse(L, tracer_at(L, lua_upvalueindex(1)),
+                  "it calls a string method (the string library is not compiled)");
+}
+
+/* Values other than tables and full userdata share one metatable per
+ * type, through which a function could reach code the trace never vets
+ * and values no guard watches: a string method (("ab"):len() calls
+ * string.len, which a script may replace), or whatever debug.setmetatable
+ * gave numbers, booleans, nil or functions.  A metatable on those refuses
+ * the function; strings' __index is swapped for one that refuses (the
+ * metatable and the original are kept in the cache table under
+ * string_mt_key and string_index_key, and put back by trace_once
+ * whatever happens). */
+static const char string_mt_key = 0, string_index_key = 0;
+
+static void close_shared_metatables(lua_State *L, tracer *t, int tidx)
+{
+    static const char *const what[] = {"nil", "booleans", "numbers", "functions"};
+    for (int k = 0; k < 4; k++) {
+        switch (k) {
+        case 0: lua_pushnil(L); break;
+        case 1: lua_pushboolean(L, 0); break;
+        case 2: lua_pushinteger(L, 0); break;
+        default: lua_pushcfunction(L, string_method); break;
+        }
+        if (lua_getmetatable(L, -1))
+            refuse(L, t, "%s have a metatable (debug.setmetatable), which a trace cannot follow",
+                   what[k]);
+        lua_pop(L, 1);
+    }
+    lua_pushliteral(L, "");
+    if (!lua_getmetatable(L, -1)) {
+        lua_pop(L, 1);
+        return;
+    }
+    lua_pushliteral(L, "__index");
+    if (lua_rawget(L, -2) == LUA_TNIL) { /* indexing a string fails anyway */
+        lua_pop(L, 3);
+        return;
+    }
+    lua_getiuservalue(L, tidx, UV_CACHE);
+    lua_insert(L, -2);
+    lua_rawsetp(L, -2, &string_index_key);
+    lua_pushvalue(L, -2);
+    lua_rawsetp(L, -2, &string_mt_key);
+    lua_pop(L, 1);
+    lua_pushliteral(L, "__index");
+    lua_pushvalue(L, tidx);
+    lua_pushcclosure(L, string_method, 1);
+    lua_rawset(L, -3);
+    lua_pop(L, 2);
+}
+
+/* Put strings' __index back.  No allocation (it runs outside the
+ * protected call): the metatable comes from the cache table, and
+ * "__index" is one of Lua's fixed strings, already a key there. */
+static void reopen_shared_metatables(lua_State *L, int tidx)
+{
+    const int top = lua_gettop(L);
+    lua_getiuservalue(L, tidx, UV_CACHE);                       /* top+1 */
+    if (lua_rawgetp(L, top + 1, &string_mt_key) == LUA_TTABLE &&  /* top+2 */
+        lua_rawgetp(L, top + 1, &string_index_key) != LUA_TNIL) { /* top+3 */
+        lua_pushliteral(L, "__index");
+        lua_insert(L, top + 3);
+        lua_rawset(L, top + 2);
+    }
+    lua_settop(L, top);
+}
+
 /* fn(c, p) or fn(x_1, ..., x_n, p) with nodes: args 1 tracer, 2 fn, 3 p. */
 static int trace_main(lua_State *L)
 {
@@ -639,6 +770,7 @@ static int trace_main(lua_State *L)
     node_metatable(L);
     math_map(L);
     lua_pop(L, 1);
+    close_shared_metatables(L, t, 1);
     vet_function(L, t, 1, 2, "it");
     lua_pushvalue(L, 2);
     if (s->positional) {
@@ -666,30 +798,21 @@ static int trace_main(lua_State *L)
 
 /* ---- compile ----------------------------------------------------------- */
 
-dfle_trace_prog *dfle_trace_compile(lua_State *L, int fidx, int pidx, const dfle_trace_spec *spec,
-                                    char *why, size_t why_len)
+/* One trace (dfle_trace_compile), with float params as inputs or as
+ * constants; *n_params receives how many it read as inputs. */
+static dfle_trace_prog *trace_once(lua_State *L, int fidx, int pidx, const dfle_trace_spec *spec,
+                                   int symbolic, int *n_params, char *why, size_t why_len)
 {
     tracer *t;
     dfle_trace_prog *p;
     int base, st, result = -1;
 
-    if (!dfle_trace_release_checked(dfle_trace_release(), why, why_len)) {
-        lua_pushnil(L); /* this Lua's opcodes and arithmetic are unknown */
-        return NULL;
-    }
-    fidx = lua_absindex(L, fidx);
-    pidx = lua_absindex(L, pidx);
-    if (!lua_checkstack(L, 40) || spec->n_inputs > DFLE_TRACE_MAX_INPUTS ||
-        lua_type(L, fidx) != LUA_TFUNCTION || lua_iscfunction(L, fidx)) {
-        snprintf(why, why_len, "it is not a Lua function");
-        lua_pushnil(L);
-        return NULL;
-    }
     base = lua_gettop(L);
     t = lua_newuserdatauv(L, sizeof *t, N_UV); /* base+1 */
     memset(t, 0, sizeof *t);
     t->spec = spec;
     t->active = 1;
+    t->symbolic = symbolic;
     for (int f = 0; f < DFLE_TRACE_MAX_INPUTS; f++)
         t->field_node[f] = -1;
     for (int uv = UV_GUARDS; uv <= N_UV; uv++) {
@@ -716,7 +839,9 @@ dfle_trace_prog *dfle_trace_compile(lua_State *L, int fidx, int pidx, const dfle
         lua_pop(L, 1);
     }
     lua_pop(L, 1);
+    reopen_shared_metatables(L, base + 1);
     t->active = 0;
+    *n_params = t->n_params;
 
     if (st == LUA_OK) {
         node_ud *u = luaL_testudata(L, base + 2, NODE_MT);
@@ -764,9 +889,43 @@ dfle_trace_prog *dfle_trace_compile(lua_State *L, int fidx, int pidx, const dfle
             p->inputs |= 1u << f;
     }
     for (int k = 0; k < p->n; k++)
-        p->val[k] = p->node[k].op == T_K ? p->node[k].k : 0.0;
+        p->val[k] = T_IS_CONST(p->node[k].op) ? p->node[k].k : 0.0;
     lua_getiuservalue(L, base + 1, UV_GUARDS);
     lua_replace(L, base + 1);
     lua_settop(L, base + 1);
+    return p;
+}
+
+dfle_trace_prog *dfle_trace_compile(lua_State *L, int fidx, int pidx, const dfle_trace_spec *spec,
+                                    char *why, size_t why_len)
+{
+    dfle_trace_prog *p;
+    int n_params = 0;
+
+    if (!dfle_trace_release_checked(dfle_trace_release(), why, why_len)) {
+        lua_pushnil(L); /* this Lua's opcodes and arithmetic are unknown */
+        return NULL;
+    }
+    fidx = lua_absindex(L, fidx);
+    pidx = lua_absindex(L, pidx);
+    if (!lua_checkstack(L, 40) || spec->n_inputs > DFLE_TRACE_MAX_INPUTS ||
+        lua_type(L, fidx) != LUA_TFUNCTION || lua_iscfunction(L, fidx)) {
+        snprintf(why, why_len, "it is not a Lua function");
+        lua_pushnil(L);
+        return NULL;
+    }
+    p = trace_once(L, fidx, pidx, spec, spec->params_inputs, &n_params, why, why_len);
+    if (p == NULL && n_params > 0) {
+        /* Refused with params as inputs, perhaps for what it does with
+         * one (compares it, loops to it): params as constants, as they
+         * were before programs were shared. */
+        lua_pop(L, 1);
+        p = trace_once(L, fidx, pidx, spec, 0, &n_params, why, why_len);
+    }
+    if (p != NULL) {
+        dfle_trace_stats *st = dfle_trace_stats_of(L);
+        if (st != NULL)
+            st->traced++;
+    }
     return p;
 }

@@ -15,7 +15,11 @@
  * What a compiled function read besides its arguments (params, globals,
  * upvalues) is baked in as constants and listed in a guard table; the
  * caller checks the guards whenever Lua code may have run since
- * (dfle_lua_epoch) and compiles again if any changed.
+ * (dfle_lua_epoch) and compiles again if any changed.  Float params may
+ * instead be inputs of the program (params_inputs), so that one program
+ * serves every law built from the same function with other values: the
+ * per-state cache (lua_trace_cache.c) hands a copy of it to each new law
+ * whose function, upvalues, globals and other params match.
  */
 #ifndef DFLE_LUA_TRACE_H
 #define DFLE_LUA_TRACE_H
@@ -34,6 +38,9 @@ typedef struct dfle_trace_spec {
     unsigned available;       /* fn(c, p): bit f set when c[names[f]] is
                                * defined (others read as nil)           */
     int positional;           /* 1: fn(x_1, ..., x_n, p); 0: fn(c, p)   */
+    int params_inputs;        /* 1: a float param is an input of the
+                               * program, its value set per law (as a
+                               * constant if the function is refused so) */
 } dfle_trace_spec;
 
 /* The release this build runs under, as LUA_VERSION_RELEASE_NUM gives
@@ -68,5 +75,38 @@ const double *dfle_trace_eval_n(dfle_trace_prog *prog, size_t n, const double *c
 /* 1 when every value the program baked in is still what it was (guard
  * table at gidx, from dfle_trace_compile).  Never raises. */
 int dfle_trace_guards_hold(lua_State *L, int gidx, const dfle_trace_prog *prog);
+
+/* ---- the per-state cache of programs (lua_trace_cache.c) ---- */
+
+/* Create the cache of L's state (at luaopen_dfle; may raise). */
+void dfle_trace_cache_open(lua_State *L);
+
+/* A program for the function at fidx with the params table at pidx from
+ * the cache of L's state: a copy of one traced earlier from the same code
+ * (the same chunk, as lua_dump writes it, debug information included) for
+ * the same spec, whose guards hold for this function and params, with
+ * this law's param values bound.  Pushes the guard table of the copy (as
+ * dfle_trace_compile does); NULL and nil when there is none.  Only
+ * programs already checked against Lua are in the cache
+ * (dfle_trace_cache_put).  Never raises. */
+dfle_trace_prog *dfle_trace_cache_find(lua_State *L, int fidx, int pidx,
+                                       const dfle_trace_spec *spec);
+
+/* Keep a copy of prog, traced from the function at fidx with the params
+ * at pidx and spec, guard table at gidx, for later laws of L's state.
+ * Call it once prog has given what the function gives run as Lua.
+ * Never raises (a program that cannot be kept is just not kept). */
+void dfle_trace_cache_put(lua_State *L, int fidx, int pidx, const dfle_trace_spec *spec,
+                          const dfle_trace_prog *prog, int gidx);
+
+/* What the cache of L's state did: programs traced (dfle_trace_compile),
+ * found (dfle_trace_cache_find), kept (dfle_trace_cache_put) and checked
+ * against Lua (counted by the caller), and the templates it holds. */
+typedef struct dfle_trace_stats {
+    unsigned long traced, found, kept, checked, held;
+} dfle_trace_stats;
+/* The counters of L's state (created on first use; NULL if out of
+ * memory).  Never raises. */
+dfle_trace_stats *dfle_trace_stats_of(lua_State *L);
 
 #endif

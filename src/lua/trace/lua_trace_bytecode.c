@@ -122,35 +122,45 @@ static int dump_writer(lua_State *L, const void *p, size_t sz, void *ud)
     return 0;
 }
 
-unsigned dfle_trace_scan(lua_State *L, int fidx)
+void dfle_trace_push_dump(lua_State *L, int fidx)
 {
-    static const unsigned char header[] = {0x1b, 'L', 'u', 'a', 0x54, 0x00, 0x19, 0x93,
-                                           '\r', '\n', 0x1a, '\n', 4};
     dump_state d;
-    reader r;
-    size_t len;
-    unsigned found;
-
     d.init = 0;
     lua_pushvalue(L, fidx);
     lua_dump(L, dump_writer, &d, 0);
     if (!d.init) {
         lua_pop(L, 1);
-        return FOUND_BAD;
+        lua_pushnil(L);
+        return;
     }
     luaL_pushresult(&d.b);
+    lua_remove(L, -2);
+}
+
+unsigned dfle_trace_scan(lua_State *L, int fidx)
+{
+    static const unsigned char header[] = {0x1b, 'L', 'u', 'a', 0x54, 0x00, 0x19, 0x93,
+                                           '\r', '\n', 0x1a, '\n', 4};
+    reader r;
+    size_t len;
+    unsigned found;
+
+    dfle_trace_push_dump(L, fidx);
+    if (lua_isnil(L, -1)) {
+        lua_pop(L, 1);
+        return FOUND_BAD;
+    }
     r.p = (const unsigned char *)lua_tolstring(L, -1, &len);
     r.end = r.p + len;
     r.bad = 0;
     if (len < sizeof header + 2 || memcmp(r.p, header, sizeof header) != 0) {
-        lua_pop(L, 2);
+        lua_pop(L, 1);
         return FOUND_BAD;
     }
     r.p += sizeof header;
     rd_skip(&r, 2);                              /* sizes of lua_Integer, lua_Number */
     rd_skip(&r, (size_t)r.p[-2] + r.p[-1] + 1); /* LUAC_INT, LUAC_NUM, sizeupvalues */
     found = scan_function(&r, 0);
-    lua_pop(L, 2);
+    lua_pop(L, 1);
     return found;
 }
-

@@ -68,7 +68,7 @@ double dfle_trace_eval(dfle_trace_prog *p, const double *in)
             v[p->in_node[f]] = in[f];
     for (int k = 0; k < p->n; k++) {
         const tnode *t = &p->node[k];
-        if (t->op > T_K)
+        if (t->op > T_PARAM)
             v[k] = apply(t->op, v[t->a], v[t->b]);
     }
     return v[p->result];
@@ -89,7 +89,7 @@ const double *dfle_trace_eval_n(dfle_trace_prog *p, size_t n, const double *cons
         p->work = w;
         p->cap = cap;
         for (int k = 0; k < p->n; k++)
-            if (p->node[k].op == T_K)
+            if (T_IS_CONST(p->node[k].op))
                 for (size_t i = 0; i < cap; i++)
                     w[(size_t)k * cap + i] = p->node[k].k;
         for (size_t i = 0; i < cap; i++)
@@ -104,7 +104,7 @@ const double *dfle_trace_eval_n(dfle_trace_prog *p, size_t n, const double *cons
             continue;
         }
         col[k] = r;
-        if (t->op == T_K)
+        if (T_IS_CONST(t->op))
             continue;
         a = col[t->a], b = col[t->b];
         switch (t->op) {
@@ -120,6 +120,28 @@ const double *dfle_trace_eval_n(dfle_trace_prog *p, size_t n, const double *cons
 
 unsigned dfle_trace_inputs(const dfle_trace_prog *p) { return p->inputs; }
 
+dfle_trace_prog *dfle_trace_clone(const dfle_trace_prog *src)
+{
+    dfle_trace_prog *p = calloc(1, sizeof *p);
+    if (p == NULL)
+        return NULL;
+    p->node = malloc((size_t)src->n * sizeof *p->node);
+    p->val = malloc((size_t)src->n * sizeof *p->val);
+    p->col = malloc((size_t)src->n * sizeof *p->col);
+    if (p->node == NULL || p->val == NULL || p->col == NULL) {
+        dfle_trace_free(p);
+        return NULL;
+    }
+    p->n = src->n;
+    p->result = src->result;
+    p->n_guards = src->n_guards;
+    p->inputs = src->inputs;
+    memcpy(p->in_node, src->in_node, sizeof p->in_node);
+    memcpy(p->node, src->node, (size_t)src->n * sizeof *p->node);
+    memcpy(p->val, src->val, (size_t)src->n * sizeof *p->val);
+    return p; /* workspace (work, cap) made on first use */
+}
+
 void dfle_trace_free(dfle_trace_prog *p)
 {
     if (p == NULL)
@@ -132,6 +154,8 @@ void dfle_trace_free(dfle_trace_prog *p)
 }
 
 /* ---- guards ------------------------------------------------------------ */
+
+const char dfle_trace_root = 0, dfle_trace_params = 0;
 
 /* Same value, as a compiled program sees it: numbers must agree in
  * subtype and bits (NaN equals itself), others must be the same object. */
@@ -151,27 +175,86 @@ static int same_value(lua_State *L, int a, int b)
     return lua_rawequal(L, a, b);
 }
 
-int dfle_trace_guards_hold(lua_State *L, int gidx, const dfle_trace_prog *p)
+/* In a template, replace the mark at idx by what it stands for. */
+static void resolve_mark(lua_State *L, int idx, int fidx, int pidx)
 {
-    int ok = 1;
+    const void *u = lua_touserdata(L, idx);
+    if (fidx != 0 && u == (const void *)&dfle_trace_root) {
+        lua_pushvalue(L, fidx);
+        lua_replace(L, idx);
+    } else if (pidx != 0 && u == (const void *)&dfle_trace_params) {
+        lua_pushvalue(L, pidx);
+        lua_replace(L, idx);
+    }
+}
+
+/* One guard at stack slots top+1 .. top+4 (kind, container, key, value). */
+static int guard_holds(lua_State *L, int top, const dfle_trace_prog *p, int template)
+{
+    const int kind = (int)lua_tointeger(L, top + 1);
+    double x, k;
+    if (kind == G_UPVALUE) {
+        if (lua_type(L, top + 2) != LUA_TFUNCTION)
+            return 0;
+        if (lua_getupvalue(L, top + 2, (int)lua_tointeger(L, top + 3)) == NULL)
+            lua_pushnil(L);
+        return same_value(L, top + 5, top + 4);
+    }
+    if (!lua_istable(L, top + 2))
+        return 0;
+    lua_pushvalue(L, top + 3);
+    lua_rawget(L, top + 2); /* top+5 */
+    if (kind == G_PARAM) {
+        /* Read as an input: any float serves a template; the law's own
+         * program holds its value in the param's node. */
+        int idx = (int)lua_tointeger(L, top + 4);
+        if (lua_type(L, top + 5) != LUA_TNUMBER || lua_isinteger(L, top + 5))
+            return 0;
+        if (template)
+            return 1;
+        if (p == NULL || idx < 0 || idx >= p->n || p->node[idx].op != T_PARAM)
+            return 0;
+        x = lua_tonumber(L, top + 5), k = p->node[idx].k;
+        return memcmp(&x, &k, sizeof x) == 0;
+    }
+    /* The trace read a field that was not set only from a table without
+     * a metatable (lua_trace.c refuses the rest): one given a metatable
+     * since may answer with __index. */
+    if (lua_isnil(L, top + 5) && lua_getmetatable(L, top + 2)) {
+        lua_pop(L, 1);
+        return 0;
+    }
+    return same_value(L, top + 5, top + 4);
+}
+
+int dfle_trace_guards_check(lua_State *L, int gidx, const dfle_trace_prog *p, int fidx, int pidx)
+{
+    const int template = fidx != 0 || pidx != 0;
+    int ok = 1, n;
     gidx = lua_absindex(L, gidx);
+    fidx = fidx != 0 ? lua_absindex(L, fidx) : 0;
+    pidx = pidx != 0 ? lua_absindex(L, pidx) : 0;
     if (!lua_checkstack(L, 8) || !lua_istable(L, gidx))
         return 0;
-    for (int j = 0; ok && j < p->n_guards; j++) {
+    n = (int)(lua_rawlen(L, gidx) / 4);
+    if (p != NULL && n != p->n_guards)
+        return 0;
+    for (int j = 0; ok && j < n; j++) {
         int top = lua_gettop(L);
         lua_rawgeti(L, gidx, 4 * j + 1); /* kind      top+1 */
         lua_rawgeti(L, gidx, 4 * j + 2); /* container top+2 */
         lua_rawgeti(L, gidx, 4 * j + 3); /* key       top+3 */
         lua_rawgeti(L, gidx, 4 * j + 4); /* value     top+4 */
-        if (lua_tointeger(L, top + 1) == G_FIELD) {
-            lua_pushvalue(L, top + 3);
-            lua_rawget(L, top + 2);
-        } else if (lua_getupvalue(L, top + 2, (int)lua_tointeger(L, top + 3)) == NULL) {
-            lua_pushnil(L);
-        }
-        ok = same_value(L, top + 5, top + 4);
+        if (template)
+            for (int e = 2; e <= 4; e++)
+                resolve_mark(L, top + e, fidx, pidx);
+        ok = guard_holds(L, top, p, template);
         lua_settop(L, top);
     }
     return ok;
 }
 
+int dfle_trace_guards_hold(lua_State *L, int gidx, const dfle_trace_prog *p)
+{
+    return dfle_trace_guards_check(L, gidx, p, 0, 0);
+}

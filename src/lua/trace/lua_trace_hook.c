@@ -1,23 +1,26 @@
 /*
- * lua_trace_hook.c - a test hook: trace a function of two numbers and
+ * lua_trace_hook.c - test hooks: trace a function of two numbers and
  * replay the record at given points, both ways the binding replays one
- * (column by column for a sweep, point by point for an integrand).
+ * (column by column for a sweep, point by point for an integrand); and
+ * the counters of the per-state cache of programs (lua_trace_cache.c).
  *
  * A law only ever hands the tracer's programs finite flow fields and
  * keeps finite results, so the tests could not otherwise check the
  * replay against Lua where the rules differ most: NaN, infinities, -0.0.
- * The hook is no part of the module's API; it lives in the registry
- * (debug.getregistry()["dfle.trace.replay"]), where only tests look.
+ * The hooks are no part of the module's API; they live in the registry
+ * (debug.getregistry()["dfle.trace.replay"], ["dfle.trace.stats"]),
+ * where only tests and benchmarks look.
  */
 #include "lua/core/dfle_lua.h"
 #include "lua/trace/lua_trace.h"
 
-/* replay(fn, xs, ys) -> column values, point values; or nil, why when
- * the tracer refuses fn(x, y, p) (p an empty table). */
+/* replay(fn, xs, ys [, p]) -> column values, point values; or nil, why
+ * when the tracer refuses fn(x, y, p).  Without p, p is an empty table;
+ * with p, its float values are inputs of the program, as a law's are. */
 static int l_replay(lua_State *L)
 {
     static const char *const names[] = {"x", "y"};
-    const dfle_trace_spec spec = {2, names, 3u, 1};
+    const dfle_trace_spec spec = {2, names, 3u, 1, !lua_isnoneornil(L, 4)};
     size_t n, ny;
     const double *x, *y, *col;
     double *out;
@@ -25,13 +28,18 @@ static int l_replay(lua_State *L)
     char why[160];
 
     luaL_checktype(L, 1, LUA_TFUNCTION);
-    lua_settop(L, 3);
+    if (spec.params_inputs)
+        luaL_checktype(L, 4, LUA_TTABLE);
+    lua_settop(L, 4);
     x = dfle_lua_check_array(L, 2, "trace.replay: xs", &n);
     y = dfle_lua_check_array(L, 3, "trace.replay: ys", &ny);
     if (n != ny)
         return luaL_error(L, "dfle.trace.replay: %d xs but %d ys", (int)n, (int)ny);
     out = lua_newuserdatauv(L, (2 * n + 1) * sizeof *out, 0);
-    lua_newtable(L); /* p */
+    if (spec.params_inputs)
+        lua_pushvalue(L, 4); /* p */
+    else
+        lua_newtable(L);
     /* From here to dfle_trace_free nothing may raise: prog is malloc'd. */
     prog = dfle_trace_compile(L, 1, -1, &spec, why, sizeof why);
     if (prog == NULL) {
@@ -52,8 +60,37 @@ static int l_replay(lua_State *L)
     return 2;
 }
 
+/* stats() -> { traced, found, kept, checked, held }: what the cache of
+ * programs of this state has done so far. */
+static int l_stats(lua_State *L)
+{
+    const dfle_trace_stats *st = dfle_trace_stats_of(L);
+    const unsigned long v[] = {st ? st->traced : 0, st ? st->found : 0, st ? st->kept : 0,
+                               st ? st->checked : 0, st ? st->held : 0};
+    static const char *const k[] = {"traced", "found", "kept", "checked", "held"};
+    lua_createtable(L, 0, 5);
+    for (int i = 0; i < 5; i++) {
+        lua_pushinteger(L, (lua_Integer)v[i]);
+        lua_setfield(L, -2, k[i]);
+    }
+    return 1;
+}
+
+/* The hooks of the first binding opened in a state stay: a second copy
+ * (dfle.so required by a host that has the binding built in) keeps a
+ * cache of its own, and the laws of the first are the ones tests watch. */
+static void set_hook(lua_State *L, const char *name, lua_CFunction fn)
+{
+    if (lua_getfield(L, LUA_REGISTRYINDEX, name) == LUA_TNIL) {
+        lua_pushcfunction(L, fn);
+        lua_setfield(L, LUA_REGISTRYINDEX, name);
+    }
+    lua_pop(L, 1);
+}
+
 void dfle_lua_open_trace_hook(lua_State *L)
 {
-    lua_pushcfunction(L, l_replay);
-    lua_setfield(L, LUA_REGISTRYINDEX, "dfle.trace.replay");
+    dfle_trace_cache_open(L);
+    set_hook(L, "dfle.trace.replay", l_replay);
+    set_hook(L, "dfle.trace.stats", l_stats);
 }

@@ -9,9 +9,11 @@
 
 #include "lua/trace/lua_trace.h"
 
-/* Node operations.  T_IN and T_K hold values set before evaluation. */
+/* Node operations.  T_IN, T_K and T_PARAM hold values set before
+ * evaluation: T_PARAM is a float param read as an input of the program
+ * (lua_trace.h), whose k is the value of the law it is bound to. */
 enum {
-    T_IN, T_K,
+    T_IN, T_K, T_PARAM,
     T_ADD, T_SUB, T_MUL, T_DIV, T_MOD, T_IDIV, T_POW, T_UNM,
     T_SQRT, T_EXP, T_LOG, T_LOGB, T_ABS, T_FLOOR, T_CEIL, T_FMOD, T_MAX, T_MIN,
     T_SIN, T_COS, T_TAN, T_ASIN, T_ACOS, T_ATAN, T_DEG, T_RAD
@@ -37,9 +39,32 @@ struct dfle_trace_prog {
 
 /* A guard is 4 entries of the guard table: kind, container (a table or
  * a function), key (a field name or an upvalue index), value; a nil value
- * is stored as a light userdata pointing at dfle_trace_nil. */
-enum { G_FIELD = 1, G_UPVALUE = 2 };
+ * is stored as a light userdata pointing at dfle_trace_nil.  G_PARAM is a
+ * float param the program reads as an input: its value entry is the
+ * index of its T_PARAM node, and the guard holds while the param is a
+ * float equal to that node's k (in a cached template, while it is any
+ * float: lua_trace_cache.c). */
+enum { G_FIELD = 1, G_UPVALUE = 2, G_PARAM = 3 };
 extern const char dfle_trace_nil;
+
+/* Whether a node holds a value set before evaluation (T_K, T_PARAM). */
+#define T_IS_CONST(op) ((op) == T_K || (op) == T_PARAM)
+
+/* How the guards at gidx are checked.  For a law's own program (fidx =
+ * pidx = 0) every value must be what the program baked in.  For a cached
+ * template (lua_trace_cache.c) the marks dfle_trace_root and
+ * dfle_trace_params stand for the function at fidx and the params table
+ * at pidx, and a G_PARAM guard holds for any float.  Never raises. */
+extern const char dfle_trace_root, dfle_trace_params;
+int dfle_trace_guards_check(lua_State *L, int gidx, const dfle_trace_prog *prog, int fidx,
+                            int pidx);
+
+/* Push the chunk lua_dump makes of the Lua function at fidx (with its
+ * debug information), or nil if it makes none.  May raise (memory). */
+void dfle_trace_push_dump(lua_State *L, int fidx);
+
+/* A copy of prog with workspaces of its own (NULL if out of memory). */
+dfle_trace_prog *dfle_trace_clone(const dfle_trace_prog *prog);
 
 /* What the scan of a function's bytecode (and its nested functions')
  * found: an equality test, an upvalue assignment, or a chunk it could
