@@ -37,7 +37,7 @@ for _, rule in ipairs{ "any", "count" } do
   end
   local t0 = os.clock()
   local run = ls:run_to_steady{ max_steps = quick and 40 or 100000, dt = 5e3 }
-  print(("combine = %-5s: %s in %.2f s (%s, %d rounds); %d heads, 99%% of |dz/dt|/U <= %.2g")
+  print(("combine = %-5s: %s in %.2f s (%s, %d rounds); %d heads, 95%% of |dz/dt|/U <= %.2g")
         :format(rule, run.converged and "steady" or "NOT steady", os.clock() - t0, run.method,
                 run.steps, run.heads, run.q_ratio))
   print("  " .. run.note)
