@@ -71,7 +71,7 @@ LIB_LUA   := $(BUILD)/libdfle_lua.a
 CLI       := $(BUILD)/dfle
 MODULE    := $(BUILD)/dfle.so
 
-.PHONY: all test check fuzz fuzz-long memcheck bench install uninstall clean mpi test-mpi FORCE
+.PHONY: figures all test check fuzz fuzz-long memcheck bench install uninstall clean mpi test-mpi FORCE
 # Keep test objects between builds (make would delete them as intermediates).
 .SECONDARY:
 all: $(CLI) $(MODULE) $(SHLIB)
@@ -205,6 +205,11 @@ memcheck: all $(TEST_BIN) $(GATE_TEST) $(MISSING_TEST)
 
 bench: all $(BENCH_BIN) $(if $(HAVE_MPICC),$(BUILD)/dfle-mpi)
 	@sh bench/run.sh $(CLI) $(BUILD)/bench
+
+# Every example's figures in quick mode, checked against doc/figures.md,
+# with an index page and a contact sheet (doc/figures.md).
+figures: all
+	@DFLE_DATA_DIR="$${DFLE_DATA_DIR:-$(CURDIR)/../shared/data}" $(CLI) doc/gallery.lua $(BUILD)/figures
 
 # --- MPI build (doc/ensembles.md): only these rules need mpicc ---
 

@@ -29,7 +29,9 @@ local fluvial = dfle.fluvial.stochastic_threshold{ k_e = 5e-14 }
 local rows = {} -- of alpha_beta.csv
 print(("%5s %5s %5s %10s %8s %10s %6s %7s %9s"):format(
   "gamma", "alpha", "beta", "method", "S_df", "A_df (m2)", "a2", "R^2", "Smax-Sch"))
-local series = {}
+-- One curve per (gamma, beta): colour by beta, dashed for gamma = 0.5.
+local colours = { [0.5] = "blue", [1] = "vermillion", [2] = "green", [3] = "purple" }
+local curves = {}
 for _, gamma in ipairs(gammas) do
 local router = dfle.router.empirical{ M0 = 3000, gamma = gamma, mu = 500, tau_y = 300 }
 for _, beta in ipairs(betas) do
@@ -54,9 +56,7 @@ for _, beta in ipairs(betas) do
         time = run.time }
     end
   end
-  if #xs > 0 then
-    series[#series + 1] = { x = xs, y = ys, label = ("gamma = %g, beta = %g"):format(gamma, beta), lines = true }
-  end
+  if #xs > 0 then curves[#curves + 1] = { gamma = gamma, beta = beta, x = xs, y = ys } end
 end
 end
 dfle.write_csv(outdir .. "/alpha_beta.csv", {
@@ -69,9 +69,42 @@ dfle.write_csv(outdir .. "/alpha_beta.csv", {
   rows = rows,
   params = { channel = channel:params(), fluvial = fluvial:params() },
 })
+
+-- Curves that are zero everywhere (slope never rises with area) would
+-- lie on top of each other: they are drawn as one, black and dashed,
+-- whose legend entry names them all.
+local series, zero, zero_names = {}, nil, {}
+for _, gamma in ipairs(gammas) do
+  local betas_zero = {}
+  for _, c in ipairs(curves) do
+    if c.gamma == gamma then
+      local all_zero = true
+      for _, v in ipairs(c.y) do all_zero = all_zero and v == 0 end
+      if all_zero then
+        betas_zero[#betas_zero + 1] = ("%g"):format(c.beta)
+        if zero == nil or #c.x > #zero.x then zero = c end
+      else
+        series[#series + 1] = {
+          x = c.x, y = c.y, style = "linespoints", rgb = colours[c.beta],
+          dash = gamma > 0, marker = gamma > 0 and "open circle" or "circle",
+          label = ("γ = %g, β = %g"):format(gamma, c.beta),
+        }
+      end
+    end
+  end
+  if #betas_zero > 0 then
+    zero_names[#zero_names + 1] = ("γ = %g, β = %s"):format(gamma, table.concat(betas_zero, ", "))
+  end
+end
+if zero then
+  series[#series + 1] = { x = zero.x, y = zero.y, style = "linespoints", rgb = "black",
+                          dash = true, marker = "open circle",
+                          label = "all 0: " .. table.concat(zero_names, "; ") }
+end
 dfle.plot.xy{
   path = outdir .. "/alpha_beta.png", series = series,
-  title = "Steady-state profiles, empirical router",
-  xlabel = "alpha (slope exponent)", ylabel = "S_max - S_ch",
+  title = "S_{max} − S_{ch} of the steady state against α, empirical router",
+  xlabel = dfle.plot.label("alpha"), ylabel = dfle.plot.label("S_max_minus_S_ch"),
+  xticks = 1,
 }
 print("wrote " .. outdir .. "/alpha_beta.csv and " .. outdir .. "/alpha_beta.png")

@@ -42,14 +42,24 @@ print(("Eq. (19) at A = 1e4 m^2: S = %.5f (check value: 0.73834)")
 print(("steady state (%s method); largest |S_model/S_Eq19 - 1| = %.2e at A = %.3g m^2")
       :format(run.method, worst, A[at]))
 
+-- The model's nodes as markers at about 40 log-spaced areas (all of them
+-- would merge into a thick line), Eq. (19) as a line through them.
+local Am, Sm, next_A = {}, {}, A[1]
+for i = 1, #A do
+  if A[i] >= next_A then
+    Am[#Am + 1], Sm[#Sm + 1] = A[i], S[i]
+    next_A = A[i] * (A[#A] / A[1]) ^ (1 / 40)
+  end
+end
 dfle.plot.xy{
   path = outdir .. "/analytical_check.png",
-  title = "Debris flows only (tau_y = 0): model vs Eq. (19)",
-  xlabel = "Drainage area, A (m^2)", ylabel = "Slope, S",
-  logx = true, logy = true,
+  title = "Debris flows only (τ_y = 0): model and Eq. (19)",
+  xlabel = dfle.plot.label("A"), ylabel = dfle.plot.label("S"),
+  xlog = true, ylog = true,
   series = {
-    { x = A, y = S, label = "model, steady state" },
-    { x = A, y = S19, label = "Eq. (19)", lines = true },
+    { x = A, y = S19, label = "Eq. (19)", lines = true, rgb = "vermillion" },
+    { x = Am, y = Sm, label = "model, steady state", marker = "open circle", rgb = "black",
+      marker_size = 5 },
   },
 }
 print("wrote " .. outdir .. "/analytical_check.png")

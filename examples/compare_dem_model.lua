@@ -81,7 +81,8 @@ local function curve(fit, lo, hi)
   end
   return A, S
 end
-for _, src in ipairs{ { "catchment (DEM network)", net }, { "model steady state", model } } do
+for _, src in ipairs{ { "catchment (DEM network)", net, "blue", "circle" },
+                      { "model steady state", model, "vermillion", "open square" } } do
   local fit, why = dfle.fit_slope_area(src[2])
   if not fit then
     io.stderr:write("compare_dem_model: " .. src[1] .. ": " .. why .. "\n")
@@ -92,9 +93,11 @@ for _, src in ipairs{ { "catchment (DEM network)", net }, { "model steady state"
   rows[#rows + 1] = { source = src[1], S_df = fit.S_df, A_df = fit.A_df, a2 = fit.a2, r2 = fit.r2,
                       S_max_minus_S_ch = fit.S_max_minus_S_ch }
   local A, S = curve(fit, fit.bins.A[1], fit.bins.A[#fit.bins.A])
-  series[#series + 1] = { x = fit.bins.A, y = fit.bins.S, label = src[1] .. ", binned" }
-  series[#series + 1] = { x = A, y = S, lines = true,
-                          label = ("%s: Eq. (2), A_{df} = %.3g m^2"):format(src[1], fit.A_df) }
+  series[#series + 1] = { x = fit.bins.A, y = fit.bins.S, label = src[1] .. ", binned",
+                          rgb = src[3], marker = src[4] }
+  series[#series + 1] = { x = A, y = S, lines = true, rgb = src[3],
+                          label = ("%s: Eq. (2), {/:Italic A}_{df} = %s m^2"):format(src[1],
+                                   dfle.plot.number(fit.A_df)) }
 end
 
 local csv = outdir .. "/compare_fits.csv"
@@ -108,7 +111,7 @@ dfle.write_csv(csv, {
 model:write_csv(outdir .. "/compare_model.csv")
 main:write_csv(outdir .. "/compare_main_stem.csv")
 local png = outdir .. "/compare_dem_model.png"
-dfle.plot.xy{ path = png, series = series, logx = true, logy = true,
+dfle.plot.xy{ path = png, series = series, xlog = true, ylog = true,
               title = "Blue Fig. 1 catchment (SRTM 30 m) and a model on its A(x)",
-              xlabel = "Drainage area, A (m^2)", ylabel = "Slope, S (m/m)" }
+              xlabel = dfle.plot.label("A"), ylabel = dfle.plot.label("S") }
 print("wrote " .. csv .. ", " .. png .. ", compare_model.csv, compare_main_stem.csv")

@@ -63,13 +63,19 @@ local rarer = dfle.law.define{
   frequency = function(A) return A > 1e4 and 0.5 ^ math.log(A / 1e4, 10) or 1 end,
 }
 
+-- The inertial law twice, in Lua and built in: the same curve, so the
+-- second is drawn as markers on the first's line.
 local laws = {
-  { label = "Eq. (6), built in", law = dfle.law.power{ k_df = 1e-4, alpha = 6, beta = 1 } },
-  { label = "inertial, Lua", law = inertial },
+  { label = "Eq. (6), built in", law = dfle.law.power{ k_df = 1e-4, alpha = 6, beta = 1 },
+    style = { rgb = "blue", lines = true } },
   { label = "inertial, built in", law = dfle.law.inertial{ k = 3e-7, D = 0.09, rho_s = 2600,
-                                                            alpha = 1.5 } },
-  { label = "excess stress, Lua", law = excess },
-  { label = "Eq. (6) x frequency(A), Lua", law = rarer },
+                                                            alpha = 1.5 },
+    style = { rgb = "vermillion", lines = true } },
+  { label = "inertial, Lua (markers: the same curve)", law = inertial,
+    style = { rgb = "black", marker = "open circle", markers = 25 } },
+  { label = "excess stress, Lua", law = excess, style = { rgb = "green", lines = true } },
+  { label = "Eq. (6) × frequency(A), Lua", law = rarer,
+    style = { rgb = "purple", lines = true, dash = true } },
 }
 
 local series, rows = {}, {}
@@ -102,7 +108,19 @@ for _, L in ipairs(laws) do
     a[#a + 1], s[#s + 1] = A[i], S[i]
     rows[#rows + 1] = { law = L.label, A = A[i], S = S[i] }
   end
-  series[#series + 1] = { x = a, y = s, label = L.label, lines = true }
+  local look = L.style
+  if look.markers then -- about that many markers, evenly spaced in log A
+    local ma, ms, next_a = {}, {}, a[1]
+    for i = 1, #a do
+      if a[i] >= next_a then
+        ma[#ma + 1], ms[#ms + 1] = a[i], s[i]
+        next_a = a[i] * (a[#a] / a[1]) ^ (1 / look.markers)
+      end
+    end
+    a, s = ma, ms
+  end
+  series[#series + 1] = { x = a, y = s, label = L.label, lines = look.lines, rgb = look.rgb,
+                          marker = look.marker, dash = look.dash }
 end
 
 local csv = outdir .. "/custom_laws.csv"
@@ -111,7 +129,7 @@ dfle.write_csv(csv, {
   columns = { "law", "A", "S" }, units = { A = "m^2", S = "-" }, rows = rows,
 })
 local png = outdir .. "/custom_laws.png"
-dfle.plot.xy{ path = png, series = series, logx = true, logy = true,
+dfle.plot.xy{ path = png, series = series, xlog = true, ylog = true,
               title = "Steady-state slope-area relations of custom incision laws",
-              xlabel = "Drainage area, A (m^2)", ylabel = "Slope, S (m/m)" }
+              xlabel = dfle.plot.label("A"), ylabel = dfle.plot.label("S") }
 print("wrote " .. csv .. ", " .. png)

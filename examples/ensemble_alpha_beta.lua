@@ -8,7 +8,7 @@
 --
 -- Writes, per router, alpha_beta_<router>.csv (one row per sample, see
 -- doc/ensembles.md; resumable: run again after an interruption) and
--- plots of S_max - S_ch and R^2 against alpha, colored by beta on a
+-- plots of S_max - S_ch and R^2 against alpha, coloured by beta on a
 -- continuous scale.  --quick: 24 samples per router on
 -- a coarse channel (dx = 20 m).  Uses all cores (-j N to choose);
 -- `dfle --shard i/n` and build/dfle-mpi work too (doc/ensembles.md).
@@ -102,15 +102,15 @@ for name, ens in pairs(results) do
   if ens.ok > 0 then
     dfle.plot.xy{
       path = outdir .. "/alpha_beta_" .. name .. "_smax.png",
-      title = "S_{max} - S_{ch} against {/Symbol a} (" .. name .. " router), colored by {/Symbol b}",
-      xlabel = "{/Symbol a}", ylabel = "S_{max} - S_{ch}",
-      series = colored(ens, "alpha", "S_max_minus_S_ch", "beta"), clabel = "{/Symbol b}",
+      title = "S_{max} − S_{ch} against α (" .. name .. " router), coloured by β",
+      xlabel = dfle.plot.label("alpha"), ylabel = dfle.plot.label("S_max_minus_S_ch"),
+      series = colored(ens, "alpha", "S_max_minus_S_ch", "beta"), clabel = dfle.plot.label("beta"),
     }
     dfle.plot.xy{
       path = outdir .. "/alpha_beta_" .. name .. "_r2.png",
-      title = "R^2 of the Eq. (2) fit (" .. name .. " router), colored by {/Symbol b}",
-      xlabel = "{/Symbol a}", ylabel = "R^2",
-      series = colored(ens, "alpha", "r2", "beta"), clabel = "{/Symbol b}",
+      title = "R^2 of the Eq. (2) fit against α (" .. name .. " router), coloured by β",
+      xlabel = dfle.plot.label("alpha"), ylabel = dfle.plot.label("r2"),
+      series = colored(ens, "alpha", "r2", "beta"), clabel = dfle.plot.label("beta"),
     }
   end
 end

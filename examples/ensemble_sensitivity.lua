@@ -12,10 +12,11 @@
 --   pawn_<router>.csv              PAWN indices (S = 10) of each input for
 --                                  A_df and S_df, with 95% bootstrap intervals
 --   sens_<router>_<param>_A_df.png, ..._S_df.png
---                                  the parameter against A_df and S_df,
---                                  colored by U (four classes of U)
+--                                  A_df and S_df against the parameter,
+--                                  coloured by U (mm/yr); parameters sampled
+--                                  over a decade or more on a log axis
 --   sens_<router>_U_A_df.png, ..._S_df.png
---                                  U against A_df and S_df with power-law fits
+--                                  A_df and S_df against U with power-law fits
 -- --quick: 32 samples per router on a coarse channel (dx = 20 m), 50
 -- bootstrap replicates.  Uses all cores (-j N); `dfle --shard i/n` and
 -- build/dfle-mpi work too.
@@ -89,12 +90,6 @@ for _, name in ipairs{ "empirical", "process" } do
 end
 
 -- Least squares of log y on log x: y = c x^k.
--- A parameter name as gnuplot enhanced text: "k_df" -> "k_{df}" (a bare
--- "_" would subscript only the next letter).
-local function label(name)
-  return (name:gsub("_(%w+)", "_{%1}"))
-end
-
 local function power_fit(xs, ys)
   local n, sx, sy, sxx, sxy = 0, 0, 0, 0, 0
   for j = 1, #xs do
@@ -117,11 +112,39 @@ local function column(ens, name)
   return v
 end
 
--- Series of y against x in four classes of `color` (quartiles).
--- Scatter of y against x, each point coloured by `color` on a continuous
--- scale (dfle.plot.xy draws the colour box).
-local function colored(ens, x, y, color)
-  return { { x = column(ens, x), y = column(ens, y), color = column(ens, color) } }
+-- Scatter of y against x, each point coloured by `color` (times the
+-- factor of its axis unit: U in mm/yr) on a continuous scale
+-- (dfle.plot.xy draws the colour box).
+local function colored(ens, x, y, color, factor)
+  local c = column(ens, color)
+  for i = 1, #c do c[i] = c[i] * factor end
+  return { { x = column(ens, x), y = column(ens, y), color = c } }
+end
+
+-- A parameter sampled log-uniformly, or over a decade or more, reads
+-- best on a log axis (gamma from 0 to 1 does not).
+local function wide(range)
+  return range.log == true or (range[1] > 0 and range[2] / range[1] >= 10)
+end
+
+-- A name as a title shows it: gamma as γ, k_df as k_{df}.
+local SYMBOLS = { gamma = "γ", mu = "μ", mu2 = "μ_2", eta = "η", tau_y = "τ_y", M0 = "M_0" }
+local function symbol(name)
+  return (SYMBOLS[name] or name):gsub("_(%w+)", "_{%1}")
+end
+
+-- The axis of a parameter spans the range it was sampled from (times
+-- `factor`), padded 4 % so no point sits on the frame: the figure shows
+-- where in its range each sample lies, and the range's round ends
+-- (10^{-6}, 10^{-5}) are labelled.
+local function sampled_range(range, log, factor)
+  local lo, hi = range[1] * factor, range[2] * factor
+  if log then
+    local r = (hi / lo) ^ 0.04
+    return { lo / r, hi * r }
+  end
+  local pad = 0.04 * (hi - lo)
+  return { lo - pad, hi + pad }
 end
 
 local STATS = { "minimum", "mean", "median", "maximum", "CV", "stdev" }
@@ -155,40 +178,51 @@ for _, name in ipairs{ "empirical", "process" } do
         columns = columns, units = units, rows = rows,
         params = { pawn = { S = 10, bootstrap = quick and 50 or 1000, ok_rows = ens.ok } },
       })
-      -- Parameter against A_df and S_df, colored by U (Figs. 5-8).
+      -- A_df and S_df against each parameter, coloured by U (Figs. 5-8).
+      local Ulabel, Ufactor = dfle.plot.label("U")
+      local params = experiments[name].params
       for _, x in ipairs(ens.inputs) do
         if x ~= "U" then
-          for _, o in ipairs{ { "A_df", "A_{df} (m^2)" }, { "S_df", "S_{df}" } } do
+          for _, o in ipairs{ "A_df", "S_df" } do
             dfle.plot.xy{
-              path = ("%s/sens_%s_%s_%s.png"):format(outdir, name, x, o[1]), logy = true,
-              title = ("%s against %s (%s router), colored by U"):format(label(x), o[2], name),
-              xlabel = label(x), ylabel = o[2], series = colored(ens, x, o[1], "U"),
-              clabel = "U (m/yr)",
+              path = ("%s/sens_%s_%s_%s.png"):format(outdir, name, x, o),
+              title = ("%s against %s (%s router), coloured by U"):format(
+                symbol(o), symbol(x), name),
+              xlabel = dfle.plot.label(x), ylabel = dfle.plot.label(o), clabel = Ulabel,
+              xlog = wide(params[x]), ylog = o == "A_df",
+              xrange = sampled_range(params[x], wide(params[x]), 1),
+              series = colored(ens, x, o, "U", Ufactor),
             }
           end
         end
       end
-      -- U against A_df and S_df with power-law fits (Figs. 9-10).
+      -- A_df and S_df against U with power-law fits (Figs. 9-10), U in mm/yr.
       local U = column(ens, "U")
-      for _, o in ipairs{ { "A_df", "A_{df}", " (m^2)" }, { "S_df", "S_{df}", "" } } do
-        local y = column(ens, o[1])
-        local series = { { x = U, y = y, label = o[2] } }
+      local Umm = {}
+      for i, u in ipairs(U) do Umm[i] = u * Ufactor end
+      for _, o in ipairs{ "A_df", "S_df" } do
+        local y = column(ens, o)
+        local sym = symbol(o)
+        local series = { { x = Umm, y = y, label = "samples", rgb = "grey" } }
         local c, k = power_fit(U, y)
         if c then
           local lo, hi = math.huge, -math.huge
-          for _, u in ipairs(U) do lo, hi = math.min(lo, u), math.max(hi, u) end
+          for _, u in ipairs(Umm) do lo, hi = math.min(lo, u), math.max(hi, u) end
           local xs, ys = {}, {}
           for j = 0, 20 do
             xs[j + 1] = lo * (hi / lo) ^ (j / 20)
-            ys[j + 1] = c * xs[j + 1] ^ k
+            ys[j + 1] = c * (xs[j + 1] / Ufactor) ^ k
           end
-          series[2] = { x = xs, y = ys, lines = true, label = ("%s = %.3g U^{%.3g}"):format(o[2], c, k) }
-          print(("  power-law fit: %s = %.4g U^%.4g"):format(o[1], c, k))
+          series[2] = { x = xs, y = ys, lines = true, rgb = "vermillion",
+                        label = ("%s = %s U^{%.3g} (U in mm/yr)"):format(sym,
+                          dfle.plot.number(c / Ufactor ^ k), k) }
+          print(("  power-law fit: %s = %.4g U^%.4g (U in m/yr)"):format(o, c, k))
         end
         dfle.plot.xy{
-          path = ("%s/sens_%s_U_%s.png"):format(outdir, name, o[1]), logx = true, logy = true,
-          title = ("Uplift rate against %s (%s router)"):format(o[2], name),
-          xlabel = "U (m/yr)", ylabel = o[2] .. o[3], series = series,
+          path = ("%s/sens_%s_U_%s.png"):format(outdir, name, o), xlog = true, ylog = true,
+          title = ("%s against uplift rate (%s router)"):format(sym, name),
+          xlabel = Ulabel, ylabel = dfle.plot.label(o), series = series,
+          xrange = sampled_range(params.U, true, Ufactor),
         }
       end
     end

@@ -7,7 +7,8 @@
 --   dfle examples/frequency_scaling.lua [--quick] [output-directory]
 --
 -- Writes frequency_scaling.csv (gamma, S_df, A_df, R^2, S_max - S_ch),
--- frequency_scaling_profiles.png (elevation against distance) and
+-- frequency_scaling_profiles.png (elevation against distance, the
+-- first 400 m, where the profiles part) and
 -- frequency_scaling_slope_area.png (slope against area, log-log).
 -- --quick: three values of gamma on a coarse channel (dx = 20 m).
 
@@ -22,6 +23,7 @@ local quick, outdir = opts.quick, opts.output
 local gammas = quick and { 0, 0.5, 1 } or { 0, 0.25, 0.5, 0.75, 1 }
 local channel = dfle.channel{ dx = quick and 20 or 5 }
 local profiles, slopes = {}, {}
+local DASHES = { "solid", "dash", "dot", "dashdot", "dashdotdot" }
 local rows = {} -- of frequency_scaling.csv
 print(("%6s %10s %8s %10s %7s %9s"):format("gamma", "converged", "S_df", "A_df (m2)", "R^2", "Smax-Sch"))
 for _, g in ipairs(gammas) do
@@ -39,9 +41,11 @@ for _, g in ipairs(gammas) do
         f.r2, f.S_max_minus_S_ch))
   rows[#rows + 1] = { gamma = g, converged = run.converged, S_df = f.S_df, A_df = f.A_df,
                       r2 = f.r2, S_max_minus_S_ch = f.S_max_minus_S_ch }
-  local label = ("{/Symbol g} = %g"):format(g)
-  profiles[#profiles + 1] = { x = m:get("x"), y = m:get("z"), label = label, lines = true }
-  slopes[#slopes + 1] = { x = m:get("A"), y = m:get("S"), label = label, lines = true }
+  -- Above about 10^5 m^2 rivers set the slope and the curves coincide:
+  -- a dash pattern per gamma keeps each visible there.
+  local label, dash = ("γ = %g"):format(g), DASHES[#profiles % #DASHES + 1]
+  profiles[#profiles + 1] = { x = m:get("x"), y = m:get("z"), label = label, lines = true, dash = dash }
+  slopes[#slopes + 1] = { x = m:get("A"), y = m:get("S"), label = label, lines = true, dash = dash }
 end
 dfle.write_csv(outdir .. "/frequency_scaling.csv", {
   about = "steady states with the debris-flow frequency scaled with area (Appendix D): process "
@@ -50,13 +54,15 @@ dfle.write_csv(outdir .. "/frequency_scaling.csv", {
   units = { gamma = "-", S_df = "-", A_df = "m^2", r2 = "-", S_max_minus_S_ch = "-" },
   rows = rows, params = { channel = channel:params() },
 })
+-- The profiles part only near the head, where debris flows set the
+-- slope: the figure shows that reach.
 dfle.plot.xy{
   path = outdir .. "/frequency_scaling_profiles.png", series = profiles,
-  title = "Steady-state profiles, debris-flow frequency scaled with area (Appendix D)",
-  xlabel = "Distance from the head (m)", ylabel = "Elevation (m)",
+  title = "Steady-state profiles near the head, debris-flow frequency scaled with area (Appendix D)",
+  xlabel = dfle.plot.label("x"), ylabel = dfle.plot.label("z"), xrange = { 0, 400 },
 }
 dfle.plot.xy{
-  path = outdir .. "/frequency_scaling_slope_area.png", series = slopes, logx = true, logy = true,
+  path = outdir .. "/frequency_scaling_slope_area.png", series = slopes, xlog = true, ylog = true,
   title = "Slope-area, debris-flow frequency scaled with area (Appendix D)",
-  xlabel = "A (m^2)", ylabel = "S",
+  xlabel = dfle.plot.label("A"), ylabel = dfle.plot.label("S"),
 }

@@ -24,14 +24,15 @@
 -- fig1_invert_<run>_chain.csv (resumable), fig1_invert_<run>_corner.png
 -- and fig1_invert_<run>_pp.png, and fig1_invert.csv (the posterior
 -- summaries).  The full run takes 10-20 minutes on two cores.  --quick (the test
--- suite) runs a very short chain on a coarse channel and skips the
--- figures.  The DEM is read from --data DIR or $DFLE_DATA_DIR (the
--- directory holding dem/); without it the script says so and stops.
+-- suite, the figure gallery) runs a very short chain on a coarse channel,
+-- whose figures only show that they are drawn.  The DEM is read from
+-- --data DIR or $DFLE_DATA_DIR (the directory holding dem/); without it
+-- the script says so and stops.
 
 local opts = dfle.args{
   usage = "dfle examples/invert_fig1.lua [options] [output-directory]",
   about = "The posterior of U for the two Fig. 1 catchments of the Big Tujunga DEM.",
-  flags = { quick = "a very short chain on a coarse channel, no figures (for the test suite)" },
+  flags = { quick = "a very short chain on a coarse channel (for the test suite and the gallery)" },
   options = { data = { "DIR", "the data directory, holding dem/ (default: $DFLE_DATA_DIR)",
                        default = os.getenv("DFLE_DATA_DIR") } },
   output = true,
@@ -123,20 +124,19 @@ for _, run in ipairs(runs) do
                   corr("U", "k_df"), corr("U", "gamma"), corr("k_df", "gamma"),
                   run.free_ke and (", ln U - ln k_e %.2f"):format(corr("U", "k_e")) or ""))
     rows[#rows + 1] = { run, res }
-    if not quick then
-      dfle.plot.corner(res, ("%s/fig1_invert_%s_corner.png"):format(outdir, run.tag), {
-        params = run.free_ke and { "U", "k_e", "k_df", "gamma", "sigma" }
-                 or { "U", "k_df", "gamma", "sigma" },
-        labels = { U = "{/:Italic U} (m/yr)", k_df = "{/:Italic k}_{df}", k_e = "{/:Italic k}_e",
-                   gamma = "{/Symbol g}", sigma = "{/Symbol s}" },
-        title = ("Big Tujunga, %s outlet: posterior%s"):format(c.name,
-                 run.free_ke and " with k_e free" or " (k_e = 5×10^{-14})"),
-      })
-      dfle.plot.posterior_predictive(res, ("%s/fig1_invert_%s_pp.png"):format(outdir, run.tag), {
-        title = ("Big Tujunga, %s outlet: posterior-predictive slope-area%s"):format(c.name,
-                 run.free_ke and " (k_e free)" or ""),
-      })
-    end
+    dfle.plot.corner(res, ("%s/fig1_invert_%s_corner.png"):format(outdir, run.tag), {
+      params = run.free_ke and { "U", "k_e", "k_df", "gamma", "sigma" }
+               or { "U", "k_df", "gamma", "sigma" },
+      scale = { U = 1e3 }, -- mm/yr
+      labels = { U = "{/:Italic U} (mm/yr)", k_df = "{/:Italic k}_{df}", k_e = "{/:Italic k}_e",
+                 gamma = "γ", sigma = "σ" },
+      title = ("Big Tujunga, %s outlet: posterior%s"):format(c.name,
+               run.free_ke and " with k_e free" or " (k_e = 5×10^{-14})"),
+    })
+    dfle.plot.posterior_predictive(res, ("%s/fig1_invert_%s_pp.png"):format(outdir, run.tag), {
+      title = ("Big Tujunga, %s outlet: posterior-predictive slope-area%s"):format(c.name,
+               run.free_ke and " (k_e free)" or ""),
+    })
   end
 end
 
@@ -160,5 +160,5 @@ dfle.write_csv(csv, {
   about = "posterior summaries per run and parameter (each in the unit of its prior: U in " ..
           "m/yr); 68 and 95 % central intervals",
 })
-print("wrote " .. csv .. ", fig1_invert_<run>_chain.csv" ..
-      (quick and "" or ", fig1_invert_<run>_corner.png, fig1_invert_<run>_pp.png"))
+print("wrote " .. csv .. ", fig1_invert_<run>_chain.csv, fig1_invert_<run>_corner.png, " ..
+      "fig1_invert_<run>_pp.png")

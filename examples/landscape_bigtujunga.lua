@@ -62,7 +62,9 @@ if quick then
   dem = ls0:dem()
 end
 
-local A0 = 1e4 -- channel heads at 1 ha: about 11 cells of 30 m
+-- channel heads at 1 ha: about 11 cells of 30 m; on the quick 90 m grid
+-- 1 ha is about one cell (every cell a channel), so heads at 11 cells
+local A0 = quick and 11 * 90 * 90 or 1e4
 local ls = dfle.landscape{
   dem = dem, outlet = outlet,
   U = 5e-4, A0 = A0, S_c = 0.8,
@@ -90,7 +92,7 @@ local t0 = os.clock()
 local run = ls:run_to_steady{ max_time = 5e7, dt = 2e3, max_steps = quick and 300 or 100000 }
 local reached = 0
 for _, v in ipairs(ls:get("reach")) do reached = reached + (v > 0 and 1 or 0) end
-print(("steady state: %s (%s, %d steps, %.2f s); 99%% of |dz/dt|/U <= %.3g, mean %.3g; "
+print(("steady state: %s (%s, %d steps, %.2f s); 95%% of |dz/dt|/U <= %.3g, mean %.3g; "
        .. "%d channel heads, %d cells reached by debris flows"):format(
        run.converged and "reached" or "NOT reached", run.method, run.steps, os.clock() - t0,
        run.q_ratio, run.mean_ratio, run.heads, reached))
@@ -114,23 +116,24 @@ ls:write_geotiff(out("bigtujunga_steady.tif"), { "z", "A", "S", "E_f", "E_df", "
 ls:plot(out("bigtujunga_map.png"), {
   title = "Big Tujunga above the black Fig. 1 outlet: steady state, U = 0.5 mm/yr" })
 local series = {}
-local function add(fit, label, color_points)
+local function add(fit, label, colour)
   if fit then
-    series[#series + 1] = { x = fit.bins.A, y = fit.bins.S, label = label .. " (binned mean)" }
+    series[#series + 1] = { x = fit.bins.A, y = fit.bins.S, label = label .. " (binned mean)",
+                            rgb = colour }
     local A, S = {}, {}
     for k = 0, 100 do
       A[k + 1] = fit.bins.A[1] * (fit.bins.A[#fit.bins.A] / fit.bins.A[1]) ^ (k / 100)
       S[k + 1] = fit.S_df / (1 + (A[k + 1] / fit.A_df) ^ fit.a2)
     end
-    series[#series + 1] = { x = A, y = S, lines = true,
+    series[#series + 1] = { x = A, y = S, lines = true, rgb = colour,
                             label = ("%s, Eq. (2): S_{df} = %.2f, R^2 = %.2f"):format(label, fit.S_df, fit.r2) }
   end
 end
-add(fit_real, "DEM")
-add(fit_model, "model")
+add(fit_real, "DEM", "black")
+add(fit_model, "model", "vermillion")
 if #series > 0 then
   dfle.plot.xy{ path = out("bigtujunga_slope_area.png"), series = series,
     title = "Slope-area of the Big Tujunga network: SRTM DEM and steady-state model",
-    xlabel = "Drainage area, {/:Italic A} (m^2)", ylabel = "Slope, {/:Italic S}",
-    logx = true, logy = true }
+    xlabel = dfle.plot.label("A"), ylabel = dfle.plot.label("S"),
+    xlog = true, ylog = true }
 end

@@ -37,7 +37,7 @@ for _, rule in ipairs{ "any", "count" } do
   end
   local t0 = os.clock()
   local run = ls:run_to_steady{ max_steps = quick and 40 or 100000, dt = 5e3 }
-  print(("combine = %-5s: %s in %.2f s (%s, %d rounds); %d heads, 99%% of |dz/dt|/U <= %.2g")
+  print(("combine = %-5s: %s in %.2f s (%s, %d rounds); %d heads, 95%% of |dz/dt|/U <= %.2g")
         :format(rule, run.converged and "steady" or "NOT steady", os.clock() - t0, run.method,
                 run.steps, run.heads, run.q_ratio))
   print("  " .. run.note)
@@ -52,7 +52,7 @@ for _, rule in ipairs{ "any", "count" } do
           { title = ("Synthetic steady state, joined debris flows: %s"):format(rule) })
 end
 if #series > 0 then
-  dfle.plot.xy{ path = out("synthetic_slope_area.png"), series = series, logx = true, logy = true,
+  dfle.plot.xy{ path = out("synthetic_slope_area.png"), series = series, xlog = true, ylog = true,
                 title = "Steady-state slope-area (binned means) by combine rule",
-                xlabel = "Drainage area, {/:Italic A} (m^2)", ylabel = "Slope, {/:Italic S}" }
+                xlabel = dfle.plot.label("A"), ylabel = dfle.plot.label("S") }
 end

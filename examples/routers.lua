@@ -34,7 +34,7 @@ print(("one flow: %s after %.1f s (%d steps); reached %d of %d nodes; volume in 
       :format(flow.ended, flow.duration, flow.steps, flow.runout_end, m.n,
               flow.volume_in, flow.volume_out, flow.volume_left))
 dfle.plot.flow(m, flow, outdir .. "/routed_flow.png",
-               { title = "A debris flow on the initial profile (depth x 50)" })
+               { title = "A debris flow on the initial profile" })
 
 -- 2. Steady states with both routers.
 local sa, prof = {}, {}
@@ -51,13 +51,17 @@ for _, name in ipairs{ "empirical", "process" } do
   model:write_csv(("%s/steady_%s.csv"):format(outdir, name))
   local A, S = model:get("A"), model:get("S")
   table.remove(A); table.remove(S)
-  sa[#sa + 1] = { x = fit.bins.A, y = fit.bins.S, label = name .. " router (bin means)" }
-  prof[#prof + 1] = { x = model:get("x"), y = model:get("z"), label = name .. " router", lines = true }
+  local look = name == "empirical" and { rgb = "blue", marker = "circle" }
+                                     or { rgb = "vermillion", marker = "open square" }
+  sa[#sa + 1] = { x = fit.bins.A, y = fit.bins.S, label = name .. " router (bin means)",
+                  rgb = look.rgb, marker = look.marker }
+  prof[#prof + 1] = { x = model:get("x"), y = model:get("z"), label = name .. " router", lines = true,
+                      rgb = look.rgb, dash = name == "process" }
 end
-dfle.plot.xy{ path = outdir .. "/routers_slope_area.png", series = sa, logx = true, logy = true,
-              title = "Steady state with each router", xlabel = "Drainage area, A (m^2)",
-              ylabel = "Slope, S" }
+dfle.plot.xy{ path = outdir .. "/routers_slope_area.png", series = sa, xlog = true, ylog = true,
+              title = "Steady state with each router", xlabel = dfle.plot.label("A"),
+              ylabel = dfle.plot.label("S") }
 dfle.plot.xy{ path = outdir .. "/routers_profiles.png", series = prof,
-              title = "Steady-state long profiles", xlabel = "Distance from channel head, x (m)",
-              ylabel = "Elevation, z (m)" }
+              title = "Steady-state long profiles", xlabel = dfle.plot.label("x"),
+              ylabel = dfle.plot.label("z") }
 print("wrote routed_flow.png, routers_slope_area.png, routers_profiles.png and steady_*.csv in " .. outdir)

@@ -3,8 +3,9 @@
 --
 -- The steady state is found directly; then U doubles and the profile is
 -- recorded at chosen times with the implicit (adaptive, error-controlled)
--- stepper, until the new steady state.  Plots the profiles and the
--- slope-area data at those times.
+-- stepper, until the new steady state.  Plots the profiles
+-- (uplift_step_profiles.png) and the binned slope-area data
+-- (uplift_step_slope_area.png) at those times and at the new steady state.
 --
 --   dfle examples/uplift_step.lua [--quick] [output-directory]
 
@@ -28,21 +29,31 @@ local r = m:run{ years = times[#times], method = "implicit", record = times }
 print(("after the step: %d implicit steps over %.3g yr"):format(r.steps, r.time))
 
 local x, A = m:get("x"), m:get("A")
-local profiles = {}
+local tlabel, kyr = dfle.plot.label("t")
+local profiles, slope_area = {}, {}
 for j, rec in ipairs(r.records) do
-  profiles[j] = { x = x, y = rec.z, label = ("t = %g kyr"):format(rec.t / 1e3), lines = true }
+  local label = ("{/:Italic t} = %g kyr"):format(rec.t * kyr)
+  profiles[j] = { x = x, y = rec.z, label = label, lines = true }
   local z, S, Au = rec.z, {}, {}
   for i = 1, #z - 1 do S[i], Au[i] = (z[i] - z[i + 1]) / (x[i + 1] - x[i]), A[i] end
   local f = dfle.fit_slope_area{ A = Au, S = S }
   if f then
     print(("t = %6g yr: head at %.1f m, S_df = %.3f, A_df = %.3g m^2"):format(rec.t, z[1], f.S_df, f.A_df))
+    -- the binned means, as dfle.fit_slope_area saw them
+    slope_area[#slope_area + 1] = { x = f.bins.A, y = f.bins.S, label = label, lines = true }
   end
 end
 local r1 = m:run_to_steady{}
 local f1 = assert(dfle.fit_slope_area(m))
 print(("new steady state at U = 1 mm/yr: S_df = %.3f, A_df = %.3g m^2"):format(f1.S_df, f1.A_df))
+slope_area[#slope_area + 1] = { x = f1.bins.A, y = f1.bins.S, label = "new steady state",
+                                lines = true, rgb = "black", dash = true }
 
 dfle.plot.xy{ path = outdir .. "/uplift_step_profiles.png", series = profiles,
-              title = "Response to doubling the uplift rate",
-              xlabel = "Distance from channel head, x (m)", ylabel = "Elevation, z (m)" }
-print("wrote " .. outdir .. "/uplift_step_profiles.png")
+              title = "Response to doubling the uplift rate (0.5 to 1 mm/yr)",
+              xlabel = dfle.plot.label("x"), ylabel = dfle.plot.label("z") }
+dfle.plot.xy{ path = outdir .. "/uplift_step_slope_area.png", series = slope_area,
+              xlog = true, ylog = true,
+              title = "Slope-area during the response (binned means)",
+              xlabel = dfle.plot.label("A"), ylabel = dfle.plot.label("S") }
+print("wrote " .. outdir .. "/uplift_step_profiles.png, uplift_step_slope_area.png")

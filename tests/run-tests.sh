@@ -57,6 +57,8 @@ for ex in examples/*.lua; do
     echo "== example $ex (quick)"
     run "$ex" sh -c "cd '$tmp' && '$PWD/$DFLE' -q '$PWD/$ex' --quick > '$tmp/out.txt' 2>&1 || { cat '$tmp/out.txt'; exit 1; }"
 done
+# The figures they drew are the ones doc/figures.md lists, no more, no less.
+run figures "$DFLE" -q doc/gallery.lua --check "$tmp"
 rm -rf "$tmp"
 
 if [ "$failed" -ne 0 ]; then

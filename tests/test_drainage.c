@@ -879,6 +879,47 @@ static void test_carve_minimax(void **state)
 /* Geometry and errors                                              */
 /* ---------------------------------------------------------------- */
 
+/* Hysteresis: a cell keeps its last receiver while that slope is within
+ * the margin of the steepest; plain D8 takes the first of a tie in the
+ * order E, SE, S, ... */
+static void test_hysteresis(void **state)
+{
+    /* The centre (cell 4) drains S to cell 7 first; then E (cell 5)
+     * ties with S, is steeper by round-off, and by a metre. */
+    double z[9] = {20, 20, 20, 20, 10, 5, 20, 0, 20};
+    dfle_drainage_opts o = grid(3, 3, 1, 1, DFLE_DRAINAGE_KEEP);
+    dfle_drainage *sticky, *plain;
+    dfle_error err = {0, ""};
+    (void)state;
+    for (int s = 0; s < 4; s++)
+        o.edge[s] = DFLE_DRAINAGE_CLOSED;
+    sticky = make(&o);
+    plain = make(&o);
+    assert_int_equal(dfle_drainage_set_hysteresis(sticky, -0.1, &err), DFLE_EINVAL);
+    assert_int_equal(dfle_drainage_set_hysteresis(sticky, 1.0, &err), DFLE_EINVAL);
+    assert_ok(dfle_drainage_set_hysteresis(sticky, 1e-9, &err), &err);
+    assert_ok(dfle_drainage_route(sticky, z, &err), &err);
+    assert_int_equal(dfle_drainage_dir(sticky)[4], 2);
+    z[5] = 0; /* an exact tie */
+    assert_ok(dfle_drainage_route(sticky, z, &err), &err);
+    assert_ok(dfle_drainage_route(plain, z, &err), &err);
+    assert_int_equal(dfle_drainage_dir(sticky)[4], 2);
+    assert_int_equal(dfle_drainage_receivers(sticky)[4], 7);
+    assert_int_equal(dfle_drainage_dir(plain)[4], 0);
+    z[5] = -1e-12; /* E steeper by 1e-13 relative: within the margin */
+    assert_ok(dfle_drainage_route(sticky, z, &err), &err);
+    assert_int_equal(dfle_drainage_dir(sticky)[4], 2);
+    z[5] = -1; /* E steeper by 10 %: D8's choice */
+    assert_ok(dfle_drainage_route(sticky, z, &err), &err);
+    assert_int_equal(dfle_drainage_dir(sticky)[4], 0);
+    assert_int_equal(dfle_drainage_receivers(sticky)[4], 5);
+    z[5] = 0; /* tied again: now E is the receiver it keeps */
+    assert_ok(dfle_drainage_route(sticky, z, &err), &err);
+    assert_int_equal(dfle_drainage_dir(sticky)[4], 0);
+    dfle_drainage_free(sticky);
+    dfle_drainage_free(plain);
+}
+
 static void test_geometry(void **state)
 {
     dfle_drainage_opts o = grid(4, 3, 3, 4, DFLE_DRAINAGE_KEEP);
@@ -969,6 +1010,7 @@ int main(void)
         cmocka_unit_test(test_reroute_matches_fresh),
         cmocka_unit_test(test_carve_noise),
         cmocka_unit_test(test_carve_minimax),
+        cmocka_unit_test(test_hysteresis),
         cmocka_unit_test(test_geometry),
         cmocka_unit_test(test_errors),
     };

@@ -15,6 +15,7 @@
 #include <signal.h>
 #include <stdlib.h>
 #include <string.h>
+#include <time.h>
 
 #include <lauxlib.h>
 #include <lua.h>
@@ -24,15 +25,17 @@
 #include "lua/core/dfle_lua.h"
 #include "lua/ensemble/lua_ensemble.h"
 
-/* Samples in this process are slowed down (5 ms of CPU) and the stand-in
- * runs at full speed, so that it surely gets some. */
+/* Samples in this process are slowed down (5 ms of CPU) and, through
+ * HOLD(), wait until the stand-in has written R.hold_until rows (or has
+ * ended): on a loaded machine the stand-in's thread may otherwise not
+ * run before this process has done every sample. */
 static const char SCRIPT[] =
     "if REMOTE and REMOTE_FAILS then error('the stand-in rank cannot replay') end\n"
     "local ens = dfle.ensemble{\n"
     "  params = { k_df = {5e-5, 1e-3, log = true}, U = {1e-4, 1e-3} },\n"
     "  n = 20, seed = 3, out = OUT,\n"
     "  build = function(p)\n"
-    "    if not REMOTE then local t = os.clock() + 0.005; while os.clock() < t do end end\n"
+    "    if not REMOTE then local t = os.clock() + 0.005; while os.clock() < t do end; HOLD() end\n"
     "    return dfle.model{ channel = dfle.channel{ dx = 50 }, U = p.U,\n"
     "                       law = dfle.law.power{ k_df = p.k_df } }\n"
     "  end,\n"
@@ -48,6 +51,7 @@ static struct standin {
     char out[128];
     int fails;           /* its replay raises                         */
     size_t stop_after;   /* raise the interrupt after this many rows  */
+    size_t hold_until;   /* local samples wait for this many of its rows */
     volatile sig_atomic_t interrupt;
     pthread_t tid;
     pthread_mutex_t lock;
@@ -59,6 +63,24 @@ static struct standin {
     size_t ran;
     char msg[DFLE_ERROR_MSG_MAX];
 } R;
+
+/* HOLD(): returns once the stand-in has written R.hold_until rows or
+ * has ended; bounded (30 s), so a broken stand-in fails the test rather
+ * than hanging it. */
+static int hold(lua_State *L)
+{
+    (void)L;
+    for (int k = 0; k < 30000; k++) {
+        int go;
+        pthread_mutex_lock(&R.lock);
+        go = R.ran >= R.hold_until || R.ended;
+        pthread_mutex_unlock(&R.lock);
+        if (go)
+            return 0;
+        nanosleep(&(struct timespec){0, 1000000}, NULL);
+    }
+    return luaL_error(L, "HOLD: the stand-in wrote no rows in 30 s");
+}
 
 /* A state like the main one: libraries, dfle, the globals, the chunk. */
 static lua_State *new_state(int remote)
@@ -74,6 +96,8 @@ static lua_State *new_state(int remote)
     lua_setglobal(L, "REMOTE");
     lua_pushboolean(L, R.fails);
     lua_setglobal(L, "REMOTE_FAILS");
+    lua_pushcfunction(L, hold);
+    lua_setglobal(L, "HOLD");
     assert_int_equal(luaL_loadbuffer(L, SCRIPT, strlen(SCRIPT), "=script"), LUA_OK);
     return L;
 }
@@ -87,11 +111,21 @@ static lua_State *open_state(void *ud, int *nargs, char *msg, size_t msglen)
 
 static int standin_next(void *ud, size_t *index)
 {
-    int stop;
+    int stop = 0;
     (void)ud;
-    pthread_mutex_lock(&R.lock);
-    stop = R.stop;
-    pthread_mutex_unlock(&R.lock);
+    /* Once it has raised the interrupt, the stand-in waits for the stop
+     * (bounded: 30 s), as a rank would between its rows: at full speed it
+     * could otherwise finish every sample before the interrupt is seen. */
+    for (int k = 0; k < 30000; k++) {
+        int raised;
+        pthread_mutex_lock(&R.lock);
+        stop = R.stop;
+        raised = R.stop_after > 0 && R.ran >= R.stop_after;
+        pthread_mutex_unlock(&R.lock);
+        if (stop || !raised)
+            break;
+        nanosleep(&(struct timespec){0, 1000000}, NULL);
+    }
     return !stop && dfle_ens_queue_next(R.queue, index);
 }
 
@@ -254,6 +288,7 @@ static void same_file_as_a_run_alone(void **state)
     (void)state;
     assert_int_equal(run("ref.csv", 0, &text), LUA_OK);
     free(text);
+    R.hold_until = 1;
     assert_int_equal(run("shared.csv", 1, &text), LUA_OK);
     assert_string_equal(text, "20"); /* ens.ran counts the stand-in's rows */
     free(text);
@@ -289,7 +324,7 @@ static void an_interrupt_stops_the_others(void **state)
     (void)state;
     assert_int_equal(run("ref.csv", 0, &text), LUA_OK);
     free(text);
-    R.stop_after = 3;
+    R.stop_after = R.hold_until = 3;
     assert_int_equal(run("stopped.csv", 1, &text), LUA_ERRRUN);
     assert_msg_contains(text, "interrupted (SIGINT)");
     free(text);

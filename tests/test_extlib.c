@@ -62,7 +62,7 @@ static void path_in_dir(char *buf, size_t len, const char *name)
 static int write_table(const char *path, dfle_error *err)
 {
     const double v = 1.5, *values[1] = {&v};
-    const dfle_nc_var col = {"a", "m", "a column"};
+    const dfle_nc_var col = {"a", "m", "a column", NULL};
     return dfle_nc_write_table(path, "sample", 1, 1, &col, values, 0, NULL, 0, NULL, err);
 }
 
@@ -205,7 +205,7 @@ static void netcdf_says_netcdf_is_missing(void **state)
 {
     const double x[2] = {0, 5}, A[2] = {1e3, 2e3}, t[1] = {0}, z[2] = {2, 1};
     const double *values[1] = {z};
-    const dfle_nc_var var = {"z", "m", "elevation"};
+    const dfle_nc_var var = {"z", "m", "elevation", NULL};
     const dfle_raster_geo geo = {0, 20, 10, 10, NULL};
     const char *want = "netcdf: netCDF could not be loaded: libdfle-test-missing-netcdf.so.0";
     char nc[600];

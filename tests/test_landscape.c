@@ -84,7 +84,8 @@ static void test_netcdf(void **state)
     char path[] = "/tmp/dfle-test-nc-XXXXXX";
     double v[6] = {1, 2, 3, 4, NAN, 6}, w[6], x[3], t;
     const double *vals[1] = {v};
-    dfle_nc_var var = {"z", "m", "elevation"};
+    dfle_nc_var var = {"z", "m", "elevation", "surface_altitude"};
+    char text[64];
     dfle_raster_geo g = {100, 2000, 10, 20, NULL};
     dfle_nc *nc;
     dfle_error err;
@@ -113,6 +114,27 @@ static void test_netcdf(void **state)
     assert_close(w[0], 7, 0, 0);
     assert_close(w[5], 6, 0, 0);
     assert_true(isnan(w[4]));
+    /* CF attributes, as xarray reads them */
+    {
+        static const char *const want[][3] = {
+            {"z", "units", "m"},          {"z", "long_name", "elevation"},
+            {"z", "standard_name", "surface_altitude"},
+            {"x", "standard_name", "projection_x_coordinate"},
+            {"y", "units", "m"},          {"time", "axis", "T"},
+        };
+        for (size_t k = 0; k < sizeof want / sizeof *want; k++) {
+            assert_int_equal(nc_inq_varid(id, want[k][0], &vid), NC_NOERR);
+            assert_int_equal(nc_inq_attlen(id, vid, want[k][1], &len), NC_NOERR);
+            assert_true(len < sizeof text);
+            assert_int_equal(nc_get_att_text(id, vid, want[k][1], text), NC_NOERR);
+            text[len] = '\0';
+            assert_string_equal(text, want[k][2]);
+        }
+        assert_int_equal(nc_inq_attlen(id, NC_GLOBAL, "Conventions", &len), NC_NOERR);
+        assert_int_equal(nc_get_att_text(id, NC_GLOBAL, "Conventions", text), NC_NOERR);
+        text[len] = '\0';
+        assert_string_equal(text, "CF-1.8");
+    }
     nc_close(id);
     close(fd);
     unlink(path);

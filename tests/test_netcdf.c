@@ -46,7 +46,7 @@ static void test_profiles(void **state)
     const double x[4] = {0, 5, 10, 15}, A[4] = {1e3, 2e3, 4e3, 8e3}, t[3] = {0, 10, 20};
     double z[12], back[12], fill, xr[4];
     const double *values[1] = {z};
-    const dfle_nc_var var = {"z", "m", "elevation"};
+    const dfle_nc_var var = {"z", "m", "elevation", NULL};
     const dfle_nc_attr attrs[1] = {{"history", "today: dfle run.lua"}};
     dfle_error err;
     int ncid, v, dims[2];
@@ -90,7 +90,7 @@ static void test_table(void **state)
 {
     const double idx[3] = {1, 2, 3}, S[3] = {0.7, NAN, 0.5};
     const double *cols[2] = {idx, S};
-    const dfle_nc_var vars[2] = {{"index", "1", "sample"}, {"S_df", NULL, "output"}};
+    const dfle_nc_var vars[2] = {{"index", "1", "sample", NULL}, {"S_df", NULL, "output", NULL}};
     const char *status[3] = {"ok", "failed", "ok"}, *reason[3] = {"", "no convergence", NULL};
     const dfle_nc_text text[2] = {{"status", NULL, status}, {"reason", "why", reason}};
     char buf[3 * 14 + 1];
@@ -123,7 +123,7 @@ static void test_errors(void **state)
 {
     const double t[1] = {0}, x[1] = {0}, A[1] = {1}, z[1] = {1};
     const double *values[1] = {z};
-    const dfle_nc_var var = {"z", "m", NULL};
+    const dfle_nc_var var = {"z", "m", NULL, NULL};
     dfle_error err;
     (void)state;
     assert_int_equal(dfle_nc_write_profiles("/nonexistent/dir/r.nc", 1, x, A, 1, t, 1, &var,
@@ -133,7 +133,7 @@ static void test_errors(void **state)
                      DFLE_EINVAL);
     /* a bad variable name fails after the file was begun */
     {
-        const dfle_nc_var bad = {"z/bad", "m", NULL};
+        const dfle_nc_var bad = {"z/bad", "m", NULL, NULL};
         char cmd[600];
         snprintf(path, sizeof path, "%s/ens.nc", dir);
         assert_int_not_equal(dfle_nc_write_profiles(path, 1, x, A, 1, t, 1, &bad, values, 0,

@@ -138,6 +138,16 @@ void dfle_drainage_free(dfle_drainage *dr);
 int dfle_drainage_set_outlets(dfle_drainage *dr, const size_t *cells, size_t n,
                               dfle_error *err);
 
+/* Hysteresis in the choice of receivers: from the next routing on, a
+ * cell keeps the receiver of the last successful routing while that
+ * neighbour is still lower and its slope is at least (1 - margin) times
+ * the steepest; otherwise D8 as above.  margin = 0 (the default) is
+ * plain D8.  Meant for iterations that re-route a surface built from
+ * its own network (the landscape's direct steady state), where exact
+ * and near ties would otherwise flip from one routing to the next.
+ * DFLE_EINVAL unless 0 <= margin < 1. */
+int dfle_drainage_set_hysteresis(dfle_drainage *dr, double margin, dfle_error *err);
+
 /* Route nx * ny elevations [m] (NaN = NoData): directions, receivers,
  * donors, stack and area, replacing those of the last call.  z is read,
  * never changed, and not kept.  DFLE_EINVAL if every cell is NoData or

@@ -31,9 +31,9 @@
  *
  * Steady state (doc/landscape.md): in 2D divides migrate and a strict
  * max |dz/dt| criterion may never be met, so a landscape is steady when
- * a fraction `quantile` of its cells has |dz/dt| <= tol U and the
- * receivers have not changed for `stable_steps` steps in a row (the
- * direct method: between two rounds).
+ * a fraction `quantile` (0.95) of its cells has |dz/dt| <= tol U and
+ * at most a fraction rcv_tol of the receivers changed at each of the
+ * last `stable_steps` routings (the direct method: one a round).
  *
  * One object is used by one thread at a time; the library starts no
  * threads, so a run gives the same numbers wherever it runs.  Rates in
@@ -145,6 +145,9 @@ enum dfle_landscape_field_id {
 int dfle_landscape_field_lookup(const char *name);  /* or -1 */
 const char *dfle_landscape_field_name(int field);
 const char *dfle_landscape_field_unit(int field);
+/* In words, for outputs; the CF standard name where one fits, else NULL. */
+const char *dfle_landscape_field_long_name(int field);
+const char *dfle_landscape_field_standard_name(int field);
 int dfle_landscape_get(dfle_landscape *ls, int field, double *out, dfle_error *err);
 
 /* --- Runs -------------------------------------------------------------- */
@@ -173,7 +176,7 @@ typedef struct dfle_landscape_run_opts {
     int method;          /* solver.h: IMPLICIT (default), EXPLICIT, DIRECT */
     double years;        /* > 0: a transient of this length (no steady stop) */
     double tol;          /* steady: |dz/dt| <= tol U ...          (1e-3)   */
-    double quantile;     /* ... in this fraction of the cells     (0.99)   */
+    double quantile;     /* ... in this fraction of the cells     (0.95)   */
     size_t stable_steps; /* ... and the network stable this long (5)       */
     double rcv_tol;      /* a routing is stable when at most this fraction
                           * of the cells changed receiver     (0.005)   */
@@ -208,11 +211,12 @@ typedef struct dfle_landscape_result {
     int reason;          /* solver.h enum dfle_stop_reason               */
     int method;          /* the method that produced the result          */
     int fallback;        /* DIRECT did not settle: continued implicitly  */
+    size_t direct_rounds; /* with fallback: the direct rounds before      */
     dfle_landscape_status last;
     double dt_min, dt_max;
     size_t routings;
     size_t n_recorded;   /* record times reached                         */
-    char note[256];      /* why it stopped, in words                     */
+    char note[512];      /* why it stopped, in words                     */
 } dfle_landscape_result;
 
 /* Run from the current state: a transient of opts->years, or to steady
@@ -222,7 +226,8 @@ int dfle_landscape_run(dfle_landscape *ls, const dfle_landscape_run_opts *opts,
                        dfle_landscape_result *res, dfle_error *err);
 
 /* One backward-Euler step of dt [yr] (route, erode in stack order,
- * hillslopes); st (may be NULL) receives its figures. */
+ * hillslopes); st (may be NULL) receives its figures (q_ratio: the 0.95
+ * quantile, as the runs' default). */
 int dfle_landscape_step(dfle_landscape *ls, double dt, double tol, dfle_landscape_status *st,
                         dfle_error *err);
 

@@ -49,6 +49,7 @@ typedef struct dfle_nc_var {
     const char *name;      /* "z", "E_df", ...        */
     const char *units;     /* "m", "m/yr", "1", ...   */
     const char *long_name; /* "elevation", ...         */
+    const char *standard_name; /* CF standard name, or NULL */
 } dfle_nc_var;
 
 int dfle_nc_create(const char *path, size_t nx, size_t ny, const dfle_raster_geo *geo,

@@ -237,6 +237,15 @@ int dfle_drainage_set_outlets(dfle_drainage *dr, const size_t *cells, size_t n,
     return DFLE_OK;
 }
 
+int dfle_drainage_set_hysteresis(dfle_drainage *dr, double margin, dfle_error *err)
+{
+    if (!(margin >= 0 && margin < 1))
+        return dfle_error_set(err, DFLE_EINVAL, "drainage: the hysteresis margin must be in [0, "
+                              "1) (got %g)", margin);
+    dr->hysteresis = margin;
+    return DFLE_OK;
+}
+
 /* ---------------------------------------------------------------- */
 /* Routing                                                          */
 /* ---------------------------------------------------------------- */
@@ -258,6 +267,7 @@ int dfle_drainage_route(dfle_drainage *dr, const double *z, dfle_error *err)
 
     if (z == NULL)
         return dfle_error_set(err, DFLE_EINVAL, "drainage: elevations are required");
+    dr->dirs_kept = dr->routed; /* dir[] holds a whole routing (hysteresis) */
     dr->routed = 0;
     memset(&dr->counts, 0, sizeof dr->counts);
     if (dr->o.depressions == DFLE_DRAINAGE_FILL) {

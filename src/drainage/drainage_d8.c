@@ -21,6 +21,20 @@ typedef struct d8_tally {
     int infinite;
 } d8_tally;
 
+/* The neighbour to drain to: k_best (slope best), or the last routing's
+ * direction k_prev (dir[i] before this pass) when it is still within the
+ * hysteresis margin; keep is 1 - margin, or 2 (never) when off. */
+static inline int sticky(const double *zp, double best, int k_best, unsigned char k_prev,
+                         const long long *step, const double *len, double keep)
+{
+    if (k_prev < 8 && (int)k_prev != k_best && k_best >= 0) {
+        double s = (zp[0] - zp[step[k_prev]]) / len[k_prev];
+        if (s > 0 && s >= keep * best)
+            return k_prev;
+    }
+    return k_best;
+}
+
 /* Where a data cell with steepest neighbour k_best (-1: none lower)
  * goes; a sink is appended to stack[]. */
 static void settle(dfle_drainage *dr, size_t i, int k_best, enum dfle_drainage_edge exit,
@@ -52,11 +66,13 @@ static int nodata(dfle_drainage *dr, double zi, size_t i, d8_tally *t)
 }
 
 /* A cell on the outer ring: neighbours checked against the grid. */
-static void ring_cell(dfle_drainage *dr, const double *z, size_t r, size_t c, d8_tally *t)
+static void ring_cell(dfle_drainage *dr, const double *z, size_t r, size_t c, double keep,
+                      d8_tally *t)
 {
     size_t i = r * dr->o.nx + c;
     double zi = z[i], best = 0.0;
     int k_best = -1, nodata_nb = 0;
+    unsigned char k_prev = dr->dir[i];
     if (nodata(dr, zi, i, t))
         return;
     for (int k = 0; k < 8; k++) {
@@ -71,6 +87,9 @@ static void ring_cell(dfle_drainage *dr, const double *z, size_t r, size_t c, d8
         }
         nodata_nb |= isnan(z[nb]);
     }
+    /* The last direction on the ring points to a cell on the grid. */
+    if (keep <= 1.0 && k_prev < 8 && drainage_nb(dr, r, c, k_prev) >= 0)
+        k_best = sticky(z + i, best, k_best, k_prev, dr->step, dr->len, keep);
     settle(dr, i, k_best, drainage_exit_known(dr, i, nodata_nb), t);
 }
 
@@ -81,6 +100,9 @@ size_t drainage_d8(dfle_drainage *dr, const double *z, size_t *n_data, int *infi
     const unsigned char *outlet = dr->outlet;
     long long step[8];
     double len[8];
+    /* The last routing's directions are in dir[] only after a routing of
+     * this grid that succeeded. */
+    const double keep = dr->dirs_kept && dr->hysteresis > 0 ? 1.0 - dr->hysteresis : 2.0;
 
     for (int k = 0; k < 8; k++) {
         step[k] = dr->step[k];
@@ -89,10 +111,10 @@ size_t drainage_d8(dfle_drainage *dr, const double *z, size_t *n_data, int *infi
     for (size_t r = 0; r < ny; r++) {
         if (r == 0 || r + 1 == ny || nx < 3) {
             for (size_t c = 0; c < nx; c++)
-                ring_cell(dr, z, r, c, &t);
+                ring_cell(dr, z, r, c, keep, &t);
             continue;
         }
-        ring_cell(dr, z, r, 0, &t);
+        ring_cell(dr, z, r, 0, keep, &t);
         for (size_t i = r * nx + 1, end = r * nx + nx - 1; i < end; i++) {
             const double *zp = z + i;
             double zi = *zp, best = 0.0;
@@ -108,6 +130,8 @@ size_t drainage_d8(dfle_drainage *dr, const double *z, size_t *n_data, int *infi
                 best = better ? s : best;
                 nodata_nb |= isnan(zn);
             }
+            if (keep <= 1.0)
+                k_best = sticky(zp, best, k_best, dr->dir[i], step, len, keep);
             if (k_best >= 0 && !nodata_nb && (outlet == NULL || !outlet[i])) {
                 /* the common case */
                 dr->dir[i] = (unsigned char)k_best;
@@ -116,7 +140,7 @@ size_t drainage_d8(dfle_drainage *dr, const double *z, size_t *n_data, int *infi
                 settle(dr, i, k_best, drainage_exit_known(dr, i, nodata_nb), &t);
             }
         }
-        ring_cell(dr, z, r, nx - 1, &t);
+        ring_cell(dr, z, r, nx - 1, keep, &t);
     }
     *n_data = nx * ny - t.nodata;
     *infinite = t.infinite;

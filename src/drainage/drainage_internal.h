@@ -64,6 +64,8 @@ struct dfle_drainage {
     long long step[8];      /* index offset of neighbour k              */
 
     unsigned char *outlet;  /* n: cells that always drain off, or NULL  */
+    double hysteresis;      /* relative slope margin to keep a receiver */
+    int dirs_kept;          /* dir[] holds the last routing's directions */
 
     /* Outputs of the last route, valid while `routed`. */
     int routed;
@@ -127,7 +129,8 @@ unsigned char *drainage_mark(dfle_drainage *dr);
 
 /* drainage_fill.c: priority-flood of z in place (dfle_drainage_fill). */
 
-/* drainage_d8.c: dir and rcv by steepest descent; cells with no lower
+/* drainage_d8.c: dir and rcv by steepest descent (or the last
+ * direction, within the hysteresis margin); cells with no lower
  * neighbour drain out or become DIR_SINK.  Lists the sinks in stack[]
  * (borrowed until the stack is built) and returns how many; counts the
  * data cells and notes an infinite elevation on the way. */

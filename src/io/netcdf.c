@@ -100,6 +100,8 @@ int dfle_nc_create(const char *path, size_t nx, size_t ny, const dfle_raster_geo
         put_text(nc->ncid, nc->vid[k], "units", vars[k].units != NULL ? vars[k].units : "1");
         if (vars[k].long_name != NULL)
             put_text(nc->ncid, nc->vid[k], "long_name", vars[k].long_name);
+        if (vars[k].standard_name != NULL)
+            put_text(nc->ncid, nc->vid[k], "standard_name", vars[k].standard_name);
         nc_put_att_double(nc->ncid, nc->vid[k], "_FillValue", NC_DOUBLE, 1, &fill);
         if (crs >= 0)
             put_text(nc->ncid, nc->vid[k], "grid_mapping", "crs");

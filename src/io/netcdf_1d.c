@@ -84,6 +84,8 @@ static int def_var(nc_out *o, const dfle_nc_var *v, int ndims, const int *dims, 
         NC_DO(text_att(o->ncid, *id, "units", v->units), v->name);
     if (v->long_name != NULL)
         NC_DO(text_att(o->ncid, *id, "long_name", v->long_name), v->name);
+    if (v->standard_name != NULL)
+        NC_DO(text_att(o->ncid, *id, "standard_name", v->standard_name), v->name);
     NC_DO(nc_put_att_double(o->ncid, *id, "_FillValue", NC_DOUBLE, 1, &fill), v->name);
 fail:
     return st;
@@ -114,7 +116,7 @@ int dfle_nc_write_profiles(const char *path, size_t n, const double *x, const do
                            const double *const *values, size_t nattrs, const dfle_nc_attr *attrs,
                            dfle_error *err)
 {
-    static const dfle_nc_var A_var = {"A", "m2", "drainage area"};
+    static const dfle_nc_var A_var = {"A", "m2", "drainage area", NULL};
     nc_out out, *o = &out;
     int dims[2], tv, xv, av, *vid = NULL, st;
 

@@ -35,7 +35,9 @@ static int cmp_desc(const void *a, const void *b)
 }
 
 /* median^{+up}_{-down}, scaled by a power of ten when the numbers are
- * large or small, as enhanced text. */
+ * large or small, as enhanced text.  The scripts are set at 0.8 of the
+ * font: at full size gnuplot stacks them into each other and into the
+ * "×10" after them. */
 static void fmt_interval(char *buf, size_t cap, double med, double lo, double hi)
 {
     double ref = fabs(med) > 0 ? fabs(med) : fmax(fabs(lo), fabs(hi));
@@ -53,9 +55,10 @@ static void fmt_interval(char *buf, size_t cap, double med, double lo, double hi
     if (dec > 5)
         dec = 5;
     if (e != 0)
-        snprintf(buf, cap, "%.*f@^{+%.*f}_{-%.*f} ×10^{%d}", dec, med * s, dec, up, dec, dn, e);
+        snprintf(buf, cap, "%.*f@^{/*0.8 +%.*f}_{/*0.8 −%.*f} ×10^{%d}", dec, med * s, dec, up,
+                 dec, dn, e);
     else
-        snprintf(buf, cap, "%.*f@^{+%.*f}_{-%.*f}", dec, med * s, dec, up, dec, dn);
+        snprintf(buf, cap, "%.*f@^{/*0.8 +%.*f}_{/*0.8 −%.*f}", dec, med * s, dec, up, dec, dn);
 }
 
 /* The axis range of parameter j in axis units, padded 4 %. */
@@ -144,58 +147,42 @@ static const char *axis_label(const dfle_corner_opts *o, size_t j, char *buf, si
     return buf;
 }
 
-/* "set xlabel ..." or "set ylabel ..." with an offset. */
-static void put_axis_label(FILE *f, char axis, const char *text, const char *offset)
-{
-    fprintf(f, "set %clabel ", axis);
-    dfle_gp_str(f, text);
-    fprintf(f, " offset %s\n", offset);
-}
-
-static void put_ticks(FILE *f, char axis, int lg, double lo, double hi, int labels)
-{
-    if (lg) {
-        dfle_gp_log_axis(f, axis, lo, hi, labels);
-        return;
-    }
-    fprintf(f, "unset logscale %c\nset %crange [%.17g:%.17g]\nset format %c '%s'\n"
-            "set %ctics autofreq\nset m%ctics 2\n", axis, axis, lo, hi, axis,
-            labels ? "%.3g" : "", axis, axis);
-}
-
-int dfle_plot_corner(const char *path, const dfle_corner_opts *opts, size_t d, size_t n,
-                     const double *x, dfle_error *err)
+int dfle_plot_corner(const char *path, const dfle_plot_opts *opts,
+                     const dfle_corner_opts *corner, size_t d, size_t n, const double *x,
+                     dfle_error *err)
 {
     static const dfle_corner_opts none = {0};
-    const dfle_corner_opts *o = opts != NULL ? opts : &none;
-    int fmt = dfle_gp_format(path, err), rc, panel, W;
+    const dfle_corner_opts *o = corner != NULL ? corner : &none;
+    const char *title = opts != NULL ? opts->title : NULL;
     size_t nb = o->nbins > 0 ? o->nbins : 30, thin;
     double *lo = NULL, *hi = NULL, *g = NULL;
-    int *lg = NULL;
+    int *lg = NULL, rc;
     unsigned char *have = NULL; /* d x d: contours traced */
+    dfle_gp_axis *tx = NULL, *ty = NULL; /* each parameter's ticks as x and as y */
+    dfle_gp_frame fr;
     dfle_gp_run r;
-    double left = 0.11, right = 0.975, bottom = 0.125, top, gap = 0.012, w;
+    double fs, left, right, bottom, top, gap, w, yem = 0;
 
-    if (fmt < 0)
-        return fmt;
     if (d < 1 || d > 12)
         return dfle_error_set(err, DFLE_EINVAL, "plot: a corner plot takes 1 to 12 parameters "
                               "(got %zu)", d);
+    /* 4 cm a panel, and room for the labels */
+    if ((rc = dfle_gp_frame_of(path, opts, 4.0 * (double)d + 2.8, 4.0 * (double)d + 2.8, &fr,
+                               err)) < 0)
+        return rc;
     if (n < 2 || x == NULL)
         return dfle_error_set(err, DFLE_EINVAL, "plot: a corner plot needs at least 2 samples "
                               "(got %zu)", n);
-    panel = o->panel > 0 ? o->panel : 250;
-    W = (int)(panel * (int)d / (right - left)) + 20;
-    if (W < 600)
-        W = 600;
-    if (W > 6000)
-        W = 6000;
+    fs = fr.font_pt;
     lo = malloc(d * sizeof *lo);
     hi = malloc(d * sizeof *hi);
     lg = calloc(d, sizeof *lg);
     have = calloc(d * d, 1);
     g = malloc(GRID * GRID * sizeof *g);
-    if (lo == NULL || hi == NULL || lg == NULL || have == NULL || g == NULL) {
+    tx = calloc(d, sizeof *tx);
+    ty = calloc(d, sizeof *ty);
+    if (lo == NULL || hi == NULL || lg == NULL || have == NULL || g == NULL || tx == NULL ||
+        ty == NULL) {
         rc = dfle_error_set(err, DFLE_ENOMEM, "plot: out of memory");
         goto done;
     }
@@ -203,10 +190,34 @@ int dfle_plot_corner(const char *path, const dfle_corner_opts *opts, size_t d, s
         lg[j] = o->logaxis != NULL && o->logaxis[j];
         axis_range(n, d, x, j, lg[j], o->truth != NULL ? o->truth[j] : NAN, &lo[j], &hi[j]);
     }
-    if ((rc = dfle_gp_begin(&r, path, fmt, W, W, err)) < 0)
-        goto done;
-    top = o->title != NULL ? 0.93 : 0.965;
+    /* The panels' size sets the ticks, whose labels set the margins. */
+    gap = 1.2 * fs; /* room for the end labels of neighbouring panels */
+    bottom = (1.25 + 1.3 + 0.45 + 1.2) * fs;
+    top = fr.h_pt - (title != NULL ? 2.4 * fs : 0.6 * fs) - 1.6 * fs; /* the top header */
+    w = (fmin(fr.w_pt - 6 * fs, top - bottom) - gap * (double)(d - 1)) / (double)d;
+    for (size_t j = 0; j < d; j++) {
+        dfle_gp_axis_range(&tx[j], lg[j], from_axis(lo[j], lg[j]), from_axis(hi[j], lg[j]), 0,
+                           NULL);
+        tx[j].end_room = gap / 2; /* panels side by side: labels keep to their own */
+        tx[j].factor_ok = 1;      /* ...and short: 3, 4, 5 with ×10^{-14} in the label */
+        ty[j] = tx[j];
+        dfle_gp_axis_ticks(&tx[j], w, fs, 0, NULL);
+        dfle_gp_axis_ticks(&ty[j], w, fs, 1, NULL);
+        if (j > 0)
+            yem = fmax(yem, ty[j].max_em);
+    }
+    left = (0.5 + 1.5 + 0.7 + 0.3) * fs + yem * fs;
+    right = fr.w_pt - 1.5 * fs;
     w = (fmin(right - left, top - bottom) - gap * (double)(d - 1)) / (double)d;
+
+    if (!(w > 3 * fs)) {
+        rc = dfle_error_set(err, DFLE_EINVAL, "plot: the page (%.3g x %.3g cm) is too small for "
+                            "%zu panels at a %g pt font", fr.w_pt / 72 * 2.54,
+                            fr.h_pt / 72 * 2.54, d, fs);
+        goto done;
+    }
+    if ((rc = dfle_gp_begin_frame(&r, path, &fr, err)) < 0)
+        goto done;
 
     /* The samples, thinned evenly for the scatter. */
     thin = n > MAX_SCATTER ? (n + MAX_SCATTER - 1) / MAX_SCATTER : 1;
@@ -265,65 +276,61 @@ int dfle_plot_corner(const char *path, const dfle_corner_opts *opts, size_t d, s
         }
     fputs("unset contour\nset surface\nunset view\n", r.f);
 
-    fputs("set multiplot\nunset key\nset tics scale 0.8,0.4 front\nset tics font ',9'\n", r.f);
-    if (o->title != NULL) {
-        fputs("set label 100 ", r.f);
-        dfle_gp_str(r.f, o->title);
-        fprintf(r.f, " at screen 0.5, screen %.4f center font ',14'\n", top + (1 - top) / 2 + 0.005);
-    }
+    fputs("set multiplot\nunset key\n", r.f);
     for (size_t i = 0; i < d; i++)         /* row, top to bottom */
         for (size_t j = 0; j <= i; j++) {  /* column */
             double L0 = left + (double)j * (w + gap), T0 = top - (double)i * (w + gap);
-            char bj[32], bi[32];
+            char bj[32], bi[32], fx[320];
             const char *lab_j = axis_label(o, j, bj, sizeof bj);
             const char *lab_i = axis_label(o, i, bi, sizeof bi);
             fprintf(r.f, "set lmargin at screen %.5f\nset rmargin at screen %.5f\n"
-                    "set tmargin at screen %.5f\nset bmargin at screen %.5f\n", L0, L0 + w, T0,
-                    T0 - w);
-            fputs("unset arrow\nunset label 1\nunset xlabel\nunset ylabel\nunset title\n", r.f);
-            fprintf(r.f, "set grid xtics ytics back lc rgb '#e4e4e4' lw 0.6\n");
-            put_ticks(r.f, 'x', lg[j], lo[j], hi[j], i == d - 1);
-            /* slanted: neighbouring panels' end labels would touch */
-            fputs("set xtics rotate by 35 right offset 0.4,0.2\n", r.f);
+                    "set tmargin at screen %.5f\nset bmargin at screen %.5f\n",
+                    L0 / fr.w_pt, (L0 + w) / fr.w_pt, T0 / fr.h_pt, (T0 - w) / fr.h_pt);
+            fputs("unset arrow\nunset label\nunset title\n", r.f);
+            fprintf(r.f, "set grid xtics ytics back lc rgb '#e4e4e4' lw 1\n");
+            dfle_gp_axis_put(r.f, "x", &tx[j], i == d - 1);
+            if (i == 0 && j == 0 && title != NULL)
+                dfle_gp_page_label(r.f, 100, title, fr.w_pt / 2, fr.h_pt - 1.25 * fs, 0, 0, &fr);
             if (i == d - 1)
-                put_axis_label(r.f, 'x', lab_j, "0,-0.2");
+                dfle_gp_page_label(r.f, 101, dfle_gp_axis_label(&tx[j], lab_j, fx, sizeof fx),
+                                   L0 + w / 2, 0.95 * fs, 0, 0, &fr);
             if (i == j) {
                 dfle_summary s;
                 char txt[200], head[320];
                 dfle_summarize(x + j, n, d, &s, NULL);
-                fputs("unset logscale y\nset yrange [0:1.12]\nunset ytics\nunset mytics\n", r.f);
+                fputs("unset logscale y\nset yrange [0:1.12]\nunset ytics\n", r.f);
                 fmt_interval(txt, sizeof txt, s.median, s.lo68, s.hi68);
                 snprintf(head, sizeof head, "%s = %s", lab_j, txt);
-                fputs("set label 1 ", r.f);
-                dfle_gp_str(r.f, head);
-                fputs(" at graph 0.5, graph 1.1 center font ',10'\n", r.f);
+                dfle_gp_page_label(r.f, 1, head, L0 + w / 2, T0 + 0.9 * fs, 0, 0, &fr);
                 fprintf(r.f, "set arrow 1 from %.10g, graph 0 to %.10g, graph 1 nohead lc rgb "
-                        "'#1f3b73' lw 1.6 front\n", s.median, s.median);
+                        "'#1f3b73' lw 3 front\n", s.median, s.median);
                 fprintf(r.f, "set arrow 2 from %.10g, graph 0 to %.10g, graph 1 nohead lc rgb "
-                        "'#1f3b73' lw 1.1 dt 2 front\n", s.lo68, s.lo68);
+                        "'#1f3b73' lw 2 dt 2 front\n", s.lo68, s.lo68);
                 fprintf(r.f, "set arrow 3 from %.10g, graph 0 to %.10g, graph 1 nohead lc rgb "
-                        "'#1f3b73' lw 1.1 dt 2 front\n", s.hi68, s.hi68);
+                        "'#1f3b73' lw 2 dt 2 front\n", s.hi68, s.hi68);
                 if (o->truth != NULL && isfinite(o->truth[j]))
                     fprintf(r.f, "set arrow 4 from %.10g, graph 0 to %.10g, graph 1 nohead lc "
-                            "rgb '#d01c1c' lw 1.8 front\n", o->truth[j], o->truth[j]);
+                            "rgb '%s' lw 3 front\n", o->truth[j], o->truth[j], DFLE_GP_FIT);
                 fprintf(r.f, "plot $h%zu using 1:2 with filledcurves y1=0 fs transparent solid "
-                        "0.35 noborder lc rgb '#0072B2', $h%zu using 1:2 with lines lw 1.4 lc rgb "
+                        "0.35 noborder lc rgb '#0072B2', $h%zu using 1:2 with lines lw 2.4 lc rgb "
                         "'#0a4a78'\n", j, j);
             } else {
-                put_ticks(r.f, 'y', lg[i], lo[i], hi[i], j == 0);
+                dfle_gp_axis_put(r.f, "y", &ty[i], j == 0);
                 if (j == 0)
-                    put_axis_label(r.f, 'y', lab_i, "0.6,0");
+                    dfle_gp_page_label(r.f, 102, dfle_gp_axis_label(&ty[i], lab_i, fx, sizeof fx),
+                                       1.1 * fs, T0 - w / 2, 90, 0, &fr);
                 if (o->truth != NULL && isfinite(o->truth[j]))
                     fprintf(r.f, "set arrow 4 from %.10g, graph 0 to %.10g, graph 1 nohead lc "
-                            "rgb '#d01c1c' lw 1.4 front\n", o->truth[j], o->truth[j]);
+                            "rgb '%s' lw 2.5 front\n", o->truth[j], o->truth[j], DFLE_GP_FIT);
                 if (o->truth != NULL && isfinite(o->truth[i]))
                     fprintf(r.f, "set arrow 5 from graph 0, first %.10g to graph 1, first %.10g "
-                            "nohead lc rgb '#d01c1c' lw 1.4 front\n", o->truth[i], o->truth[i]);
-                fprintf(r.f, "plot $s using %zu:%zu with points pt 7 ps 0.22 lc rgb '#A00072B2'",
-                        j + 1, i + 1);
+                            "nohead lc rgb '%s' lw 2.5 front\n", o->truth[i], o->truth[i],
+                            DFLE_GP_FIT);
+                fprintf(r.f, "plot $s using %zu:%zu with points pt 7 ps %.3g lc rgb '#A00072B2'",
+                        j + 1, i + 1, dfle_gp_ps(&fr, 1.4));
                 /* contours of (x_j, x_i): the grid was (a = j, b = i) */
                 if (have[j * d + i])
-                    fprintf(r.f, ", $c%zu_%zu using (%s):(%s) with lines lw 1.5 lc rgb "
+                    fprintf(r.f, ", $c%zu_%zu using (%s):(%s) with lines lw 2.6 lc rgb "
                             "'#0a2a4a'", j, i, lg[j] ? "10**$1" : "$1", lg[i] ? "10**$2" : "$2");
                 fputs("\n", r.f);
             }
@@ -336,5 +343,7 @@ done:
     free(lg);
     free(have);
     free(g);
+    free(tx);
+    free(ty);
     return rc;
 }

@@ -149,6 +149,7 @@ void dfle_landscape_free(dfle_landscape *ls)
     free(ls->s_rcv);
     free(ls->s_len);
     free(ls->s_chan);
+    free(ls->w_table);
     free(ls);
 }
 
@@ -201,6 +202,12 @@ static int make_model(dfle_landscape *ls, dfle_error *err)
     ls->s_dfs = ls->df_scale.grid != NULL || ls->df_scale.value != 1.0 ? ls->s_len + 4 * nd
                                                                          : NULL;
     ls->s_src = ls->s_chan + nd;
+    ls->n_w = nd < LS_W_TABLE ? nd + 1 : LS_W_TABLE;
+    if ((ls->w_table = malloc(ls->n_w * sizeof *ls->w_table)) == NULL)
+        return dfle_error_set(err, DFLE_ENOMEM, "landscape: out of memory for the debris-flow "
+                              "network (%zu cells)", nd);
+    for (size_t j = 0; j < ls->n_w; j++)
+        ls->w_table[j] = ls->o.k_w * pow((double)j * ls->cell_area, ls->o.b);
     for (size_t c = 0; c < n; c++) {
         ls->node_of[c] = isnan(ls->z[c]) ? LS_NONE : (uint32_t)k;
         if (!isnan(ls->z[c]))
@@ -254,7 +261,8 @@ int dfle_landscape_new(const dfle_landscape_opts *o, dfle_landscape **out, dfle_
     ls->rcv_tol = 0.005;
     for (int k = 0; k < 8; k++)
         ls->len[k] = dfle_drainage_length(ls->dr, k);
-    if ((st = dfle_drainage_set_outlets(ls->dr, o->outlets, o->n_outlets, err)) != DFLE_OK)
+    if ((st = dfle_drainage_set_outlets(ls->dr, o->outlets, o->n_outlets, err)) != DFLE_OK ||
+        (st = dfle_drainage_set_hysteresis(ls->dr, LS_TIE_MARGIN, err)) != DFLE_OK)
         goto fail;
     ls->z = malloc(ls->n * sizeof *ls->z);
     ls->rcv_prev = malloc(ls->n * sizeof *ls->rcv_prev);
@@ -353,6 +361,21 @@ size_t dfle_landscape_memory(const dfle_landscape *ls)
 /* Routing, and the network of the debris-flow model                 */
 /* ---------------------------------------------------------------- */
 
+/* w = k_w A^b [m].  Areas are whole numbers of cells, mostly few (a
+ * hillslope cell drains less than A_0), so the widths of areas up to
+ * LS_W_TABLE cells are kept in a table: the same numbers as pow() gives,
+ * without a pow() per cell at every routing. */
+static double width(const dfle_landscape *ls, double A)
+{
+    const double cells = A / ls->cell_area;
+    if (cells < (double)ls->n_w) {
+        const size_t j = (size_t)(cells + 0.5);
+        if ((double)j * ls->cell_area == A)
+            return ls->w_table[j];
+    }
+    return ls->o.k_w * pow(A, ls->o.b);
+}
+
 /* The network of the data cells from the routing just done. */
 static int shape_network(dfle_landscape *ls, dfle_error *err)
 {
@@ -373,7 +396,7 @@ static int shape_network(dfle_landscape *ls, dfle_error *err)
         ls->s_rcv[k] = ls->node_of[rcv[c]];
         ls->s_len[k] = dir[c] < 8 ? ls->len[dir[c]] : 1.0;
         ls->s_A[k] = A[c];
-        ls->s_w[k] = ls->o.k_w * pow(A[c], ls->o.b);
+        ls->s_w[k] = width(ls, A[c]);
         for (uint32_t j = off[c]; head && j < off[c + 1]; j++)
             head = !(A[don[j]] >= A0);
         ls->s_chan[k] = (unsigned char)is_chan;
@@ -462,14 +485,22 @@ double ls_fluvial_rate(const dfle_landscape *ls, size_t c, double A, double S)
 /* Fields                                                           */
 /* ---------------------------------------------------------------- */
 
+/* Names, units, and the CF long and standard names (a standard name
+ * only where the CF table has one that means the same thing). */
 static const struct {
-    const char *name, *unit;
+    const char *name, *unit, *long_name, *standard_name;
 } field_info[DFLE_LS_NFIELDS] = {
-    [DFLE_LS_Z] = {"z", "m"},          [DFLE_LS_A] = {"A", "m^2"},
-    [DFLE_LS_S] = {"S", "-"},          [DFLE_LS_E_F] = {"E_f", "m/yr"},
-    [DFLE_LS_E_DF] = {"E_df", "m/yr"}, [DFLE_LS_REACH] = {"reach", "-"},
-    [DFLE_LS_CHANNEL] = {"channel", "-"}, [DFLE_LS_DZDT] = {"dzdt", "m/yr"},
-    [DFLE_LS_U] = {"U", "m/yr"},       [DFLE_LS_BASE] = {"base", "-"},
+    [DFLE_LS_Z] = {"z", "m", "elevation of the land surface", "surface_altitude"},
+    [DFLE_LS_A] = {"A", "m^2", "drainage area (D8)", NULL},
+    [DFLE_LS_S] = {"S", "-", "slope to the D8 receiver", NULL},
+    [DFLE_LS_E_F] = {"E_f", "m/yr", "fluvial erosion rate", NULL},
+    [DFLE_LS_E_DF] = {"E_df", "m/yr", "debris-flow erosion rate", NULL},
+    [DFLE_LS_REACH] = {"reach", "-", "debris flows going on at the cell (weighted count)", NULL},
+    [DFLE_LS_CHANNEL] = {"channel", "-", "cell kind: 0 hillslope, 1 channel, 2 channel head",
+                         NULL},
+    [DFLE_LS_DZDT] = {"dzdt", "m/yr", "rate of change of the surface elevation", NULL},
+    [DFLE_LS_U] = {"U", "m/yr", "rock uplift rate", NULL},
+    [DFLE_LS_BASE] = {"base", "-", "base-level cell (1) or not (0)", NULL},
 };
 
 int dfle_landscape_field_lookup(const char *name)
@@ -488,6 +519,16 @@ const char *dfle_landscape_field_name(int f)
 const char *dfle_landscape_field_unit(int f)
 {
     return f >= 0 && f < DFLE_LS_NFIELDS ? field_info[f].unit : NULL;
+}
+
+const char *dfle_landscape_field_long_name(int f)
+{
+    return f >= 0 && f < DFLE_LS_NFIELDS ? field_info[f].long_name : NULL;
+}
+
+const char *dfle_landscape_field_standard_name(int f)
+{
+    return f >= 0 && f < DFLE_LS_NFIELDS ? field_info[f].standard_name : NULL;
 }
 
 int dfle_landscape_get(dfle_landscape *ls, int field, double *out, dfle_error *err)

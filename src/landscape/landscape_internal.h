@@ -7,8 +7,11 @@
  *                      fluvial closed form / Newton, debris-flow cells
  *                      through the model's root solve), explicit steps,
  *                      hillslopes (threshold, implicit diffusion);
+ *   landscape_direct.c one round of the direct steady state (channels
+ *                      from the heads down, threshold hillslopes as the
+ *                      lowest caps over the channels);
  *   landscape_run.c    runs: transients, steady states (the criterion,
- *                      implicit stepping, the direct method).
+ *                      implicit stepping, the direct method's rounds).
  *
  * Memory per cell is the constraint (a 2000^2 grid is 4e6 cells): the
  * state is z (8 bytes), the receivers of the last routing (4, to count
@@ -25,6 +28,20 @@
 #include "dfle/network.h"
 
 #define LS_NONE UINT32_MAX
+
+/* Receivers are chosen with this hysteresis (drainage.h): a cell keeps
+ * the receiver of the last routing while its slope is within this
+ * relative margin of the steepest.  Exact ties are common on a
+ * landscape (hillslopes at S_c are planes, built by sums of S_c L in
+ * different orders), and D8 broke them by round-off, differently at
+ * every routing: a steady landscape then kept "changing" hundreds of
+ * receivers a step without any change in elevation or area.  Slopes
+ * that differ by more than round-off (1e-9 relative) choose as plain
+ * D8 does. */
+#define LS_TIE_MARGIN 1e-9
+
+/* Widths w = k_w A^b are tabled for areas of up to this many cells. */
+#define LS_W_TABLE 4096
 
 /* A field in space (and time): value, or grid (owned) filled by fn. */
 typedef struct ls_field {
@@ -73,6 +90,8 @@ struct dfle_landscape {
     size_t *s_rcv, *s_stack;   /* shape scratch, n_data each            */
     double *s_len, *s_A, *s_w, *s_Ks, *s_dfs;
     unsigned char *s_src, *s_chan;
+    double *w_table;           /* k_w (j dx dy)^b for j < n_w cells     */
+    size_t n_w;
     int model_z_current;       /* the model's z and flow match ours     */
     size_t channel_cells, heads;
 };

@@ -3,15 +3,17 @@
  *
  * What steady means for a landscape (doc/landscape.md).  On a 1D channel
  * the run stops when max |dz/dt| <= tol U.  In 2D the drainage network
- * itself moves: divides migrate, a cell on a divide flips between two
- * receivers, and a few cells keep |dz/dt| of order U long after the
- * rest is still (fastscapelib's 250^2 landscape with n = 2.33 has max
- * |dz/dt|/U of about 3 after 1.6e7 yr while the mean is 1.3e-2).  So a
- * landscape is steady when
- *   - at least a fraction `quantile` (0.99) of its non-base data cells
+ * itself moves: divides migrate, a hillslope cell on a divide flips
+ * between receivers, and every flip moves its area from one flow path to
+ * another, so the channel cells below it keep |dz/dt| of a few percent
+ * of U long after the rest is still (fastscapelib's 250^2 landscape with
+ * n = 2.33 has max |dz/dt|/U of about 3 after 1.6e7 yr while the mean is
+ * 1.3e-2).  So a landscape is steady when
+ *   - at least a fraction `quantile` (0.95) of its non-base data cells
  *     has |dz/dt| <= tol U (tol = 1e-3), and
- *   - no cell has changed its receiver for `stable_steps` (5) routings
- *     in a row (the network has stopped changing).
+ *   - the network is stable: at most a fraction rcv_tol (0.005) of the
+ *     cells changed receiver at each of the last `stable_steps` (5)
+ *     routings.
  * Both are reported as the run goes (q_ratio, frac_above, rcv_changes,
  * stable); a run that reaches max_time or max_steps without meeting them
  * ends with converged = 0 and a note saying which part failed and by how
@@ -19,27 +21,29 @@
  *
  * Methods: IMPLICIT, backward Euler with a fixed step (landscape_step.c);
  * EXPLICIT, forward Euler with the CFL step (the reference); DIRECT, the
- * steady state of a fixed network node by node (slopes from the heads
- * down, elevations from base level up), re-routed until the network
- * stops changing, then judged by the same criterion on the evaluated
- * rates; when rounds do not settle (a network that cycles) the run goes
- * on by implicit steps and says so.
+ * steady state of a fixed network node by node (landscape_direct.c),
+ * re-routed and judged by the same criterion after every round; when the
+ * rounds stop approaching a fixed network the run goes on by implicit
+ * steps from the last round's surface, and says so.
  */
 #include "landscape/landscape_internal.h"
 
 #include <math.h>
+#include <stdint.h>
 #include <stdio.h>
 #include <stdlib.h>
 #include <string.h>
 
-#define DIRECT_ROUNDS 60
+/* The direct rounds give up when they have not reached a new fewest
+ * number of receiver changes for this many rounds. */
+#define DIRECT_STALL 30
 
 void dfle_landscape_run_opts_default(dfle_landscape_run_opts *o)
 {
     memset(o, 0, sizeof *o);
     o->method = DFLE_METHOD_AUTO;
     o->tol = 1e-3;
-    o->quantile = 0.99;
+    o->quantile = 0.95;
     o->stable_steps = 5;
     o->rcv_tol = 0.005;
     o->max_time = 1e7;
@@ -128,51 +132,76 @@ static double fraction(const dfle_landscape_run_opts *o, double t, double max_ti
     return f < 0 ? 0 : f > 1 ? 1 : f;
 }
 
-/* Rounds of the direct method; DFLE_EFIT (with why) when they do not
- * settle or a cell has no steady slope, the state then as it was. */
+/* Rounds of the direct method until the criterion holds.  DFLE_EFIT
+ * (with why) when a cell has no steady slope (*stalled = 0: nothing to
+ * go on from) or when the rounds stop approaching a fixed network
+ * (*stalled = 1: the surface is the last round's, close to steady
+ * but for the cells whose receivers still flip).
+ *
+ * Each round moves the network only near where the last one changed it
+ * (a channel head extends by a cell, a divide shifts), so the rounds
+ * needed grow with the size of the grid: about 30 on 100 x 100 cells
+ * from noise, 50-70 on 200 x 200.  The rounds stop when the criterion
+ * holds (the last rcv_tol-stable routings count towards stable_steps);
+ * they give up when the fewest changes so far came DIRECT_STALL rounds
+ * ago (a network that cycles between near-equal routings), or after
+ * max_steps rounds. */
 static int run_direct(dfle_landscape *ls, const dfle_landscape_run_opts *o,
-                      dfle_landscape_result *res, dfle_landscape_status *st, dfle_error *err)
+                      dfle_landscape_result *res, dfle_landscape_status *st, int *stalled,
+                      dfle_error *err)
 {
-    size_t rounds = 0, limit = o->max_steps < DIRECT_ROUNDS ? o->max_steps : DIRECT_ROUNDS;
+    size_t rounds = 0, fewest = SIZE_MAX, fewest_at = 0;
     int s;
 
+    *stalled = 0;
     res->method = DFLE_METHOD_DIRECT;
     ls->stable = 0;
     ls->routed = 0; /* count from a routing of this state */
     for (;;) {
         if ((s = ls_route(ls, err)) != DFLE_OK)
             return s;
-        /* Settled when this round's surface routes as the last did (but
-         * for the few divide cells rcv_tol allows). */
-        if (rounds > 0 && ls->stable > 0)
-            break;
-        if (rounds >= limit)
-            return dfle_error_set(err, DFLE_EFIT, "direct: the network still changed after "
-                                  "%zu rounds (%zu cells changed receiver in the last)", rounds,
-                                  ls->rcv_changes);
+        if (rounds > 0) {
+            st->steps = rounds;
+            /* The rates (a routing of the debris flows, the model's
+             * evaluation) decide only once the network is stable. */
+            if (ls->stable >= o->stable_steps) {
+                if ((s = ls_evaluate_rates(ls, o->tol, o->quantile, st, err)) != DFLE_OK)
+                    return s;
+                if (steady_met(o, st))
+                    return DFLE_OK;
+            }
+            st->rcv_changes = ls->rcv_changes;
+            st->stable = ls->stable;
+            if (ls->rcv_changes < fewest) {
+                fewest = ls->rcv_changes;
+                fewest_at = rounds;
+            }
+            if (o->on_step != NULL && o->on_step(o->on_step_ud, ls, st) != 0)
+                return dfle_error_set(err, DFLE_ECANCELED, "landscape: run stopped by its step "
+                                      "callback");
+        }
+        if (rounds >= o->max_steps || (rounds > 0 && rounds - fewest_at >= DIRECT_STALL)) {
+            const char *why = rounds >= o->max_steps ? "reached max_steps"
+                                                     : "stopped approaching a fixed network";
+            *stalled = 1;
+            if (ls->stable >= o->stable_steps) /* the network held; the rates did not */
+                return dfle_error_set(err, DFLE_EFIT, "the direct rounds %s after %zu rounds: "
+                                      "the network is stable but %.3g%% of the cells have "
+                                      "|dz/dt| > tol U (allowed %.3g%%; cells below divides "
+                                      "that flip)", why, rounds, 100 * st->frac_above,
+                                      100 * (1 - o->quantile));
+            return dfle_error_set(err, DFLE_EFIT, "the direct rounds %s after %zu rounds (%zu "
+                                  "cells changed receiver in the last, %zu allowed; the "
+                                  "fewest, %zu, in round %zu)", why, rounds, ls->rcv_changes,
+                                  (size_t)floor(ls->rcv_tol * (double)ls->n_data), fewest,
+                                  fewest_at);
+        }
         if (o->interrupt != NULL && *o->interrupt)
             return DFLE_OK;
         if ((s = ls_direct_round(ls, err)) != DFLE_OK)
             return s;
         rounds++;
-        if (o->on_step != NULL) {
-            st->steps = rounds;
-            if (o->on_step(o->on_step_ud, ls, st) != 0)
-                return dfle_error_set(err, DFLE_ECANCELED, "landscape: run stopped by its "
-                                      "step callback");
-        }
     }
-    /* One more round on this routing, kept: the steady state of the
-     * network that its own surface routes to, but for the few divide
-     * cells rcv_tol allows (a flipped divide cell moves the areas of two
-     * whole flow paths, so the state is judged on the network it was
-     * solved on, not on a re-routing that may flip them back). */
-    if ((s = ls_direct_round(ls, err)) != DFLE_OK)
-        return s;
-    ls->routed = 1;
-    st->steps = rounds + 1;
-    ls->stable = o->stable_steps;
-    return DFLE_OK;
 }
 
 int dfle_landscape_run(dfle_landscape *ls, const dfle_landscape_run_opts *o,
@@ -210,35 +239,26 @@ int dfle_landscape_run(dfle_landscape *ls, const dfle_landscape_run_opts *o,
 
     if (method == DFLE_METHOD_DIRECT) {
         dfle_error why;
+        int stalled = 0;
         double *z_save = malloc(ls->n * sizeof *z_save);
         if (z_save == NULL)
             return dfle_error_set(err, DFLE_ENOMEM, "landscape: out of memory");
         memcpy(z_save, ls->z, ls->n * sizeof *z_save);
-        s = run_direct(ls, o, res, &st, &why);
-        if (s == DFLE_OK && !(o->interrupt != NULL && *o->interrupt)) {
-            s = ls_evaluate_rates(ls, o->tol, o->quantile, &st, err);
-            if (s == DFLE_OK && steady_met(o, &st)) {
-                free(z_save);
+        s = run_direct(ls, o, res, &st, &stalled, &why);
+        if (s == DFLE_OK) {
+            free(z_save);
+            res->last = st;
+            res->routings = ls->routings - routings0;
+            res->dt_min = res->dt_max = 0;
+            if (o->interrupt != NULL && *o->interrupt) {
+                res->reason = DFLE_STOP_INTERRUPTED;
+                snprintf(res->note, sizeof res->note, "interrupted during the direct rounds");
+            } else {
                 res->converged = 1;
                 res->reason = DFLE_STOP_STEADY;
-                res->last = st;
-                res->routings = ls->routings - routings0;
-                res->dt_min = res->dt_max = 0;
                 snprintf(res->note, sizeof res->note, "steady: the network settled after %zu "
                          "direct rounds", st.steps);
-                return DFLE_OK;
             }
-            if (s != DFLE_OK) {
-                free(z_save);
-                return s;
-            }
-            explain(o, &st, why.msg, sizeof why.msg);
-            s = DFLE_EFIT;
-        } else if (s == DFLE_OK) {
-            free(z_save);
-            res->reason = DFLE_STOP_INTERRUPTED;
-            res->last = st;
-            snprintf(res->note, sizeof res->note, "interrupted during the direct rounds");
             return DFLE_OK;
         }
         if (s != DFLE_EFIT) {
@@ -247,13 +267,17 @@ int dfle_landscape_run(dfle_landscape *ls, const dfle_landscape_run_opts *o,
                 *err = why;
             return s;
         }
-        /* No consistent steady state of a fixed network: step instead,
-         * from where the run began. */
-        dfle_landscape_set_z(ls, z_save, NULL);
+        /* Rounds that stalled leave a surface close to steady but for the
+         * cells whose receivers flip: implicit steps settle those, as
+         * time does.  A cell with no steady slope leaves nothing to go on
+         * from: step from where the run began. */
+        if (!stalled)
+            dfle_landscape_set_z(ls, z_save, NULL);
         free(z_save);
         res->fallback = 1;
-        snprintf(res->note, sizeof res->note, "direct: %.200s; continued by implicit steps",
-                 why.msg);
+        res->direct_rounds = st.steps;
+        snprintf(res->note, sizeof res->note, "direct: %.200s; continued by implicit steps from "
+                 "%s", why.msg, stalled ? "the last round's surface" : "the start");
         method = DFLE_METHOD_IMPLICIT;
         res->method = method;
         steps = 0;
@@ -314,7 +338,7 @@ int dfle_landscape_run(dfle_landscape *ls, const dfle_landscape_run_opts *o,
     if (res->dt_min > res->dt_max)
         res->dt_min = 0;
     if (res->note[0] == '\0' || res->converged) {
-        char why[200];
+        char why[300];
         if (res->converged)
             snprintf(why, sizeof why, "steady after %zu steps", steps);
         else if (transient && res->reason == DFLE_STOP_TIME)
@@ -330,7 +354,7 @@ int dfle_landscape_run(dfle_landscape *ls, const dfle_landscape_run_opts *o,
             snprintf(res->note, sizeof res->note, "%s", why);
         }
     } else {
-        char why[200];
+        char why[300];
         size_t used = strlen(res->note);
         explain(o, &st, why, sizeof why);
         snprintf(res->note + used, sizeof res->note - used, "; %s", why);

@@ -1,7 +1,7 @@
 /*
  * landscape_step.c - how the landscape's surface moves: one backward-
- * Euler step in stack order, one explicit step, hillslope diffusion, and
- * one round of the direct steady state.
+ * Euler step in stack order, one explicit step, and hillslope diffusion
+ * (the direct steady state is in landscape_direct.c).
  *
  * Backward Euler (Braun and Willett 2013).  The stack lists every data
  * cell after its receiver, so when cell i is reached its receiver r
@@ -199,6 +199,16 @@ static int check_surface(dfle_landscape *ls, double dt, double vol, double VU, d
     return step_undone(ls, ls->z_undo, DFLE_EINVAL);
 }
 
+/* Cells a debris flow reaches, on the flow just evaluated. */
+static size_t count_reached(const dfle_landscape *ls)
+{
+    size_t k = 0;
+    if (ls->model != NULL)
+        for (size_t c = 0; c < ls->n; c++)
+            k += !isnan(ls->z[c]) && ls_reach(ls, c) > 0;
+    return k;
+}
+
 int ls_implicit_step(dfle_landscape *ls, double dt, double tol, double quantile,
                      dfle_landscape_status *st, dfle_error *err)
 {
@@ -337,7 +347,7 @@ int dfle_landscape_step(dfle_landscape *ls, double dt, double tol, dfle_landscap
         memset(st, 0, sizeof *st);
     if ((s = ls_update_fields(ls, 0, err)) != DFLE_OK)
         return s;
-    if ((s = ls_implicit_step(ls, dt, tol, 0.99, st, err)) != DFLE_OK)
+    if ((s = ls_implicit_step(ls, dt, tol, 0.95, st, err)) != DFLE_OK)
         return s;
     ls->time += dt;
     return DFLE_OK;
@@ -393,6 +403,7 @@ int ls_evaluate_rates(dfle_landscape *ls, double tol, double quantile,
     if (st != NULL) {
         ls_ratios(ls, tol, quantile, st);
         status_network(ls, st);
+        st->reached = count_reached(ls);
     }
     return DFLE_OK;
 }
@@ -615,94 +626,5 @@ int ls_diffuse(dfle_landscape *ls, double dt, dfle_error *err)
     ls->model_z_current = 0;
     free(blk);
     free(unk);
-    return st;
-}
-
-/* ---------------------------------------------------------------- */
-/* The direct steady state                                          */
-/* ---------------------------------------------------------------- */
-
-int ls_direct_round(dfle_landscape *ls, dfle_error *err)
-{
-    const uint32_t *rcv, *stack;
-    const unsigned char *dir;
-    const double *A, *Sm = NULL;
-    double *S = NULL, *flows = NULL;
-    size_t n_stack;
-    int st;
-
-    if ((st = ls_route(ls, err)) != DFLE_OK)
-        return st;
-    if (ls->model != NULL) {
-        if ((st = ls_model_evaluate(ls, err)) != DFLE_OK)
-            return st;
-        Sm = dfle_model_field(ls->model, DFLE_FIELD_S, err);
-    }
-    rcv = dfle_drainage_receivers(ls->dr);
-    dir = dfle_drainage_dir(ls->dr);
-    A = dfle_drainage_area(ls->dr);
-    stack = dfle_drainage_stack(ls->dr, &n_stack);
-    S = malloc(ls->n * sizeof *S);
-    if (ls->model != NULL)
-        flows = malloc(ls->n_data * sizeof *flows);
-    if (S == NULL || (ls->model != NULL && flows == NULL)) {
-        free(S);
-        return dfle_error_set(err, DFLE_ENOMEM, "landscape: out of memory");
-    }
-    if (flows != NULL) {
-        const unsigned char *src = dfle_network_sources(ls->net);
-        for (size_t k = 0; k < ls->n_data; k++)
-            flows[k] = src[k];
-    }
-    /* Slopes from the heads down: every cell after its donors, so the
-     * flows arriving at a cell are known when it is solved. */
-    st = DFLE_OK;
-    for (size_t k = n_stack; k-- > 0 && st == DFLE_OK;) {
-        const size_t c = stack[k], r = rcv[c];
-        const double U = ls_value(&ls->U, c);
-        if (r == c)
-            continue;
-        if (A[c] >= ls->o.A0) {
-            const size_t node = flows != NULL ? ls->node_of[c] : 0;
-            const double Kc = ls->K * ls_value(&ls->K_scale, c);
-            if (flows != NULL && flows[node] > 0) {
-                int goes_on = 0;
-                st = dfle_solver_node_slope(ls->model, node, U, 0.0, flows[node],
-                                            Sm[node] > 0 ? Sm[node] : 0.1, &S[c], &goes_on, err);
-                if (st == DFLE_OK && goes_on)
-                    flows[ls->node_of[r]] += flows[node];
-            } else if (Kc > 0) {
-                S[c] = pow(U / (Kc * pow(A[c], ls->m_exp)), 1.0 / ls->n_exp);
-            } else {
-                st = dfle_error_set(err, DFLE_EFIT, "landscape: channel cell %zu (row %zu, "
-                                    "column %zu, A = %g m^2) has no steady slope: no fluvial "
-                                    "erosion and no debris flow reaches it", c, c / ls->nx,
-                                    c % ls->nx, A[c]);
-            }
-        } else if (ls->o.hillslope == DFLE_HILLSLOPE_UPLIFT) {
-            st = dfle_error_set(err, DFLE_EFIT, "landscape: hillslopes that only rise with "
-                                "uplift (hillslope = uplift) have no steady state");
-        } else {
-            S[c] = ls->o.S_c; /* DIFFUSION: a start, solved below */
-        }
-    }
-    if (st == DFLE_OK) {
-        for (size_t k = 0; k < n_stack; k++) {
-            const size_t c = stack[k], r = rcv[c];
-            if (r != c)
-                ls->z[c] = ls->z[r] + S[c] * ls->len[dir[c]];
-        }
-        ls->routed = 0;
-        ls->model_z_current = 0;
-        ls->have_rates = 0;
-    }
-    free(S);
-    free(flows);
-    if (st == DFLE_OK && ls->o.hillslope == DFLE_HILLSLOPE_DIFFUSION) {
-        /* The hillslopes between the channels just built. */
-        ls->routed = 1; /* the receivers are those of this round */
-        st = ls_diffuse(ls, INFINITY, err);
-    }
-    ls->routed = 0;
     return st;
 }

@@ -109,15 +109,15 @@ void dfle_model_sync_domain(dfle_model *m)
         m->inv_len[i] = 1.0 / L[i];
     m->channel = dfle_network_channel(m->net);
     if (m->fl != NULL) {
-        /* K A^m is fixed per shape: hoist its pow() out of the step loop. */
+        /* K A^m is fixed per shape: hoist its pow() out of the step loop;
+         * hillslopes (off the channel mask) have no fluvial erosion. */
         for (size_t i = 0; i < m->n; i++)
-            m->KAm[i] = dfle_fluvial_K(m->fl) * pow(A[i], dfle_fluvial_m(m->fl));
+            m->KAm[i] = m->channel == NULL || m->channel[i]
+                            ? dfle_fluvial_K(m->fl) * pow(A[i], dfle_fluvial_m(m->fl))
+                            : 0.0;
         if (m->K_scale != NULL)
             for (size_t i = 0; i < m->n; i++)
                 m->KAm[i] *= m->K_scale[i];
-        if (m->channel != NULL) /* hillslopes: no fluvial erosion */
-            for (size_t i = 0; i < m->n; i++)
-                m->KAm[i] = m->channel[i] ? m->KAm[i] : 0.0;
     }
     m->net_version = v;
     dfle_model_invalidate_flow(m); /* areas moved: the flow must be routed again */

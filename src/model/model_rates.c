@@ -235,8 +235,8 @@ int dfle_model_evaluate(dfle_model *m, dfle_error *err)
 
     if (m->fl != NULL) {
         const double n_s = dfle_fluvial_n(m->fl);
-        for (size_t i = 0; i < n; i++)
-            m->E_f[i] = m->S[i] > 0 ? m->KAm[i] * pow(m->S[i], n_s) : 0.0;
+        for (size_t i = 0; i < n; i++) /* KAm = 0 off the channels: no pow() there */
+            m->E_f[i] = m->S[i] > 0 && m->KAm[i] != 0 ? m->KAm[i] * pow(m->S[i], n_s) : 0.0;
     }
     if (m->rt != NULL) {
         int route = 1;

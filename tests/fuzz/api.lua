@@ -292,6 +292,23 @@ T["dfle.plot.xy"] = function(S)
                   title = "xy" })
 end
 
+T["dfle.plot.panels"] = function(S)
+    local x, y = xy(S, 10)
+    return pack({ path = S.path("png"), xlabel = "x", title = "panels",
+                  panels = { { series = { { x = x, y = y, lines = true } }, ylabel = "a" },
+                             { series = { { x = x, y = y, style = "linespoints" } },
+                               ylog = S.r.chance(0.5), weight = 0.5 } } })
+end
+T["dfle.plot.sheet"] = function(S)
+    local p, x, y = S.path("png"), xy(S, 5)
+    pcall(dfle.plot.xy, { path = p, series = { { x = x, y = y } } })
+    return pack({ path = S.path("png"), images = { p, p }, titles = { "a", "b" }, columns = 2 })
+end
+T["dfle.plot.label"] = function(S) return pack(S.r.pick{ "A", "S", "U", "k_df", "x", "h", "t" }) end
+T["dfle.plot.number"] = function(S)
+    return pack(S.r.pick{ 0, 1.42e5, -3e-7, 12.5, 1 / 0, -1 / 0, 0 / 0, 1e308, 5e-324 })
+end
+
 T["dfle.dem.read"] = function(S)
     local f = S.inputs.dem(S)
     local o = nil

@@ -327,7 +327,8 @@ end
 local targets = {}
 local WEIGHT = {
     ["dfle.plot.slope_area"] = 0.1, ["dfle.plot.profile"] = 0.1, ["dfle.plot.flow"] = 0.05,
-    ["dfle.plot.xy"] = 0.1, ["dfle.plot.corner"] = 0.1, ["dfle.plot.posterior_predictive"] = 0.1,
+    ["dfle.plot.xy"] = 0.1, ["dfle.plot.panels"] = 0.1, ["dfle.plot.sheet"] = 0.05,
+    ["dfle.plot.corner"] = 0.1, ["dfle.plot.posterior_predictive"] = 0.1,
     ["dfle.landscape:plot"] = 0.1, ["dfle.ensemble"] = 0.4, ["dfle.gather"] = 0.6,
     ["dfle.worker"] = 0.2, ["dfle.model"] = 2, ["dfle.model:run"] = 2,
     ["dfle.model:run_to_steady"] = 2,

@@ -93,7 +93,7 @@ local subjects = {
         call = function(o) return dfle.analytical_exponent(dfle.router.empirical{}, dfle.law.power{}, o) end,
     },
     {
-        name = "dfle.plot.slope_area", base = {}, num = "nbins", known = "nbins, title",
+        name = "dfle.plot.slope_area", base = {}, num = "nbins", known = "nbins, dpi, title",
         call = function(o) return dfle.plot.slope_area(small_model(), T.tmpname(".png"), nil, o) end,
     },
 }
@@ -443,6 +443,100 @@ tests["plot: bad paths, fits and series"] = function()
     raises(function() return dfle.plot.xy{ path = T.tmpname(".png"), series = { { x = { 1 }, y = { 1 } } }, logx = "yes" } end, "'logx'", "boolean")
     raises(function() return dfle.plot.xy{ path = T.tmpname(".png"), series = { { x = { 1 }, y = { 1 } } }, bogus = 1 } end, "'bogus'", "path, series")
     raises(function() return dfle.plot.xy("x.png") end, "table")
+end
+
+-- The options every dfle.plot function shares: a wrong shape or name
+-- raises at the script's line, naming the option (and what it could be).
+tests["plot: the shared options refuse bad values, naming the option"] = function()
+    local S = { { x = { 1, 2, 3 }, y = { 1, 4, 9 } } }
+    -- on one line: the errors are at xy's call of dfle.plot.xy
+    local function xy(o) o.path, o.series = o.path or T.tmpname(".png"), o.series or S; return dfle.plot.xy(o) end
+    local function bad(o, ...) return raises_at(xy, function() return xy(o) end, ...) end
+    bad({ size = { 17, 11, "mm" } }, "dfle.plot.xy", "size unit 'mm'",
+       "'cm', 'in', 'px'")
+    bad({ size = { "17", 11 } }, "size[1] must be a number")
+    bad({ size = 17 }, "size must be a table {width, height")
+    bad({ size = {} }, "size needs a width or a height")
+    bad({ size = { 1, 1 } }, "outside 2 to 200 cm")
+    bad({ legend = "middle" }, "legend 'middle' is not a legend position",
+        "'top left'", "'below'")
+    bad({ legend = 3 }, "legend must be a position")
+    bad({ xrange = { 5, 1 } }, "xrange must be increasing")
+    bad({ yrange = "0..1" }, "yrange must be a table {lo, hi}")
+    bad({ xlog = true, xrange = { 0, 3 } }, "xrange must be > 0")
+    bad({ xlog = "yes" }, "'xlog'", "boolean")
+    bad({ xticks = "many" }, "xticks must be a spacing")
+    bad({ xticks = { 1, "two" } }, "xticks[2] must be a number or {value")
+    bad({ yticks = { { 1, 2 } } }, "yticks[1]: the label must be a string")
+    bad({ ylog = true, yticks = 2 }, "a spacing (2) needs a linear axis")
+    bad({ font = "Helvetica,1000" }, "font 'Helvetica,1000'", "4 to 72")
+    bad({ dpi = 5 }, "dpi must be from 30 to 2400")
+    bad({ series = { { x = { 1 }, y = { 1 }, style = "bars" } } },
+        "series[1].style 'bars' is not a style")
+    bad({ series = { { x = { 1 }, y = { 1 }, marker = "hexagon" } } },
+        "series[1].marker 'hexagon'", "'open circle'")
+    bad({ series = { { x = { 1 }, y = { 1 }, dash = "long" } } },
+        "series[1].dash 'long'")
+    bad({ series = { S[1], { x = { 1 }, y = { 1 }, rgb = "mauve" } } },
+        "series[2]: rgb 'mauve' is not a colour")
+    bad({ series = { { x = { 1 }, y = { 1 }, width = 50 } } },
+        "series[1]: width must be from 0 to 20 pt")
+    bad({ series = { { x = { 1 }, hi = { 1 } } } }, "series[1] has hi but no lo")
+    bad({ path = T.tmpname(".jpg") }, ".png, .pdf or .svg")
+    bad({ crange = { 3, 1 } }, "crange must be increasing")
+    bad({ clog = true, crange = { 0, 1 } }, "crange must be > 0")
+    bad({ cticks = "x" }, "cticks must be a spacing")
+    bad({ xformat = 5 }, "'xformat' must be a string")
+    bad({ cformat = {} }, "'cformat' must be a string")
+    bad({ series = { { x = { 1 }, y = { 1 }, marker_size = 100 } } },
+        "series[1]: marker_size must be from 0 to 50 pt")
+    -- the other figures take the same options and give the same messages
+    local m = small_model()
+    raises(function() return dfle.plot.profile(m, T.tmpname(".png"), { legend = "up" }) end,
+           "dfle.plot.profile", "legend 'up'")
+    raises(function() return dfle.plot.slope_area(m, T.tmpname(".png"), nil, { size = { 8, 6, "pt" } }) end,
+           "dfle.plot.slope_area", "size unit 'pt'")
+    raises(function() return dfle.plot.panels{ path = T.tmpname(".png"), panels = { { series = S, yrange = { 2, 2 } } } } end,
+           "dfle.plot.panels", "yrange must be increasing")
+    raises(function() return dfle.plot.sheet{ path = T.tmpname(".png"), images = { 5 } } end,
+           "images[1] must be a path")
+    raises(function() return dfle.plot.sheet{ path = T.tmpname(".png"), images = { "a.png" }, xlog = true } end,
+           "unknown parameter 'xlog'")
+    raises(function() return dfle.plot.sheet{ path = T.tmpname(".png"), images = { "a.png" }, columns = 0 } end,
+           "dfle.plot.sheet", "columns must be a whole number")
+    raises(function() return dfle.plot.sheet{ path = T.tmpname(".png"), images = { "a.png" }, titles = { 5 } } end,
+           "titles[1] must be a string")
+    raises(function() return dfle.plot.panels{ path = T.tmpname(".png"), panels = { { series = S, weight = -1 } } } end,
+           "panel 1: weight must be >= 0")
+    local pm = dfle.model{ channel = dfle.channel{ dx = 50 }, U = 5e-4,
+                           router = dfle.router.process{ M0 = 200 },
+                           law = dfle.law.power{ k_df = 1e-4, alpha = 6, beta = 1 } }
+    local flow = dfle.router.process{ M0 = 200 }:route(pm, { snapshots = { 10 } })
+    T.raises_here(function() return dfle.plot.flow(pm, flow, T.tmpname(".png"), { exaggeration = 0 }) end,
+                  "dfle.plot.flow", "exaggeration must be > 0")
+    raises(function() return dfle.plot.label("Q_s") end, "no house label for 'Q_s'", "A, S")
+end
+
+-- A PDF and an SVG through the Lua options: size and font reach the file.
+tests["plot: PDF and SVG from a script, sized in cm and inches"] = function()
+    local pdf, svg = T.tmpname(".pdf"), T.tmpname(".svg")
+    local S = { { x = { 1, 2, 3 }, y = { 1, 4, 9 }, label = "squares", style = "linespoints" } }
+    dfle.plot.xy{ path = pdf, series = S, size = { 8.3, 6, "cm" }, font = "Helvetica,8",
+                  xticks = { { 1, "one" }, 2, 3 }, legend = "top left", title = "small" }
+    local t = assert(T.read_file(pdf))
+    T.eq(t:sub(1, 5), "%PDF-")
+    T.ok(t:sub(-16):find("%%EOF", 1, true), "the PDF ends with %%EOF")
+    T.ok(t:find("/MediaBox [ 0 0 235 170 ]", 1, true), "an 8.3 x 6 cm page")
+    dfle.plot.xy{ path = svg, series = S, size = { 4, nil, "in" }, legend = false, ylog = true }
+    t = assert(T.read_file(svg))
+    T.ok(t:find('width="288pt"', 1, true), "4 inches wide, in points")
+    T.ok(t:find("</svg>%s*$"), "the SVG is whole")
+    local label, factor = dfle.plot.label("U")
+    T.eq(label, "Uplift rate, {/:Italic U} (mm/yr)")
+    T.eq(factor, 1000)
+    T.eq(dfle.plot.number(1.42e5), "1.42×10^{5}")
+    T.eq(dfle.plot.number(1 / 0), "inf")
+    T.eq(dfle.plot.number(0 / 0), "NaN")
 end
 
 -- Options with a misspelt key are silently ignored by plot.profile.

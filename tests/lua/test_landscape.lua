@@ -255,6 +255,44 @@ tests["debris flows + fluvial: direct steady state meets the criterion"] = funct
   T.ok(s.q_ratio < 1e-2, "implicit steps from the direct steady state: q_ratio " .. s.q_ratio)
 end
 
+-- The direct rounds on a grid past the size where the old rounds kept
+-- flipping receivers (50 x 50): they settle, and the state meets the
+-- criterion on a fresh routing of its own surface.
+-- outlets = {{E, N}, ...} hold cells at base level anywhere on the grid.
+tests["outlets: named cells are base levels"] = function()
+  local ls = dfle.landscape{ nx = 9, ny = 7, dx = 10, edges = "closed", router = false,
+                             outlets = { { 45, 5 }, { 5, 65 } }, noise = {} }
+  local base = ls:get("base")
+  T.eq(base[6 * 9 + 5], 1, "south-middle cell (E 45, N 5)")
+  T.eq(base[1], 1, "north-west cell (E 5, N 65)")
+  local n = 0
+  for i = 1, #base do n = n + base[i] end
+  T.eq(n, 2, "only the named cells")
+  T.errors_with(function() dfle.landscape{ nx = 3, ny = 3, outlets = { { 1e6, 0 } } } end, "off the grid")
+end
+
+tests["direct steady state settles on a 150 x 150 grid"] = function()
+  local ls = dfle.landscape{ nx = 150, ny = 150, dx = 30, U = 5e-4, A0 = 1e4, router = false,
+                             fluvial = dfle.fluvial.stream_power{ K = 2e-5, m = 0.5, n = 1 },
+                             noise = { seed = 42 } }
+  local r = ls:run_to_steady{}
+  T.ok(r.converged and r.method == "direct" and not r.fallback, r.note)
+  T.ok(r.frac_above <= 0.05 and r.stable >= 5, "criterion: " .. r.frac_above)
+  T.ok(r.rcv_changes <= 0.005 * 150 * 150, "receivers changed: " .. r.rcv_changes)
+end
+
+-- A run that cannot meet the criterion says so on stderr, never silently.
+tests["a steady run that cannot meet the criterion warns with the reason"] = function()
+  local out, ok = T.run_dfle([[
+    local ls = dfle.landscape{ nx = 20, ny = 20, dx = 30, router = false, noise = {} }
+    local r = ls:run_to_steady{ method = "implicit", max_steps = 2, dt = 10 }
+    print("converged", r.converged, r.reason)
+  ]])
+  T.ok(ok, out)
+  T.has(out, "dfle: warning: ", ".lua:2: dfle.landscape:run_to_steady: not steady: ",
+        "of the cells have |dz/dt| > tol U", "converged\tfalse\tsteps")
+end
+
 tests["hillslopes: threshold caps slopes at S_c; diffusion is implicit and steady"] = function()
   local ls = dfle.landscape{ nx = 20, ny = 20, dx = 20, router = false, U = 1e-3, A0 = 8e3,
                              S_c = 0.6, noise = { seed = 3 } }
@@ -295,8 +333,15 @@ tests["GeoTIFF, NetCDF and the map are written and read back"] = function()
   -- a classic (64-bit offset) netCDF file; its contents are checked
   -- in tests/test_landscape.c
   local g = assert(io.open(nc, "rb"))
-  T.eq(g:read(4), "CDF\2", "netCDF magic")
+  local head = g:read(4)
+  local rest = g:read("a")
+  T.eq(head, "CDF\2", "netCDF magic")
   g:close()
+  -- CF attributes (a classic file keeps them as plain text in its header)
+  for _, a in ipairs{ "Conventions", "CF-1.8", "surface_altitude", "elevation of the land surface",
+                      "fluvial erosion rate", "projection_x_coordinate", "m/yr" } do
+    T.ok(rest:find(a, 1, true), "netCDF attribute text " .. a)
+  end
   local png = tmp .. "/map.png"
   ls:plot(png, { title = "test" })
   local f = assert(io.open(png, "rb"))

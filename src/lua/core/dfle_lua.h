@@ -34,6 +34,7 @@
 #include "dfle/fluvial.h"
 #include "dfle/law.h"
 #include "dfle/model.h"
+#include "dfle/plot.h"
 #include "dfle/record.h"
 #include "dfle/solver.h"
 #include "dfle/router.h"
@@ -235,6 +236,34 @@ const char *dfle_lua_opt_string(lua_State *L, int idx, const char *key, const ch
  * left on the stack).  Returns the number of pairs. */
 size_t dfle_lua_slope_area(lua_State *L, int arg, const char *fn, const double **A,
                            const double **S);
+
+/* --- lua_plot_opts.c (analysis/): the options every dfle.plot function
+ * shares, read in one place --- */
+
+/* Which of the shared keys a function takes: the page (title, size,
+ * dpi, font) always; DFLE_LUA_PLOT_AXES adds the axes (x/y/c label,
+ * range, log, ticks, format) and the legend. */
+enum { DFLE_LUA_PLOT_PAGE = 0, DFLE_LUA_PLOT_AXES = 1 };
+
+/* Read the options table at idx (absent: defaults) into *o: the shared
+ * keys of `which`, the function's numeric `params` and its other keys
+ * `own` (NULL-terminated, may be NULL; the caller reads them); any other
+ * key raises, listing the known ones.  Checks the values
+ * (dfle_plot_opts_check) and raises "dfle.<fn>: ..." naming the option.
+ * Strings stay held by the table; tick lists go to scratch userdata
+ * pushed on the stack, which must stay until the figure is drawn. */
+void dfle_lua_plot_opts(lua_State *L, int idx, const char *fn, unsigned which,
+                        const dfle_lua_param *params, size_t np, const char *const *own,
+                        dfle_plot_opts *o);
+/* The axis keys <axis>label, <axis>range, <axis>log, <axis>ticks,
+ * <axis>format of the table at idx into *a (axis 'x', 'y' or 'c'). */
+void dfle_lua_plot_axis(lua_State *L, int idx, const char *fn, char axis, dfle_plot_axis *a);
+/* Series `k` (from 1, for messages) of a figure, the table at idx:
+ * x, y (or lo, hi), label, style, lines, color, rgb, dash, width,
+ * marker, marker_size.  Arrays go to scratch userdata on the stack. */
+void dfle_lua_plot_series(lua_State *L, int idx, const char *fn, size_t k, dfle_plot_series *s);
+/* Raise err (a message from dfle/plot.h, "plot: ...") as "dfle.<fn>: ...". */
+int dfle_lua_plot_raise(lua_State *L, const char *fn, const dfle_error *err);
 
 /* --- lua_params.c: a router's or law's parameters in Lua --- */
 

@@ -119,7 +119,7 @@ static int l_write_netcdf(lua_State *L)
                 return luaL_error(L, "dfle.%s: column names must be strings", fn);
         }
         cols[k] = (dfle_nc_var){name, k == 0 ? "1" : known_units(name), k == 0 ? "sample index (row of the design, from 1)"
-                                           : k <= nin ? "input parameter" : "output"};
+                                           : k <= nin ? "input parameter" : "output", NULL};
         read_column(L, data, name, nrows, values + k * nrows);
         colp[k] = values + k * nrows;
     }

@@ -2,8 +2,8 @@
  * lua_invert_plot.c - the two figures of an inversion, through the plot
  * machinery of src/io:
  *
- *   dfle.plot.corner(res, "corner.png" [, {params =, labels =, truth =, title =}])
- *   dfle.plot.posterior_predictive(res, "pp.png" [, {n =, truth =, title =}])
+ *   dfle.plot.corner(res, "corner.png" [, {params =, labels =, truth =, scale =, <page options>}])
+ *   dfle.plot.posterior_predictive(res, "pp.png" [, {n =, truth =, raw =, <options>}])
  *
  * The corner plot shows the posterior's marginals and every pair (the
  * trade-offs); the posterior-predictive plot shows whether the model, at
@@ -19,35 +19,35 @@
 #include "dfle/plot.h"
 
 /* The arguments (res, path [, opts]) of both figures: the result's
- * context index; *path the image. */
-static int plot_args(lua_State *L, const char *fn, const dfle_lua_param *nums, size_t nnums,
-                     const char *const *keys, const char **path)
+ * context index; *path the image; *o the shared options (`which` of
+ * them), nums and keys the figure's own. */
+static int plot_args(lua_State *L, const char *fn, unsigned which, const dfle_lua_param *nums,
+                     size_t nnums, const char *const *keys, const char **path, dfle_plot_opts *o)
 {
     int ctx;
     lua_settop(L, 3);
     ctx = inv_result_ctx(L, 1);
     *path = luaL_checkstring(L, 2);
-    if (!lua_isnil(L, 3) && !lua_istable(L, 3))
-        luaL_argerror(L, 3, "expected a table of options");
-    dfle_lua_read_params(L, 3, fn, nums, nnums, keys);
+    dfle_lua_plot_opts(L, 3, fn, which, nums, nnums, keys, o);
     return ctx;
 }
 
 /* dfle.plot.corner(res, path [, opts]) */
 static int l_corner(lua_State *L)
 {
-    static const char *const keys[] = {"params", "labels", "truth", "title", NULL};
-    double panel = 0, nbins = 0;
-    const dfle_lua_param nums[] = {{"panel", &panel}, {"nbins", &nbins}};
+    static const char *const keys[] = {"params", "labels", "truth", "scale", NULL};
+    double nbins = 0;
+    const dfle_lua_param nums[] = {{"nbins", &nbins}};
     const char *path, **labels;
     int ctx, names, sel, *logs;
     inv_run *R;
     size_t d, m, np;
     double *x, *truth;
     dfle_corner_opts o;
+    dfle_plot_opts po;
     dfle_error err;
 
-    ctx = plot_args(L, "plot.corner", nums, 2, keys, &path);
+    ctx = plot_args(L, "plot.corner", DFLE_LUA_PLOT_PAGE, nums, 1, keys, &path, &po);
     lua_getfield(L, ctx, "box");
     R = luaL_checkudata(L, -1, INV_BOX);
     lua_pop(L, 1);
@@ -106,37 +106,55 @@ static int l_corner(lua_State *L)
         lua_geti(L, sel, (lua_Integer)c + 1);
         j = (size_t)lua_tointeger(L, -1);
         lua_pop(L, 1);
-        for (size_t i = 0; i < m; i++)
-            x[i * d + c] = R->X[((R->burn + 1) * R->walkers + i) * R->d + j];
+        double scale = 1;
         logs[c] = R->logs[j];
         truth[c] = NAN;
         lua_geti(L, names, (lua_Integer)j + 1);
         labels[c] = lua_tostring(L, -1); /* held by names */
         if (lua_istable(L, 3)) {
-            for (int k = 0; k < 2; k++) {
-                if (lua_getfield(L, 3, k == 0 ? "labels" : "truth") == LUA_TTABLE) {
+            /* labels[name], truth[name], scale[name] (a unit's factor:
+             * U in mm/yr is scale = {U = 1e3}) */
+            for (int k = 0; k < 3; k++) {
+                static const char *const field[] = {"labels", "truth", "scale"};
+                int t = lua_getfield(L, 3, field[k]);
+                if (t == LUA_TTABLE) {
                     lua_pushvalue(L, -2);
                     lua_gettable(L, -2);
                     if (k == 0 && lua_type(L, -1) == LUA_TSTRING)
                         labels[c] = lua_tostring(L, -1); /* held by opts.labels */
                     else if (k == 1 && lua_type(L, -1) == LUA_TNUMBER)
                         truth[c] = lua_tonumber(L, -1);
+                    else if (k == 2 && lua_type(L, -1) == LUA_TNUMBER)
+                        scale = lua_tonumber(L, -1);
+                    else if (k == 2 && !lua_isnil(L, -1))
+                        return luaL_error(L, "dfle.plot.corner: scale.%s must be a number, "
+                                          "got %s", lua_tostring(L, -3),
+                                          dfle_lua_typename(L, -1));
                     lua_pop(L, 1);
+                } else if (t != LUA_TNIL) {
+                    return luaL_error(L, "dfle.plot.corner: '%s' must be a table keyed by "
+                                      "parameter name, got %s", field[k],
+                                      dfle_lua_typename(L, -1));
                 }
                 lua_pop(L, 1);
             }
         }
         lua_pop(L, 1);
+        if (!(isfinite(scale) && scale > 0))
+            return luaL_error(L, "dfle.plot.corner: scale of '%s' must be > 0 (got %s)",
+                              labels[c], dfle_lua_number_text(L, scale));
+        for (size_t i = 0; i < m; i++)
+            x[i * d + c] = scale * R->X[((R->burn + 1) * R->walkers + i) * R->d + j];
+        truth[c] *= scale;
     }
     memset(&o, 0, sizeof o);
-    o.title = dfle_lua_opt_string(L, 3, "title", "plot.corner");
     o.labels = labels;
     o.logaxis = logs;
     o.truth = truth;
-    o.panel = (int)dfle_lua_check_whole(L, panel, "plot.corner", "panel", 0, 2000);
     o.nbins = (size_t)dfle_lua_check_whole(L, nbins, "plot.corner", "nbins", 0, 1000);
-    if (dfle_plot_corner(path, &o, d, m, x, &err) != DFLE_OK)
+    if (dfle_plot_corner(path, &po, &o, d, m, x, &err) != DFLE_OK)
         return dfle_lua_raise(L, &err);
+    dfle_lua_note_file(L, path); /* for run records */
     return 0;
 }
 
@@ -148,10 +166,10 @@ static size_t truth_curve(lua_State *L, int opts, const double **A, const double
     return dfle_lua_slope_area(L, -1, "plot.posterior_predictive: truth", A, S);
 }
 
-/* dfle.plot.posterior_predictive(res, path [, {n = 100, truth =, title =}]) */
+/* dfle.plot.posterior_predictive(res, path [, {n = 100, truth =, raw =, ...}]) */
 static int l_predictive(lua_State *L)
 {
-    static const char *const keys[] = {"title", "truth", "raw", NULL};
+    static const char *const keys[] = {"truth", "raw", NULL};
     double n = 100;
     const dfle_lua_param nums[] = {{"n", &n}};
     const char *path;
@@ -166,7 +184,8 @@ static int l_predictive(lua_State *L)
     static const char *const fields[] = {"A", "median", "lo68", "hi68", "lo95", "hi95",
                                          "obs_lo95", "obs_hi95"};
 
-    ctx = plot_args(L, "plot.posterior_predictive", nums, 1, keys, &path);
+    ctx = plot_args(L, "plot.posterior_predictive", DFLE_LUA_PLOT_AXES, nums, 1, keys, &path,
+                    &o);
     if (lua_istable(L, 3) && lua_getfield(L, 3, "raw") != LUA_TNIL)
         raw = lua_toboolean(L, -1);
     lua_settop(L, 4);
@@ -213,28 +232,32 @@ static int l_predictive(lua_State *L)
         s[ns++] = (dfle_plot_series){.label = "68 %", .n = nA, .x = arr[0], .lo = arr[2],
                                      .hi = arr[3], .rgb = "#3182bd"};
         s[ns++] = (dfle_plot_series){.label = "Posterior median", .n = nA, .x = arr[0],
-                                     .y = arr[1], .lines = 1, .rgb = "#08306b"};
+                                     .y = arr[1], .style = DFLE_PLOT_LINES, .rgb = "#08306b"};
         s[ns++] = (dfle_plot_series){.label = "95 % of binned slopes (with noise)", .n = nA,
-                                     .x = arr[0], .y = arr[6], .lines = 1, .dash = 1,
+                                     .x = arr[0], .y = arr[6], .style = DFLE_PLOT_LINES, .dash = 1,
                                      .rgb = "#6baed6"};
         s[ns++] = (dfle_plot_series){.label = NULL, .n = nA, .x = arr[0], .y = arr[7],
-                                     .lines = 1, .dash = 1, .rgb = "#6baed6"};
+                                     .style = DFLE_PLOT_LINES, .dash = 1, .rgb = "#6baed6"};
         if (nt > 0)
             s[ns++] = (dfle_plot_series){.label = "True model", .n = nt, .x = tA, .y = tS,
-                                         .lines = 1, .dash = 1, .rgb = "#d01c1c"};
+                                         .style = DFLE_PLOT_LINES, .dash = 1, .rgb = "vermillion"};
         snprintf(lab, sizeof lab, "Binned data (%d bins)", (int)nd);
         s[ns++] = (dfle_plot_series){.label = lab, .n = nd, .x = arr[8], .y = dS,
                                      .rgb = "#000000"};
     }
-    memset(&o, 0, sizeof o);
-    o.title = dfle_lua_opt_string(L, 3, "title", "plot.posterior_predictive");
-    o.xlabel = "Drainage area, {/:Italic A} (m^2)";
-    o.ylabel = "Slope, {/:Italic S}";
-    o.logx = o.logy = 1;
-    o.width = 900;
-    o.height = 650;
+    if (o.x.label == NULL)
+        o.x.label = dfle_plot_label("A", NULL);
+    if (o.y.label == NULL)
+        o.y.label = dfle_plot_label("S", NULL);
+    if (o.x.log == 0)
+        o.x.log = 1;
+    if (o.y.log == 0)
+        o.y.log = 1;
+    if (o.width == 0 && o.height == 0)
+        o.width = 16, o.height = 11;
     if (dfle_plot_xy(path, &o, s, (size_t)ns, &err) != DFLE_OK)
         return dfle_lua_raise(L, &err);
+    dfle_lua_note_file(L, path); /* for run records */
     return 0;
 }
 

@@ -549,7 +549,7 @@ static int l_landscape_new(lua_State *L)
         lua_pop(L, 1);
         for (size_t k = 0; k < m; k++) {
             double E, N, col, row;
-            if (lua_rawgeti(L, -2, (lua_Integer)k + 1) != LUA_TTABLE ||
+            if (lua_rawgeti(L, -1, (lua_Integer)k + 1) != LUA_TTABLE ||
                 lua_rawgeti(L, -1, 1) != LUA_TNUMBER || lua_rawgeti(L, -2, 2) != LUA_TNUMBER)
                 luaL_error(L, "dfle.landscape: outlets[%d] must be {E, N}", (int)k + 1);
             E = lua_tonumber(L, -2), N = lua_tonumber(L, -1);
@@ -919,7 +919,8 @@ static int landscape_run(lua_State *L, int steady)
             vars[j].units = dfle_landscape_field_unit(ctx.fields[j]);
             if (strcmp(vars[j].units, "-") == 0)
                 vars[j].units = "1";
-            vars[j].long_name = vars[j].name;
+            vars[j].long_name = dfle_landscape_field_long_name(ctx.fields[j]);
+            vars[j].standard_name = dfle_landscape_field_standard_name(ctx.fields[j]);
         }
         ctx.buf = lua_newuserdatauv(L, ctx.nf * n * sizeof(double), 0);
         geo_of(u, &g);
@@ -959,11 +960,14 @@ static int landscape_run(lua_State *L, int steady)
     if (res.reason == DFLE_STOP_INTERRUPTED)
         dfle_lua_set_interrupt_note(L, "%s stopped at t = %f yr and kept its state (reason "
                                        "\"interrupted\")", fn, dfle_landscape_time(u->ls));
-    lua_createtable(L, 0, 24);
+    else if (steady && !res.converged) /* never silently */
+        dfle_lua_warn(L, fn, res.note);
+    lua_createtable(L, 0, 25);
     lua_pushboolean(L, res.converged), lua_setfield(L, -2, "converged");
     lua_pushstring(L, dfle_stop_reason_name(res.reason)), lua_setfield(L, -2, "reason");
     lua_pushstring(L, dfle_method_name(res.method)), lua_setfield(L, -2, "method");
     lua_pushboolean(L, res.fallback), lua_setfield(L, -2, "fallback");
+    lua_pushinteger(L, (lua_Integer)res.direct_rounds), lua_setfield(L, -2, "direct_rounds");
     lua_pushnumber(L, res.last.time), lua_setfield(L, -2, "time");
     lua_pushinteger(L, (lua_Integer)res.last.steps), lua_setfield(L, -2, "steps");
     lua_pushinteger(L, (lua_Integer)res.routings), lua_setfield(L, -2, "routings");

@@ -295,7 +295,7 @@ static void remember_run(lua_State *L, int steady, const dfle_run_opts *o, doubl
 static void write_records(lua_State *L, dfle_model *m, const char *path, const dfle_run_opts *o,
                           const dfle_run_result *res)
 {
-    static const dfle_nc_var z_var = {"z", "m", "elevation above the outlet"};
+    static const dfle_nc_var z_var = {"z", "m", "elevation above the outlet", NULL};
     const double *x, *A, *values[1];
     dfle_nc_attr attrs[3];
     dfle_error err;
