@@ -181,15 +181,19 @@ static int keep_surface(dfle_landscape *ls, dfle_error *err)
 
 /* Everything a step produced is checked: a step of 1e300 yr, or a U of
  * 1e300 m/yr, overflowed the volumes and made the diffusion solve NaN,
- * and the step "succeeded" with a surface that was none.  `vol` is the
- * sum of the step's volumes [m]. */
-static int check_surface(dfle_landscape *ls, double dt, double vol, double VU, double Vh,
-                         dfle_error *err)
+ * and the step "succeeded" with a surface that was none.  `vol` holds
+ * the step's volumes [m] (uplift, fluvial, debris flows, hillslope,
+ * change). */
+static int check_surface(dfle_landscape *ls, double dt, const double vol[5], double VU,
+                         double Vh, dfle_error *err)
 {
     size_t finite = 0;
+    int vol_ok = 1;
     for (size_t c = 0; c < ls->n; c++)
         finite += isfinite(ls->z[c]) != 0;
-    if (finite == ls->n_data && isfinite(vol * ls->cell_area))
+    for (int k = 0; k < 5; k++) /* each as reported: times the cell area */
+        vol_ok &= isfinite(vol[k] * ls->cell_area) != 0;
+    if (finite == ls->n_data && vol_ok)
         return DFLE_OK;
     dfle_error_set(err, DFLE_EINVAL, "landscape: a step of dt = %g yr gave %s (uplift volume %g "
                    "m^3, hillslope %g m^3); it was undone: take shorter steps, or check U", dt,
@@ -318,7 +322,8 @@ int ls_implicit_step(dfle_landscape *ls, double dt, double tol, double quantile,
         Vh += before - after;
         dV += after - before;
     }
-    if ((st_ = check_surface(ls, dt, VU + Vf + Vdf + Vh + dV, VU, Vh, err)) != DFLE_OK)
+    if ((st_ = check_surface(ls, dt, (const double[5]){VU, Vf, Vdf, Vh, dV}, VU, Vh, err))
+        != DFLE_OK)
         return st_;
     if (st != NULL) {
         st->route_seconds = t1 - t0;
@@ -476,7 +481,7 @@ int ls_explicit_step(dfle_landscape *ls, double dt_cap, double cfl, double tol,
     }
     ls->routed = 0;
     ls->model_z_current = 0;
-    if ((s = check_surface(ls, dt, VU + Vh + dV + Vf + Vdf, VU, Vh, err)) != DFLE_OK)
+    if ((s = check_surface(ls, dt, (const double[5]){VU, Vf, Vdf, Vh, dV}, VU, Vh, err)) != DFLE_OK)
         return s;
     *dt_out = dt;
     if (st != NULL) {

@@ -288,6 +288,13 @@ tests["a landscape step that leaves no surface is an error, and undone"] = funct
     ls = dfle.landscape{ nx = 8, ny = 3, dx = 30, U = 1e300 }
     T.raises_here(function() return ls:step(1e10) end, "gave volumes that are not finite")
     T.ok(ls:step(10).dt == 10, "a sane step afterwards")
+    -- volumes that overflow only once multiplied by the cell area
+    -- (V_hillslope = inf, the sum of the volumes finite)
+    ls = dfle.landscape{ nx = 6, ny = 5, dx = 10 }
+    local z = {}
+    for i = 1, 30 do z[i] = i * 5e305 end
+    ls:set_z(z)
+    T.raises_here(function() return ls:step(1) end, "gave volumes that are not finite")
     -- the explicit method's steps too
     ls = dfle.landscape{ nx = 3, ny = 3, dx = 30, router = false, U = 1e300 }
     T.raises_here(function() return ls:run{ years = 1e10, dt = 1e10, method = "explicit", max_steps = 5 } end,
