@@ -359,7 +359,7 @@ tests["errors name the parameter"] = function()
   end
   err({}, "'nx' and 'ny'")
   err({ nx = 4, ny = 4, U = -1 }, "U (uplift")
-  err({ nx = 4, ny = 4, hillslope = "landslide" }, "invalid option 'landslide'")
+  err({ nx = 4, ny = 4, hillslope = "landslide" }, "hillslope must be 'threshold', 'diffusion' or 'uplift' (got 'landslide')")
   err({ nx = 4, ny = 4, edges = "wall" }, "\"base_level\", \"closed\" or \"open\"")
   err({ nx = 4, ny = 4, z = { 1, 2 } }, "'z' has 2 values")
   err({ nx = 4, ny = 4, S_c = 0 }, "S_c")
