@@ -134,6 +134,20 @@ static double fraction(const dfle_landscape_run_opts *o, double t, double max_ti
     return f < 0 ? 0 : f > 1 ? 1 : f;
 }
 
+/* Channel cells of the current routing steeper than S_c. */
+static size_t steeper_channels(dfle_landscape *ls)
+{
+    const uint32_t *rcv = dfle_drainage_receivers(ls->dr);
+    const unsigned char *dir = dfle_drainage_dir(ls->dr);
+    const double *A = dfle_drainage_area(ls->dr);
+    size_t k = 0;
+    for (size_t c = 0; c < ls->n; c++)
+        if (rcv[c] != c && A[c] >= ls->o.A0 &&
+            ls->z[c] - ls->z[rcv[c]] > ls->o.S_c * (1.0 + 1e-9) * ls->len[dir[c]])
+            k++;
+    return k;
+}
+
 /* Rounds of the direct method until the criterion holds.  DFLE_EFIT
  * (with why) when a cell has no steady slope (*stalled = 0: nothing to
  * go on from) or when the rounds stop approaching a fixed network
@@ -200,6 +214,18 @@ static int run_direct(dfle_landscape *ls, const dfle_landscape_run_opts *o,
                                       "|dz/dt| > tol U (allowed %.3g%%; cells below divides "
                                       "that flip)", why, rounds, 100 * st->frac_above,
                                       100 * (1 - o->quantile));
+            if (ls->o.hillslope == DFLE_HILLSLOPE_THRESHOLD && !ls->o.cap_channels) {
+                /* The likely cause, named (doc/landscape.md, "Channels
+                 * steeper than S_c"): such heads have no steady network. */
+                size_t steep = steeper_channels(ls);
+                if (steep > 0)
+                    return dfle_error_set(err, DFLE_EFIT, "the direct rounds %s after %zu "
+                                          "rounds (%zu cells changed receiver in the last, %zu "
+                                          "allowed; %zu channel cells are steeper than S_c, "
+                                          "cap_channels = false)", why, rounds,
+                                          ls->rcv_changes,
+                                          (size_t)floor(ls->rcv_tol * (double)ls->n_data), steep);
+            }
             return dfle_error_set(err, DFLE_EFIT, "the direct rounds %s after %zu rounds (%zu "
                                   "cells changed receiver in the last, %zu allowed; the "
                                   "fewest, %zu, in round %zu)", why, rounds, ls->rcv_changes,

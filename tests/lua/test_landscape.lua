@@ -284,7 +284,8 @@ tests["S_c caps channel cells: heads steeper than S_c settle, uncapped they cycl
   -- uncapped, the same grid never settles, and says so
   local u = grid(false):run_to_steady{ rcv_tol = 0, max_time = 2e4, progress = false }
   T.ok(not u.converged and u.fallback, u.note)
-  T.has(u.note, "stopped approaching a fixed network", "receivers still change")
+  T.has(u.note, "stopped approaching a fixed network", "channel cells are steeper than S_c",
+        "receivers still change")
 end
 
 tests["debris flows + fluvial: direct steady state meets the criterion"] = function()
