@@ -8,7 +8,11 @@
  *    S = (U / K A^m)^(1/n).  Where flows arrive: the model's per-node
  *    root solve of E_f + E_df = U (solver.h, dfle_solver_node_slope),
  *    which also says whether the flows go on (tau >= tau_y at that
- *    slope: exactly the runout rule).  Elevations then follow from base
+ *    slope: exactly the runout rule).  With threshold hillslopes and
+ *    cap_channels, a slope above S_c is held at S_c and the flows go on
+ *    or stop by their verdict there (a head steeper than the hillslope
+ *    beside it loses its donors to it, and back, every round: no steady
+ *    network; doc/landscape.md).  Elevations then follow from base
  *    level up, z = z_r + S L, in stack order.
  *  - Threshold hillslopes (A < A_0).  A hillslope cell rises with U
  *    until it stands S_c above its steepest-descent receiver, so at

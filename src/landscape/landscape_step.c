@@ -19,8 +19,10 @@
  * model's per-node root solve (solver.h), E = E_f + E_df; the flows are
  * those routed at the start of the step (lagged one step, as the 1D
  * implicit solver lags the runout).  Hillslope cells rise with U and are
- * capped at S_c above their receiver (THRESHOLD), or diffuse after the
- * sweep (DIFFUSION).  O(n), no linear system, no stability limit.
+ * capped at S_c above their receiver (THRESHOLD; channel cells too with
+ * cap_channels, the excess counted as hillslope volume), or diffuse
+ * after the sweep (DIFFUSION).  O(n), no linear system, no stability
+ * limit.
  */
 #include "landscape/landscape_internal.h"
 
