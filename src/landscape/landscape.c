@@ -31,6 +31,7 @@ void dfle_landscape_opts_default(dfle_landscape_opts *o)
     o->b = 0.3;
     o->hillslope = DFLE_HILLSLOPE_THRESHOLD;
     o->S_c = 0.8;
+    o->cap_channels = 1;
     o->D = 0.01;
     o->U.value = 5e-4;
     o->K_scale.value = 1.0;

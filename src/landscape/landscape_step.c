@@ -19,8 +19,10 @@
  * model's per-node root solve (solver.h), E = E_f + E_df; the flows are
  * those routed at the start of the step (lagged one step, as the 1D
  * implicit solver lags the runout).  Hillslope cells rise with U and are
- * capped at S_c above their receiver (THRESHOLD), or diffuse after the
- * sweep (DIFFUSION).  O(n), no linear system, no stability limit.
+ * capped at S_c above their receiver (THRESHOLD; channel cells too with
+ * cap_channels, the excess counted as hillslope volume), or diffuse
+ * after the sweep (DIFFUSION).  O(n), no linear system, no stability
+ * limit.
  */
 #include "landscape/landscape_internal.h"
 
@@ -222,6 +224,7 @@ int ls_implicit_step(dfle_landscape *ls, double dt, double tol, double quantile,
     const double A0 = ls->o.A0, K = ls->K, mexp = ls->m_exp, nexp = ls->n_exp;
     const double Sc = ls->o.S_c, ca = ls->cell_area;
     const int hill = ls->o.hillslope, sqrt_m = mexp == 0.5, n_one = nexp == 1.0;
+    const int cap_ch = hill == DFLE_HILLSLOPE_THRESHOLD && ls->o.cap_channels;
     double *z = ls->z;
     double VU = 0, Vf = 0, Vdf = 0, Vh = 0, dV = 0;
     size_t n_stack, reached = 0;
@@ -293,6 +296,10 @@ int ls_implicit_step(dfle_landscape *ls, double dt, double tol, double quantile,
                     zn = z[r] + d;
                     Vf += d0 - d;
                 }
+            }
+            if (cap_ch && zn > z[r] + Sc * L) { /* S_c caps channels too */
+                Vh += zn - (z[r] + Sc * L);
+                zn = z[r] + Sc * L;
             }
         } else if (hill == DFLE_HILLSLOPE_THRESHOLD) {
             const double cap = z[r] + Sc * L;
@@ -371,6 +378,7 @@ int ls_evaluate_rates(dfle_landscape *ls, double tol, double quantile,
     const uint32_t *rcv;
     const unsigned char *dir;
     const double *A, *Edf = NULL;
+    const int cap = ls->o.hillslope == DFLE_HILLSLOPE_THRESHOLD && ls->o.cap_channels;
     int s;
 
     if ((s = ls_route(ls, err)) != DFLE_OK)
@@ -394,9 +402,11 @@ int ls_evaluate_rates(dfle_landscape *ls, double tol, double quantile,
         }
         U = ls_value(&ls->U, c);
         S = (ls->z[c] - ls->z[rcv[c]]) / ls->len[dir[c]];
-        if (A[c] >= ls->o.A0)
+        if (A[c] >= ls->o.A0) {
             r = U - ls_fluvial_rate(ls, c, A[c], S) - (Edf != NULL ? Edf[ls->node_of[c]] : 0.0);
-        else if (ls->o.hillslope == DFLE_HILLSLOPE_THRESHOLD)
+            if (r > 0 && cap && S >= ls->o.S_c * (1.0 - 1e-9))
+                r = 0.0; /* held at S_c: what erosion leaves fails */
+        } else if (ls->o.hillslope == DFLE_HILLSLOPE_THRESHOLD)
             r = S >= ls->o.S_c * (1.0 - 1e-9) ? 0.0 : U; /* held at S_c, or rising */
         else if (ls->o.hillslope == DFLE_HILLSLOPE_DIFFUSION)
             r = U + laplacian(ls, c);
@@ -465,6 +475,11 @@ int ls_explicit_step(dfle_landscape *ls, double dt_cap, double cfl, double tol,
             double Ef = ls_fluvial_rate(ls, c, A[c], S > 0 ? S : 0);
             Vf += Ef * dt;
             Vdf += (U - ls->dzdt[c]) * dt - Ef * dt;
+            if (ls->o.hillslope == DFLE_HILLSLOPE_THRESHOLD && ls->o.cap_channels &&
+                zn > ls->z[r] + ls->o.S_c * ls->len[dir[c]]) { /* S_c caps channels too */
+                Vh += zn - (ls->z[r] + ls->o.S_c * ls->len[dir[c]]);
+                zn = ls->z[r] + ls->o.S_c * ls->len[dir[c]];
+            }
         }
         if (!(A[c] >= ls->o.A0) && ls->o.hillslope == DFLE_HILLSLOPE_THRESHOLD) {
             double cap = ls->z[r] + ls->o.S_c * ls->len[dir[c]];

@@ -347,7 +347,8 @@ static int l_landscape_new(lua_State *L)
                                     {"S_c", &o.S_c}, {"D", &o.D}, {"x0", &x0}, {"y0", &y0}};
         static const char *const others[] = {"z", "noise", "dem", "outlet", "outlets", "edges",
                                              "nodata", "fluvial", "router", "law", "combine",
-                                             "hillslope", "U", "K", "k_e", "k_df", NULL};
+                                             "hillslope", "cap_channels", "U", "K", "k_e", "k_df",
+                                             NULL};
         dfle_lua_read_params(L, 1, "landscape", p, sizeof p / sizeof p[0], others);
     }
     /* The userdata first (valid and empty), so refs made below are
@@ -571,6 +572,13 @@ static int l_landscape_new(lua_State *L)
     if (lua_getfield(L, 1, "hillslope") != LUA_TNIL) {
         static const char *const rules[] = {"threshold", "diffusion", "uplift", NULL};
         o.hillslope = dfle_lua_check_option(L, -1, "landscape", "hillslope", rules);
+    }
+    lua_pop(L, 1);
+    if (lua_getfield(L, 1, "cap_channels") != LUA_TNIL) {
+        if (!lua_isboolean(L, -1))
+            luaL_error(L, "dfle.landscape: parameter 'cap_channels' must be a boolean (got %s)",
+                       luaL_typename(L, -1));
+        o.cap_channels = lua_toboolean(L, -1);
     }
     lua_pop(L, 1);
 
