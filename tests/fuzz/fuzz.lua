@@ -460,7 +460,8 @@ local NONFINITE_OK = {
     ["dfle.ensemble:write_netcdf"] = { ["*"] = "nan" },      -- returns the ensemble
     ["dfle.landscape:get"] = { ["*"] = "nan" },              -- NoData cells
     -- a parameter no walker moved in: tau NaN, tau_max inf (warned)
-    ["dfle.invert"] = { ["tau.*"] = "nan", tau_max = "inf" },
+    -- lsq.corr NaN for a parameter of zero variance (documented)
+    ["dfle.invert"] = { ["tau.*"] = "nan", tau_max = "inf", corr = "nan" },
 }
 
 local function has_nonfinite(v, seen, depth)
