@@ -457,10 +457,8 @@ static void lua_laws_rate_dlnS(void **state)
     for (size_t l = 0; l < 6; l++) {
         size_t nonzero = 0;
         /* No op before the programs are compiled and checked against Lua
-         * (the first evaluation does both; the check runs Lua, so the
-         * guards are checked again on the next), then one. */
+         * (the first evaluation does both), then one. */
         assert_false(dfle_law_has_rate_dlnS(lua[l]));
-        law_at(r, r->rt[0], lua[l], 40, 0.3, NULL);
         law_at(r, r->rt[0], lua[l], 40, 0.3, NULL);
         assert_true(dfle_law_has_rate_dlnS(lua[l]));
         for (size_t q = 0; q < np; q++) {

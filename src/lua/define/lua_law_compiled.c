@@ -290,6 +290,28 @@ static int deriv_ready(const lua_law *ll, int op)
            ll->seen[op] == *ll->epoch && dfle_trace_differentiable(p);
 }
 
+/* The check of a new program runs the function as Lua, which moves the
+ * epoch: the guards of the programs rate_dlnS needs are checked again
+ * here (no Lua runs), so that the op comes as soon as they hold, whether
+ * the programs were traced and checked now or found in the cache (the
+ * same solver path either way).  A guard that fails is left to the next
+ * sweep, which traces again. */
+void ll_compiled_refresh(lua_law *ll)
+{
+    lua_State *T = ll->sh.T;
+    const int ops[2] = {ll->time_resolved ? OP_RATE_TR : OP_RATE,
+                        ll->has_factor && !ll->time_resolved ? OP_FACTOR : -1};
+    for (int k = 0; k < 2; k++) {
+        const int op = ops[k];
+        if (op < 0 || ll->prog[op] == NULL || ll->cstate[op] <= 0 || ll->unchecked[op] ||
+            ll->seen[op] == *ll->epoch)
+            continue;
+        lua_settop(T, SLOT_COUNT);
+        if (dfle_trace_guards_hold(T, SLOT_GUARDS_FACTOR + op, ll->prog[op]))
+            ll->seen[op] = *ll->epoch;
+    }
+}
+
 int ll_compiled_can_dlnS(const lua_law *ll)
 {
     /* After a time-resolved routing the factor is the held Eq. (11) sum:

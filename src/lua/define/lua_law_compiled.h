@@ -21,6 +21,9 @@ int ll_compiled_integrand(lua_law *ll, double h, double v, double lambda, double
  * after the last flow_factor): compiled, checked against Lua, guards
  * current, every operation differentiable. */
 int ll_compiled_can_dlnS(const lua_law *ll);
+/* Check again the guards of the programs rate_dlnS needs whose epoch has
+ * moved (inside the shell: T is the law's thread).  Never raises. */
+void ll_compiled_refresh(lua_law *ll);
 /* dE[0..n) = dE/d ln S by forward-mode differentiation of the programs
  * (law.h's rate_dlnS); NaN where there is none to give (a program not
  * ready, out of memory, an area not in the frequency memo). */

@@ -81,6 +81,8 @@ static int run_sweep(lua_law *ll, int op, const dfle_law_ctx *ctx, const double 
         st = ll_compiled_sweep(ll, op, ctx, F_in, out, err);
     if (st == TRY_LUA)
         st = ll_interpreted_sweep(ll, op, ctx, F_in, out, err);
+    if (st == DFLE_OK && ll->compile)
+        ll_compiled_refresh(ll);
     dfle_lua_shell_leave(&ll->sh);
     offer_dlnS(ll);
     return st;
