@@ -2,8 +2,10 @@
  * the empirical router's node_flow_dlnS, each built-in law's rate_dlnS
  * and the model's dfle_model_node_erosion_dlnS against centred
  * differences in ln S, over many slopes and areas: flat and very steep,
- * and on both sides of tau = tau_y, where Theta -> 0. */
+ * and on both sides of tau = tau_y, where Theta -> 0; and laws written
+ * in Lua, whose op differentiates their compiled programs. */
 #include <math.h>
+#include <stdio.h>
 #include <stdlib.h>
 #include <string.h>
 
@@ -16,6 +18,13 @@
 #include "dfle/router_empirical.h"
 #include "dfle/router_process.h"
 #include "dfle/solver.h"
+
+#include <lauxlib.h>
+#include <lua.h>
+#include <lualib.h>
+
+#include "dfle/lua.h"
+#include "lua/core/dfle_lua.h"
 
 /* Half-width of the centred differences in ln S: truncation ~h^2/6 and
  * round-off ~1e-16/h, both ~1e-11 relative. */
@@ -366,6 +375,200 @@ static void model_node_erosion_dlnS(void **state)
     dfle_fluvial_free(fl);
 }
 
+/* ---- laws written in Lua: rate_dlnS by differentiating the programs ---- */
+
+/* A law defined by `def` (the table of dfle.law.define, in Lua), kept
+ * in L's registry (alive until lua_close). */
+static dfle_law *lua_law(lua_State *L, const char *def)
+{
+    char code[1024];
+    dfle_law *law;
+    snprintf(code, sizeof code, "return dfle.law.define%s", def);
+    if (luaL_loadstring(L, code) != LUA_OK || lua_pcall(L, 0, 1, 0) != LUA_OK) {
+        print_error("%s\n", lua_tostring(L, -1));
+        fail();
+    }
+    law = dfle_lua_check_law(L, -1);
+    luaL_ref(L, LUA_REGISTRYINDEX);
+    return law;
+}
+
+static lua_State *lua_with_dfle(void)
+{
+    lua_State *L = luaL_newstate();
+    assert_non_null(L);
+    luaL_openlibs(L);
+    luaL_requiref(L, "dfle", luaopen_dfle, 1);
+    lua_pop(L, 1);
+    return L;
+}
+
+/* Lua laws that mirror built-in ones (with a factor and without), one
+ * with exp, log, min, sqrt, abs, a division and a slope-dependent
+ * exponent, and one with the other operations: their compiled programs'
+ * rate_dlnS against a centred difference, and against the built-in
+ * law's own op, with the flow following S and held (d = NULL). */
+static void lua_laws_rate_dlnS(void **state)
+{
+    rig *r = *state;
+    lua_State *L = lua_with_dfle();
+    dfle_power_law_opts po;
+    dfle_excess_stress_law_opts eo;
+    dfle_law *lua[6], *builtin[6] = {NULL};
+    point pt[MAX_POINTS];
+    const size_t np = points_of(r, pt);
+    lua[0] = lua_law(L, "{ params = { k_df = 1e-4, alpha = 6, beta = 1 },"
+                        "  factor = function(c, p) return c.t_p * c.h ^ p.beta * c.Theta end,"
+                        "  rate = function(c, p) return p.k_df * c.S ^ p.alpha * c.F end }");
+    lua[1] = lua_law(L, "{ params = { k_df = 1e-4, alpha = 2.5, beta = 0.7 },"
+                        "  rate = function(c, p)"
+                        "    return p.k_df * c.S ^ p.alpha * c.t_p * c.h ^ p.beta * c.Theta end }");
+    /* tau_c above the router's tau_y = 300 Pa: where the excess is
+     * positive the flow goes on, as the built-in law requires. */
+    lua[2] = lua_law(L, "{ params = { k = 1e-9, tau_c = 500, p = 1.5 },"
+                        "  factor = function(c, p) return math.max(c.tau - p.tau_c, 0) ^ p.p end,"
+                        "  rate = function(c, p) return p.k * c.F end }");
+    lua[3] = lua_law(L, "{ params = { k = 1e-9, tau_c = 400, p = 0.6 },"
+                        "  rate = function(c, p) return p.k * math.max(c.tau - p.tau_c, 0) ^ p.p end }");
+    lua[4] = lua_law(L, "{ params = { k = 1e-5, a = 3.5, hmax = 2 },"
+                        "  rate = function(c, p)"
+                        "    return p.k * math.exp(p.a * math.log(c.S)) * math.min(c.h, p.hmax)"
+                        "      * math.sqrt(c.t_p) * c.Theta / (1 + math.abs(c.v - 5))"
+                        "      * c.S ^ (0.1 * c.Theta) end }");
+    /* Every other operation with a rule: trigonometry, log to a base,
+     * deg and rad, and the quotients flat between their jumps. */
+    lua[5] = lua_law(
+        L, "{ params = { k = 1e-4 }, rate = function(c, p)"
+           "  return p.k * c.S ^ 2 * (2 + math.sin(c.h)) * (2 + math.cos(0.01 * c.v))"
+           "    * (1 + math.atan(c.tau, 100)) * (2 + math.tan(0.3 * c.Theta))"
+           "    * (1 + math.asin(0.5 * c.Theta)) * (2 + math.acos(0.5 * c.Theta))"
+           "    * math.log(1 + c.S, 10) / math.log(2 + c.S, 3) * math.log(1 + c.S, 2)"
+           "    * (1 + math.rad(math.deg(c.Theta)))"
+           "    * (1 + c.h % 7 + math.fmod(c.h, 5) + c.h // 3 + math.floor(c.h) - math.ceil(c.h))"
+           "  end }");
+    dfle_power_law_opts_default(&po);
+    assert_int_equal(dfle_law_new_power(&po, &builtin[0], NULL), DFLE_OK);
+    po.alpha = 2.5, po.beta = 0.7;
+    assert_int_equal(dfle_law_new_power(&po, &builtin[1], NULL), DFLE_OK);
+    dfle_excess_stress_law_opts_default(&eo);
+    assert_int_equal(dfle_law_new_excess_stress(&eo, &builtin[2], NULL), DFLE_OK);
+    eo.tau_c = 400, eo.p = 0.6;
+    assert_int_equal(dfle_law_new_excess_stress(&eo, &builtin[3], NULL), DFLE_OK);
+    for (size_t l = 0; l < 6; l++) {
+        size_t nonzero = 0;
+        /* No op before the programs are compiled and checked against Lua
+         * (the first evaluation does both), then one. */
+        assert_false(dfle_law_has_rate_dlnS(lua[l]));
+        law_at(r, r->rt[0], lua[l], 40, 0.3, NULL);
+        assert_true(dfle_law_has_rate_dlnS(lua[l]));
+        for (size_t q = 0; q < np; q++) {
+            dfle_router *rt = r->rt[pt[q].k];
+            const size_t i = pt[q].i;
+            const double S = pt[q].S, h = pt[q].h;
+            double dE, E = law_at(r, rt, lua[l], i, S, &dE), Em, Ep;
+            if (builtin[l] != NULL) {
+                /* The same flow at S; then held (d = NULL). */
+                dfle_law_ctx ctx = {.n = 1, .S = &S, .A = dfle_network_A(r->net) + i,
+                                    .w = dfle_network_w(r->net) + i, .flow = &r->node};
+                double dEb, Eb = law_at(r, rt, builtin[l], i, S, &dEb), F[2], Eh[2], dEh[2];
+                dfle_error err;
+                assert_close(E, Eb, 1e-13, 0);
+                assert_close(dE, dEb, 1e-10, 1e-12 * fabs(Eb));
+                for (int b = 0; b < 2; b++) {
+                    dfle_law *law = b ? builtin[l] : lua[l];
+                    assert_ok(dfle_law_flow_factor(law, &ctx, &F[b], &err), &err);
+                    assert_ok(dfle_law_rate(law, &ctx, &F[b], &Eh[b], &err), &err);
+                    assert_ok(dfle_law_rate_dlnS(law, &ctx, &F[b], &Eh[b], NULL, &dEh[b], &err),
+                              &err);
+                }
+                assert_close(dEh[0], dEh[1], 1e-10, 1e-12 * fabs(Eb));
+            }
+            Em = law_at(r, rt, lua[l], i, S * exp(-h), NULL);
+            Ep = law_at(r, rt, lua[l], i, S * exp(h), NULL);
+            /* A threshold of the law's own (tau = tau_c, min's switch) is
+             * not a point to difference across. */
+            if ((Em == 0) != (Ep == 0))
+                continue;
+            if (l == 4 && (r->node.h[0] - 2) * (r->node.h[0] - 2) < 1e-6)
+                continue;
+            check_field(dE, Em, Ep, h, 0, fabs(E), dfle_law_name(lua[l]), i, S);
+            nonzero += dE != 0;
+        }
+        assert_true(nonzero > 20);
+    }
+    for (size_t l = 0; l < 6; l++)
+        dfle_law_free(builtin[l]);
+    lua_close(L);
+}
+
+/* No op where the programs cannot give one: a function the tracer
+ * refuses (it branches on a flow field, so runs as Lua), or compile =
+ * false. */
+static void lua_laws_without_rate_dlnS(void **state)
+{
+    rig *r = *state;
+    lua_State *L = lua_with_dfle();
+    dfle_law *refused = lua_law(L, "{ rate = function(c, p)"
+                                   "  if c.h > 1 then return 1e-4 * c.S ^ 2 end"
+                                   "  return 1e-4 * c.S end }");
+    dfle_law *plain = lua_law(L, "{ compile = false,"
+                                 "  rate = function(c, p) return 1e-4 * c.S ^ 2 * c.h end }");
+    law_at(r, r->rt[0], refused, 40, 0.3, NULL);
+    law_at(r, r->rt[0], plain, 40, 0.3, NULL);
+    assert_false(dfle_law_has_rate_dlnS(refused));
+    assert_false(dfle_law_has_rate_dlnS(plain));
+    lua_close(L);
+}
+
+/* The direct steady state with a compiled Lua Eq. (6) law is the
+ * built-in law's, to the solvers' tolerance, and takes Newton's path:
+ * about as many one-node erosions per node as the built-in law, where
+ * differences take about 6.6. */
+static void lua_law_direct_steady_state(void **state)
+{
+    rig *r = *state;
+    lua_State *L = lua_with_dfle();
+    dfle_law *law[2];
+    dfle_power_law_opts po;
+    dfle_stochastic_threshold_opts so;
+    dfle_fluvial *fl;
+    const size_t n = dfle_channel_size(r->ch);
+    double *S = malloc(2 * n * sizeof *S), per[2];
+    dfle_power_law_opts_default(&po);
+    assert_int_equal(dfle_law_new_power(&po, &law[0], NULL), DFLE_OK);
+    law[1] = lua_law(L, "{ params = { k_df = 1e-4, alpha = 6, beta = 1 },"
+                        "  factor = function(c, p) return c.t_p * c.h ^ p.beta * c.Theta end,"
+                        "  rate = function(c, p) return p.k_df * c.S ^ p.alpha * c.F end }");
+    dfle_stochastic_threshold_opts_default(&so);
+    assert_int_equal(dfle_fluvial_new_stochastic_threshold(&so, &fl, NULL), DFLE_OK);
+    for (int k = 0; k < 2; k++) {
+        dfle_model_opts mo;
+        dfle_model *m;
+        dfle_run_opts ro;
+        dfle_run_result res;
+        dfle_error err;
+        dfle_model_opts_default(&mo);
+        mo.channel = r->ch, mo.fluvial = fl, mo.router = r->rt[0], mo.law = law[k];
+        assert_ok(dfle_model_new(&mo, &m, &err), &err);
+        dfle_run_opts_default(&ro);
+        ro.method = DFLE_METHOD_DIRECT;
+        assert_ok(dfle_solver_run(m, &ro, &res, &err), &err);
+        assert_true(res.converged && !res.fallback);
+        memcpy(S + k * n, dfle_model_field(m, DFLE_FIELD_S, &err), n * sizeof *S);
+        per[k] = (double)dfle_model_node_evaluations(m) / (double)(n - 1);
+        dfle_model_free(m);
+    }
+    for (size_t i = 0; i + 1 < n; i++)
+        assert_close(S[n + i], S[i], 1e-10, 0);
+    print_message("one-node erosions per node: built-in %.2f, compiled Lua %.2f\n", per[0],
+                  per[1]);
+    assert_true(per[1] < per[0] + 0.05);
+    free(S);
+    dfle_fluvial_free(fl);
+    dfle_law_free(law[0]);
+    lua_close(L);
+}
+
 int main(void)
 {
     const struct CMUnitTest tests[] = {
@@ -373,6 +576,9 @@ int main(void)
         cmocka_unit_test(laws_rate_dlnS_with_the_flow),
         cmocka_unit_test(laws_rate_dlnS_with_the_flow_held),
         cmocka_unit_test(model_node_erosion_dlnS),
+        cmocka_unit_test(lua_laws_rate_dlnS),
+        cmocka_unit_test(lua_laws_without_rate_dlnS),
+        cmocka_unit_test(lua_law_direct_steady_state),
     };
     return cmocka_run_group_tests(tests, setup, teardown);
 }

@@ -66,7 +66,10 @@ typedef struct dfle_law_ops {
      * stands and only the slope moves).  0 wherever E is 0 by the rate's
      * own rules (S <= 0, F = 0).  With it (and, for a router routed
      * every step, the router's node_flow_dlnS) the node solvers take
-     * Newton steps in ln S; without it they difference E. */
+     * Newton steps in ln S; without it they difference E.  An ops table
+     * may gain and lose this op as its state changes (a law written in
+     * Lua has it while its compiled programs can be differentiated):
+     * callers ask dfle_law_has_rate_dlnS each time, never once for all. */
     int (*rate_dlnS)(void *state, const dfle_law_ctx *ctx, const double *F, const double *E,
                      const dfle_flow_dlnS *d, double *dE, dfle_error *err);
 } dfle_law_ops;

@@ -207,8 +207,10 @@ int dfle_model_node_erosion(dfle_model *m, size_t i, double S, double flows, dou
  * give it: the fluvial law always, the erosion law through its rate_dlnS
  * op and, for a router routed every step, the router through its
  * node_flow_dlnS op (routed rarely, the flow is held: only S moves).
- * dfle_model_node_dlnS says whether they can; when they cannot, *dE is
- * NaN and E is what dfle_model_node_erosion gives. */
+ * dfle_model_node_dlnS says whether they can now (a law written in Lua
+ * can only while its compiled programs can be differentiated: law.h);
+ * when they cannot, *dE is NaN and E is what dfle_model_node_erosion
+ * gives. */
 int dfle_model_node_erosion_dlnS(dfle_model *m, size_t i, double S, double flows, double *E,
                                  double *dE, int *goes_on, dfle_error *err);
 int dfle_model_node_dlnS(const dfle_model *m);

@@ -196,11 +196,6 @@ int dfle_model_new(const dfle_model_opts *o, dfle_model **out, dfle_error *err)
     m->combine = o->df_combine;
     m->frequency = o->df_frequency;
     m->frequency_ud = o->df_frequency_ud;
-    /* Whether the one-node erosion can give dE/d ln S (model_rates.c):
-     * the parts are the model's for life, so this is decided once. */
-    m->node_dlnS = m->rt == NULL ||
-                   (dfle_law_has_rate_dlnS(m->law) &&
-                    (!dfle_router_is_local(m->rt) || dfle_router_has_node_flow_dlnS(m->rt)));
     st = DFLE_OK;
     if (o->channel != NULL)
         st = dfle_network_new_chain(o->channel, &m->own_net, err);

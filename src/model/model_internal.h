@@ -62,7 +62,6 @@ struct dfle_model {
     int flow_valid;      /* flow/F match the last routing         */
     size_t routings;     /* routings since creation               */
     size_t node_evaluations; /* one-node erosions since creation  */
-    int node_dlnS;       /* they can give dE/d ln S too           */
     size_t nonpositive;  /* non-base nodes with S <= 0 at the last evaluation */
 };
 

@@ -412,8 +412,12 @@ static int node_erosion(dfle_model *m, size_t i, double S, double flows, double 
         }
         if ((st = dfle_law_rate(m->law, &ctx, &F, &Edf, err)) != DFLE_OK)
             return st;
-        if (dE != NULL &&
-            (st = dfle_law_rate_dlnS(m->law, &ctx, &F, &Edf, dp, &dEdf, err)) != DFLE_OK)
+        /* The rate just run may have dropped the law's op (a Lua law
+         * whose program failed its check): no derivative, then. */
+        if (dE != NULL && !dfle_law_has_rate_dlnS(m->law))
+            dEdf = NAN;
+        else if (dE != NULL &&
+                 (st = dfle_law_rate_dlnS(m->law, &ctx, &F, &Edf, dp, &dEdf, err)) != DFLE_OK)
             return st;
         /* The combine rule and the scales are constants in S: they
          * multiply E_df and its derivative alike. */
@@ -443,12 +447,18 @@ int dfle_model_node_erosion(dfle_model *m, size_t i, double S, double flows, dou
     return node_erosion(m, i, S, flows, E, NULL, goes_on, err);
 }
 
-int dfle_model_node_dlnS(const dfle_model *m) { return m->node_dlnS; }
+/* Asked each time: a law written in Lua offers rate_dlnS only while its
+ * compiled programs can give it (doc/laws.md). */
+int dfle_model_node_dlnS(const dfle_model *m)
+{
+    return m->rt == NULL || (dfle_law_has_rate_dlnS(m->law) &&
+                             (!dfle_router_is_local(m->rt) || dfle_router_has_node_flow_dlnS(m->rt)));
+}
 
 int dfle_model_node_erosion_dlnS(dfle_model *m, size_t i, double S, double flows, double *E,
                                  double *dE, int *goes_on, dfle_error *err)
 {
-    if (!m->node_dlnS) {
+    if (!dfle_model_node_dlnS(m)) {
         *dE = NAN;
         return node_erosion(m, i, S, flows, E, NULL, goes_on, err);
     }

@@ -20,11 +20,13 @@
  * return a guess.  They differ in where the slope of ln E comes from:
  *
  *  - exact, when the router and the law give dE/d ln S (their optional
- *    node_flow_dlnS and rate_dlnS ops; every built-in one does): one
+ *    node_flow_dlnS and rate_dlnS ops; every built-in one does, and a
+ *    compiled Lua law differentiates its programs, doc/laws.md): one
  *    evaluation per step and a stopping rule that predicts the error of
  *    the step it is about to take, about 2.15 evaluations per node of a
  *    steady state (solve_newton);
- *  - otherwise from values alone (laws and routers written in Lua): the
+ *  - otherwise from values alone (routers written in Lua, laws run as
+ *    Lua): the
  *    root is bracketed first, then a difference derivative and secant
  *    slopes, until a step is below the tolerance, about 6.6 evaluations
  *    per node (solve_secant).

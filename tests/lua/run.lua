@@ -93,6 +93,16 @@ function T.close(a, b, rel, abs, msg)
     end
 end
 
+
+-- A steady profile of a compiled law against the same law run as Lua
+-- (compile = false): the compiled law gives the node solvers dE/d ln S
+-- and takes Newton steps, the Lua law differences E (doc/laws.md), so
+-- their slopes agree to the solvers' tolerance, 1e-10 relative, not to
+-- the bit (their values do: the explicit method's profiles are equal).
+function T.close_to_lua(z, zl, what)
+    T.eq(#z, #zl, what .. ": length")
+    for i = 1, #z do T.close(z[i], zl[i], 1e-10, 0, what .. ", node " .. i) end
+end
 -- The string s matches the Lua pattern p.
 function T.match(s, p, msg)
     if type(s) ~= "string" or not s:find(p) then

@@ -37,14 +37,17 @@ local function steady_z(law, method, router)
     return m:get("z")
 end
 
-tests["Eq. (6) compiles, and equals the law run as Lua bit for bit, every method"] = function()
+tests["Eq. (6) compiles, and equals the law run as Lua, bit for bit by the explicit method"] = function()
     for _, method in ipairs{ "explicit", "implicit", "direct" } do
         local c, l = pair{
             params = { k_df = 1e-4, alpha = 6, beta = 1 },
             factor = function(c, p) return c.t_p * c.h ^ p.beta * c.Theta end,
             rate = function(c, p) return p.k_df * c.S ^ p.alpha * c.F end,
         }
-        bits_equal(steady_z(c, method), steady_z(l, method), method)
+        -- bit for bit by the explicit method; the node solvers take
+        -- Newton steps with the compiled law only (T.close_to_lua)
+        local compare = method == "explicit" and bits_equal or T.close_to_lua
+        compare(steady_z(c, method), steady_z(l, method), method)
         local st = c:compiled()
         T.eq(st.factor, true, method .. ": factor")
         T.eq(st.rate, true, method .. ": rate")
@@ -399,12 +402,12 @@ tests["values read from outside are re-read when the script changes them"] = fun
             factor = function(c, p) return c.t_p * c.h * c.Theta end,
             rate = function(c, p) return kk * c.S ^ 6 * c.F end }
     end
-    bits_equal(steady_z(law, "direct"), steady_z(ref(2e-4), "direct"), "first")
+    T.close_to_lua(steady_z(law, "direct"), steady_z(ref(2e-4), "direct"), "first")
     T.eq(law:compiled().rate, true)
     k = 3e-4 -- an upvalue
-    bits_equal(steady_z(law, "direct"), steady_z(ref(6e-4), "direct"), "upvalue changed")
+    T.close_to_lua(steady_z(law, "direct"), steady_z(ref(6e-4), "direct"), "upvalue changed")
     dfle_test_K = 1 -- a global
-    bits_equal(steady_z(law, "direct"), steady_z(ref(3e-4), "direct"), "global changed")
+    T.close_to_lua(steady_z(law, "direct"), steady_z(ref(3e-4), "direct"), "global changed")
     dfle_test_K = nil
 end
 

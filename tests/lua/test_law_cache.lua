@@ -3,8 +3,9 @@
 -- function reuses the program an earlier law traced and checked, with its
 -- own float params bound, but only while everything else the program
 -- baked in (upvalues, globals, other params, the code itself) is what it
--- was.  Every reuse must give, bit for bit, what a fresh trace and the
--- law run as Lua give.
+-- was.  Every reuse must give, bit for bit, what a fresh trace gives,
+-- and what the law run as Lua gives (to the node solvers' tolerance: see
+-- close_to_lua).
 local tests = {}
 
 local stats = debug.getregistry()["dfle.trace.stats"]
@@ -22,6 +23,8 @@ local function steady_z(law)
 end
 
 local bits_equal = T.bits_equal
+
+local close_to_lua = T.close_to_lua
 
 local function differs(a, b)
     for i = 1, #a do if a[i] ~= b[i] then return true end end
@@ -58,7 +61,7 @@ tests["a law built anew reuses the program, bit for bit a fresh trace and Lua"] 
         T.eq(d.traced, 0, "nothing traced")
         T.eq(d.checked, 0, "a program found is not checked again")
         bits_equal(z, steady_z(eq6(k, 6, { cache = false })), "fresh trace, k_df = " .. k)
-        bits_equal(z, steady_z(eq6(k, 6, { compile = false })), "Lua, k_df = " .. k)
+        close_to_lua(z, steady_z(eq6(k, 6, { compile = false })), "Lua, k_df = " .. k)
     end
     T.ok(differs(steady_z(eq6(2e-4)), steady_z(eq6(1e-4))), "a new k_df gives a new profile")
 end
@@ -78,9 +81,9 @@ tests["an integer param is baked in: another value is traced and checked anew"] 
     T.eq(d.traced, 1, "rate traced again (factor does not read alpha)")
     T.eq(d.checked, 1)
     T.eq(d.found, 1, "factor found")
-    bits_equal(z, steady_z(eq6(1e-4, 5, { compile = false })), "alpha = 5")
+    close_to_lua(z, steady_z(eq6(1e-4, 5, { compile = false })), "alpha = 5")
     -- alpha = 6.0 is a float: read as an input, not the integer's program
-    bits_equal(steady_z(eq6(1e-4, 6.0)), steady_z(eq6(1e-4, 6.0, { compile = false })), "6.0")
+    close_to_lua(steady_z(eq6(1e-4, 6.0)), steady_z(eq6(1e-4, 6.0, { compile = false })), "6.0")
 end
 
 tests["an upvalue changed between models gives the new result"] = function()
@@ -93,7 +96,7 @@ tests["an upvalue changed between models gives the new result"] = function()
     local z2
     local d = counted(function() z2 = steady_z(law()) end)
     T.eq(d.traced, 1, "rate traced again")
-    bits_equal(z2, steady_z(law(false)), "gain = 2.5")
+    close_to_lua(z2, steady_z(law(false)), "gain = 2.5")
     T.ok(differs(z1, z2), "the new gain shows")
     -- closures of one expression with other upvalues: never the other's
     local function make(g) return function(c, p) return g * p.k_df * c.S ^ 6 * c.F end end
@@ -102,7 +105,7 @@ tests["an upvalue changed between models gives the new result"] = function()
         local def = { params = { k_df = 1e-4, beta = 1 }, factor = factor, rate = make(g) }
         zs[i] = steady_z(dfle.law.define(def))
         def.compile = false
-        bits_equal(zs[i], steady_z(dfle.law.define(def)), "closure with g = " .. g)
+        close_to_lua(zs[i], steady_z(dfle.law.define(def)), "closure with g = " .. g)
     end
     T.ok(differs(zs[1], zs[2]))
     bits_equal(zs[1], zs[3], "same upvalue value")
@@ -116,7 +119,7 @@ tests["a global changed between models gives the new result"] = function()
     local z1 = steady_z(law())
     dfle_test_cache_K = 4e-4
     local z2 = steady_z(law())
-    bits_equal(z2, steady_z(law(false)), "K = 4e-4")
+    close_to_lua(z2, steady_z(law(false)), "K = 4e-4")
     T.ok(differs(z1, z2))
     dfle_test_cache_K = 1e-4
     local z3
@@ -139,7 +142,7 @@ tests["two different functions never share a program"] = function()
                                        factor = factor, rate = r6 })
     end)
     T.eq(d.traced, 2, "both rates traced")
-    bits_equal(z5, steady_z(dfle.law.define{ params = { k_df = 1e-4, beta = 1 },
+    close_to_lua(z5, steady_z(dfle.law.define{ params = { k_df = 1e-4, beta = 1 },
                                              factor = factor, rate = r5, compile = false }), "S^5")
     bits_equal(z6, steady_z(eq6(1e-4)), "S^6")
     T.ok(differs(z5, z6))
@@ -167,7 +170,7 @@ tests["the closures of one expression share (ensemble build functions)"] = funct
     local ref = dfle.law.define{ params = { k_df = 2.5e-4, beta = 1 }, compile = false,
         factor = function(c, p) return c.t_p * c.h ^ p.beta * c.Theta end,
         rate = function(c, p) return p.k_df * c.S ^ 6 * c.F end }
-    bits_equal(z, steady_z(ref), "k_df = 2.5e-4")
+    close_to_lua(z, steady_z(ref), "k_df = 2.5e-4")
 end
 
 tests["a param the function compares is baked in, and read again for each law"] = function()
@@ -183,8 +186,8 @@ tests["a param the function compares is baked in, and read again for each law"] 
     local za, zb = steady_z(a), steady_z(b)
     T.eq(a:compiled().rate, true, "compiled with mode as a constant")
     T.eq(b:compiled().rate, true)
-    bits_equal(za, steady_z(law(0.75, false)), "mode = 0.75")
-    bits_equal(zb, steady_z(law(0.25, false)), "mode = 0.25")
+    close_to_lua(za, steady_z(law(0.75, false)), "mode = 0.75")
+    close_to_lua(zb, steady_z(law(0.25, false)), "mode = 0.25")
     T.ok(differs(za, zb))
 end
 
@@ -217,7 +220,7 @@ tests["a program is checked where it is traced, and kept only once checked"] = f
     local d2 = counted(function() z = steady_z(law()) end)
     T.eq(d2.found, 2, "a new law finds both programs")
     T.eq(d2.checked, 0)
-    bits_equal(z, steady_z(dfle.law.define{ params = { k_df = 1e-4, beta = 1 }, factor = factor,
+    close_to_lua(z, steady_z(dfle.law.define{ params = { k_df = 1e-4, beta = 1 }, factor = factor,
         compile = false, rate = function(c, p) return p.k_df * c.S ^ 6 * c.F end,
         frequency = function() return 1 end }), "with frequency")
 end

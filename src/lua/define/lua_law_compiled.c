@@ -16,6 +16,9 @@
  * that program was checked against Lua when it was traced, and is not
  * checked again.  Otherwise the function is traced and checked, and once
  * the check has passed the program goes into the cache.
+ *
+ * For the node solvers the programs are also differentiated forward
+ * (ll_compiled_rate_dlnS, the law's rate_dlnS op while they can be).
  */
 #include "lua/define/lua_law_compiled.h"
 
@@ -271,5 +274,131 @@ void ll_push_compiled(lua_State *L, const lua_law *ll)
     } else if (ll->g_kind == G_LUA) {
         push_status(L, ll, ll->gstate, ll->gwhy);
         lua_setfield(L, -2, "integrand");
+    }
+}
+
+/* ---- dE/d ln S ---------------------------------------------------------- */
+
+/* Whether op's program can give derivatives now: compiled, checked
+ * against Lua, its guards checked at the current epoch (so it is the
+ * program of the function as it stands), and every operation with a
+ * rule (dfle_trace_differentiable). */
+static int deriv_ready(const lua_law *ll, int op)
+{
+    const dfle_trace_prog *p = ll->prog[op];
+    return ll->compile && p != NULL && ll->cstate[op] > 0 && !ll->unchecked[op] &&
+           ll->seen[op] == *ll->epoch && dfle_trace_differentiable(p);
+}
+
+/* The check of a new program runs the function as Lua, which moves the
+ * epoch: the guards of the programs rate_dlnS needs are checked again
+ * here (no Lua runs), so that the op comes as soon as they hold, whether
+ * the programs were traced and checked now or found in the cache (the
+ * same solver path either way).  A guard that fails is left to the next
+ * sweep, which traces again. */
+void ll_compiled_refresh(lua_law *ll)
+{
+    lua_State *T = ll->sh.T;
+    const int ops[2] = {ll->time_resolved ? OP_RATE_TR : OP_RATE,
+                        ll->has_factor && !ll->time_resolved ? OP_FACTOR : -1};
+    for (int k = 0; k < 2; k++) {
+        const int op = ops[k];
+        if (op < 0 || ll->prog[op] == NULL || ll->cstate[op] <= 0 || ll->unchecked[op] ||
+            ll->seen[op] == *ll->epoch)
+            continue;
+        lua_settop(T, SLOT_COUNT);
+        if (dfle_trace_guards_hold(T, SLOT_GUARDS_FACTOR + op, ll->prog[op]))
+            ll->seen[op] = *ll->epoch;
+    }
+}
+
+int ll_compiled_can_dlnS(const lua_law *ll)
+{
+    /* After a time-resolved routing the factor is the held Eq. (11) sum:
+     * only rate's own dependence on S counts. */
+    if (ll->time_resolved)
+        return deriv_ready(ll, OP_RATE_TR);
+    return deriv_ready(ll, OP_RATE) && (!ll->has_factor || deriv_ready(ll, OP_FACTOR));
+}
+
+/* Room for the derivative columns of the inputs (N_IN x n). */
+static double *deriv_buffer(lua_law *ll, size_t n)
+{
+    if (n > ll->dcap) {
+        double *b = realloc(ll->dbuf, (size_t)N_IN * n * sizeof *b);
+        if (b == NULL)
+            return NULL;
+        ll->dbuf = b;
+        ll->dcap = n;
+    }
+    return ll->dbuf;
+}
+
+/* The values of the program of op for the call in progress (ll->ctx,
+ * ll->F_in), then its derivative for the input derivatives din. */
+static const double *program_deriv(lua_law *ll, int op, size_t n, const double *const *din)
+{
+    dfle_trace_prog *p = ll->prog[op];
+    const unsigned used = dfle_trace_inputs(p);
+    const double *src[N_IN];
+    ll->op = op;
+    for (int f = 0; f < N_IN; f++)
+        src[f] = used & (1u << f) ? ll_field_source(ll, f) : NULL;
+    if (dfle_trace_eval_n(p, n, src) == NULL)
+        return NULL;
+    return dfle_trace_deriv_n(p, n, din);
+}
+
+/* Forward mode through the programs (law.h's rate_dlnS).  The inputs
+ * move with ln S as the router says: dS = S, dX = X d ln X for the
+ * positive flow fields, dTheta as given, A and w not at all; with a
+ * factor, dF is the factor program's derivative for those, and rate's
+ * then carries dS and dF on.  A held flow (d NULL) or a time-resolved
+ * one (its factor the Eq. (11) sum) moves S alone.  frequency(A) is a
+ * constant in S: it scales E and dE alike. */
+void ll_compiled_rate_dlnS(lua_law *ll, const dfle_law_ctx *ctx, const double *F,
+                           const double *E, const dfle_flow_dlnS *d, double *dE)
+{
+    const size_t n = ctx->n;
+    const int moving = d != NULL && !ll->time_resolved;
+    const double *din[N_IN] = {NULL}, *dv = NULL;
+    double *buf = deriv_buffer(ll, n);
+
+    ll->ctx = ctx, ll->F_in = F; /* for ll_field_source() */
+    if (buf != NULL && ll_compiled_can_dlnS(ll)) {
+        din[F_S] = ctx->S;
+        if (moving) {
+            static const int field[] = {F_H, F_V, F_T_P, F_TAU, F_Q, F_M, F_THETA};
+            const dfle_flow *fl = ctx->flow;
+            for (size_t i = 0; i < n; i++) {
+                buf[F_H * n + i] = fl->h[i] * d[i].h;
+                buf[F_V * n + i] = fl->v[i] * d[i].v;
+                buf[F_T_P * n + i] = fl->t_p[i] * d[i].t_p;
+                buf[F_TAU * n + i] = fl->tau[i] * d[i].tau;
+                buf[F_Q * n + i] = fl->Q[i] * d[i].Q;
+                buf[F_M * n + i] = fl->M[i] * d[i].M;
+                buf[F_THETA * n + i] = d[i].Theta;
+            }
+            for (size_t k = 0; k < sizeof field / sizeof field[0]; k++)
+                din[field[k]] = buf + (size_t)field[k] * n;
+            if (ll->has_factor) {
+                const double *dF = program_deriv(ll, OP_FACTOR, n, din);
+                if (dF != NULL) {
+                    memcpy(buf + (size_t)F_F * n, dF, n * sizeof *dF);
+                    din[F_F] = buf + (size_t)F_F * n;
+                }
+            }
+        }
+        if (!moving || !ll->has_factor || din[F_F] != NULL)
+            dv = program_deriv(ll, ll->time_resolved ? OP_RATE_TR : OP_RATE, n, din);
+    }
+    for (size_t i = 0; i < n; i++) {
+        size_t at;
+        if (E[i] == 0)
+            dE[i] = 0.0; /* no erosion by the rate's own rules */
+        else if (dv == NULL || (ll->has_frequency && !ll_memo_find(ll, ctx->A[i], &at)))
+            dE[i] = NAN; /* none to give: the solvers then do without */
+        else
+            dE[i] = ll->has_frequency ? dv[i] * ll->fv[at] : dv[i];
     }
 }

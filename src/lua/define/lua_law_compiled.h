@@ -17,6 +17,18 @@ int ll_compiled_sweep(lua_law *ll, int op, const dfle_law_ctx *ctx, const double
  * TRY_LUA when the Lua call must do it. */
 int ll_compiled_integrand(lua_law *ll, double h, double v, double lambda, double *g,
                           dfle_error *err);
+/* Whether the compiled programs can give dE/d ln S now (for the call
+ * after the last flow_factor): compiled, checked against Lua, guards
+ * current, every operation differentiable. */
+int ll_compiled_can_dlnS(const lua_law *ll);
+/* Check again the guards of the programs rate_dlnS needs whose epoch has
+ * moved (inside the shell: T is the law's thread).  Never raises. */
+void ll_compiled_refresh(lua_law *ll);
+/* dE[0..n) = dE/d ln S by forward-mode differentiation of the programs
+ * (law.h's rate_dlnS); NaN where there is none to give (a program not
+ * ready, out of memory, an area not in the frequency memo). */
+void ll_compiled_rate_dlnS(lua_law *ll, const dfle_law_ctx *ctx, const double *F,
+                           const double *E, const dfle_flow_dlnS *d, double *dE);
 /* Push law:compiled()'s table for ll: { factor =, rate =, integrand = },
  * each true (compiled), false (not used yet) or a string (why it runs
  * as Lua). */

@@ -38,6 +38,25 @@
 #include <math.h>
 #include <stdlib.h>
 
+/* law.h's rate_dlnS: forward mode through the compiled programs
+ * (lua_law_compiled.c).  Offered only while they can give it
+ * (offer_dlnS); a law whose programs cannot (refused, not yet checked,
+ * guards moved) has no op, and the solvers difference E instead. */
+static int ll_rate_dlnS(void *state, const dfle_law_ctx *ctx, const double *F, const double *E,
+                        const dfle_flow_dlnS *d, double *dE, dfle_error *err)
+{
+    (void)err;
+    ll_compiled_rate_dlnS(state, ctx, F, E, d, dE);
+    return DFLE_OK;
+}
+
+/* The op comes and goes with the programs: set after every call that may
+ * have compiled, checked or dropped one. */
+static void offer_dlnS(lua_law *ll)
+{
+    ll->ops.rate_dlnS = ll_compiled_can_dlnS(ll) ? ll_rate_dlnS : NULL;
+}
+
 /* One op call: the rate a one-node flow_factor already evaluated (see
  * sweep() in lua_law_sweep.c), else the compiled program if there is
  * one, else the Lua sweep. */
@@ -62,7 +81,10 @@ static int run_sweep(lua_law *ll, int op, const dfle_law_ctx *ctx, const double 
         st = ll_compiled_sweep(ll, op, ctx, F_in, out, err);
     if (st == TRY_LUA)
         st = ll_interpreted_sweep(ll, op, ctx, F_in, out, err);
+    if (st == DFLE_OK && ll->compile)
+        ll_compiled_refresh(ll);
     dfle_lua_shell_leave(&ll->sh);
+    offer_dlnS(ll);
     return st;
 }
 
@@ -72,6 +94,7 @@ static int ll_flow_factor(void *state, const dfle_law_ctx *ctx, double *F, dfle_
     const dfle_flow *fl = ctx->flow;
 
     ll->time_resolved = fl->time_resolved;
+    offer_dlnS(ll); /* which programs count depends on the flow's kind */
     if (ll->has_factor)
         return run_sweep(ll, OP_FACTOR, ctx, NULL, F, err);
     /* No factor: the Eq. (11) sum for a time-resolved flow, else 1 where
@@ -133,6 +156,9 @@ static void ll_destroy(void *state)
     free(ll->fA);
     free(ll->fv);
     free(ll->scratch);
+    free(ll->dbuf);
+    ll->dbuf = NULL;
+    ll->ops.rate_dlnS = NULL;
     ll->shadow = ll->fA = ll->fv = ll->scratch = NULL;
     for (int op = 0; op < N_OPS; op++) {
         dfle_trace_free(ll->prog[op]);

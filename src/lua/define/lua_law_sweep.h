@@ -95,6 +95,8 @@ typedef struct lua_law {
     char gwhy[160];
     double *scratch; /* a compiled sweep checked against Lua */
     size_t scratch_cap;
+    double *dbuf; /* derivative columns of the inputs (ll_compiled_rate_dlnS) */
+    size_t dcap;
     /* The op in progress, read by the sweep. */
     int busy, op;
     const dfle_law_ctx *ctx;

@@ -72,6 +72,18 @@ double dfle_trace_eval(dfle_trace_prog *prog, const double *in);
  * Returns the n values (valid until the next call), NULL if out of memory. */
 const double *dfle_trace_eval_n(dfle_trace_prog *prog, size_t n, const double *const *in);
 
+/* Forward-mode derivative of the values dfle_trace_eval_n has just given
+ * for the same n points: din[f] is the derivative of input f at every
+ * point (NULL: 0, a constant).  Each node carries its derivative along
+ * with its value, by the rule of its operation (a kink, as in abs at 0,
+ * gives NaN; min and max follow the operand they chose; floor, ceil and
+ * // are flat almost everywhere).  Returns the n derivatives of the
+ * result (valid until the next call), NULL if out of memory.  The values
+ * themselves are not touched. */
+const double *dfle_trace_deriv_n(dfle_trace_prog *prog, size_t n, const double *const *din);
+/* 1 when dfle_trace_deriv_n knows the rule of every operation in prog. */
+int dfle_trace_differentiable(const dfle_trace_prog *prog);
+
 /* 1 when every value the program baked in is still what it was (guard
  * table at gidx, from dfle_trace_compile).  Never raises. */
 int dfle_trace_guards_hold(lua_State *L, int gidx, const dfle_trace_prog *prog);

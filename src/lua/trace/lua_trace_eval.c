@@ -118,6 +118,113 @@ const double *dfle_trace_eval_n(dfle_trace_prog *p, size_t n, const double *cons
     return col[p->result];
 }
 
+
+/* ---- derivatives ------------------------------------------------------- */
+
+/* The derivative of r = op(a, b) from those of a and b (da, db).  An
+ * operand whose derivative is 0 contributes nothing, so a constant one
+ * never forms inf * 0 (0^(b-1) with b < 1, a pole of 1/b). */
+static double dapply(int op, double a, double b, double r, double da, double db)
+{
+    double d = 0.0, lb;
+    switch (op) {
+    case T_ADD: return da + db;
+    case T_SUB: return da - db;
+    case T_MUL: return (da != 0 ? da * b : 0.0) + (db != 0 ? a * db : 0.0);
+    case T_DIV: return (da != 0 ? da / b : 0.0) - (db != 0 ? r * db / b : 0.0);
+    /* a - floor(a/b) b and a - trunc(a/b) b: the quotient is flat between
+     * its jumps. */
+    case T_MOD: return da - (db != 0 ? floor(a / b) * db : 0.0);
+    case T_FMOD: return da - (db != 0 ? trunc(a / b) * db : 0.0);
+    case T_IDIV: case T_FLOOR: case T_CEIL: return 0.0;
+    case T_POW:
+        if (da != 0)
+            d = b == 1 ? da : b == 2 ? 2.0 * a * da : b * pow(a, b - 1) * da;
+        if (db != 0)
+            d += r * log(a) * db;
+        return d;
+    case T_UNM: return -da;
+    case T_SQRT: return da != 0 ? da / (2.0 * r) : 0.0;
+    case T_EXP: return da != 0 ? r * da : 0.0;
+    case T_LOG: return da != 0 ? da / a : 0.0;
+    case T_LOGB: /* log(a) / log(b), whichever way apply() forms it */
+        lb = log(b);
+        return (da != 0 ? da / (a * lb) : 0.0) - (db != 0 ? r * db / (b * lb) : 0.0);
+    case T_ABS: return da == 0 ? 0.0 : a > 0 ? da : a < 0 ? -da : NAN; /* kink at 0 */
+    case T_MAX: return a < b ? db : da; /* the operand apply() chose */
+    case T_MIN: return b < a ? db : da;
+    case T_SIN: return da != 0 ? cos(a) * da : 0.0;
+    case T_COS: return da != 0 ? -sin(a) * da : 0.0;
+    case T_TAN: return da != 0 ? da / (cos(a) * cos(a)) : 0.0;
+    case T_ASIN: return da != 0 ? da / sqrt(1.0 - a * a) : 0.0;
+    case T_ACOS: return da != 0 ? -da / sqrt(1.0 - a * a) : 0.0;
+    case T_ATAN: /* atan2(a, b) */
+        return ((da != 0 ? b * da : 0.0) - (db != 0 ? a * db : 0.0)) / (a * a + b * b);
+    case T_DEG: return da * (180.0 / LUA_PI);
+    case T_RAD: return da * (LUA_PI / 180.0);
+    default: return NAN;
+    }
+}
+
+int dfle_trace_differentiable(const dfle_trace_prog *p)
+{
+    for (int k = 0; k < p->n; k++) {
+        const int op = p->node[k].op;
+        /* dapply() has a rule for every operation from T_ADD to T_RAD. */
+        if (op > T_PARAM && !(op >= T_ADD && op <= T_RAD))
+            return 0;
+    }
+    return 1;
+}
+
+/* Forward mode, column by column like dfle_trace_eval_n, whose value
+ * columns (p->col) it reads.  A node none of whose operands moves keeps
+ * the column of zeros: its derivative is exactly 0, whatever its value. */
+const double *dfle_trace_deriv_n(dfle_trace_prog *p, size_t n, const double *const *din)
+{
+    const double **col = p->col, **dcol;
+    const double *zero;
+    if (p->dcol == NULL && (p->dcol = malloc((size_t)p->n * sizeof *p->dcol)) == NULL)
+        return NULL;
+    if (n > p->dcap) {
+        size_t cap = n > 2 * p->dcap ? n : 2 * p->dcap;
+        double *w = malloc((size_t)(p->n + 1) * cap * sizeof *w);
+        if (w == NULL)
+            return NULL;
+        free(p->dwork);
+        p->dwork = w;
+        p->dcap = cap;
+        for (size_t i = 0; i < cap; i++)
+            w[(size_t)p->n * cap + i] = 0.0;
+    }
+    dcol = p->dcol;
+    zero = p->dwork + (size_t)p->n * p->dcap;
+    for (int k = 0; k < p->n; k++) {
+        const tnode *t = &p->node[k];
+        double *r = p->dwork + (size_t)k * p->dcap;
+        const double *a, *b, *da, *db, *v;
+        if (t->op == T_IN) {
+            dcol[k] = din[t->a] != NULL ? din[t->a] : zero;
+            continue;
+        }
+        if (T_IS_CONST(t->op) || (dcol[t->a] == zero && dcol[t->b] == zero)) {
+            dcol[k] = zero;
+            continue;
+        }
+        dcol[k] = r;
+        a = col[t->a], b = col[t->b], v = col[k], da = dcol[t->a], db = dcol[t->b];
+        switch (t->op) {
+        case T_ADD: for (size_t i = 0; i < n; i++) r[i] = da[i] + db[i]; break;
+        case T_SUB: for (size_t i = 0; i < n; i++) r[i] = da[i] - db[i]; break;
+        default:
+            for (size_t i = 0; i < n; i++)
+                r[i] = dapply(t->op, a[i], b[i], v[i], da[i], db[i]);
+            break;
+        }
+    }
+    return dcol[p->result];
+}
+
 unsigned dfle_trace_inputs(const dfle_trace_prog *p) { return p->inputs; }
 
 dfle_trace_prog *dfle_trace_clone(const dfle_trace_prog *src)
@@ -150,6 +257,8 @@ void dfle_trace_free(dfle_trace_prog *p)
     free(p->val);
     free(p->col);
     free(p->work);
+    free(p->dcol);
+    free(p->dwork);
     free(p);
 }
 

@@ -35,6 +35,11 @@ struct dfle_trace_prog {
     const double **col;   /* dfle_trace_eval_n's columns, one per node */
     double *work;         /* their storage: (n + 1) x cap              */
     size_t cap;
+    /* dfle_trace_deriv_n's tangent columns, one per node, and their
+     * storage: (n + 1) x dcap (the last column is zeros). */
+    const double **dcol;
+    double *dwork;
+    size_t dcap;
 };
 
 /* A guard is 4 entries of the guard table: kind, container (a table or
