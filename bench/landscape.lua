@@ -4,7 +4,8 @@
 -- edges closed, one outlet in the middle of the south edge, the Fig. 9
 -- components (the defaults), U = 0.5 mm/yr, channel heads at 1 ha; the
 -- direct method.  Also the direct steady state of rivers alone on larger
--- grids (30 m cells, stream power n = 1, every edge a base level).
+-- grids (30 m cells, stream power n = 1, every edge a base level), and
+-- debris flows on 300^2 cells with the synthetic example's set-up (once).
 -- CPU seconds, best of `reps`; figures only, nothing asserted.
 --
 --   dfle -q bench/landscape.lua [reps]
@@ -42,4 +43,22 @@ print(("Landscape steady states (direct method), CPU s, best of %d:"):format(rep
 time(catchment, "debris flows + rivers, 316^2 x 10 m (1e5 cells)", " (target < 1 s)")
 for _, n in ipairs{ 250, 500 } do
   time(function() return rivers(n) end, ("rivers, %d^2 x 30 m"):format(n))
+end
+
+-- The set-up of examples/landscape_synthetic.lua on 300^2 cells from
+-- noise: base level on the south edge only (flow paths of 9 km), U rising
+-- from 0.5 to 1 mm/yr northwards, both rules for joined debris flows;
+-- channel heads there are steeper than S_c without its cap
+-- (doc/landscape.md, "Channels steeper than S_c").  One run each.
+local function synthetic(rule)
+  local n = 300
+  return dfle.landscape{ nx = n, ny = n, dx = 30, A0 = 1e4, S_c = 0.8, combine = rule,
+                         edges = { south = "base_level", north = "closed", east = "closed",
+                                   west = "closed" },
+                         U = function(_, y) return 5e-4 * (1 + y / (n * 30)) end,
+                         noise = { amplitude = 1, seed = 42 } }
+end
+reps = 1
+for _, rule in ipairs{ "any", "count" } do
+  time(function() return synthetic(rule) end, ("debris flows, 300^2 south edge, %s"):format(rule))
 end

@@ -710,6 +710,19 @@ static void test_log_fit_unbiased_with_lognormal_noise(void **state)
  *     SS_tot = (0.6 - m)^2 + (0.2 - m)^2 + (0.125 - m)^2 = 0.130416667;
  *   log10: residuals log10(1.2), log10(0.8), 0; SS_tot about the mean of
  *     log10 0.6, log10 0.2, log10 0.125. */
+/* Far past A_df with a large a2, Eq. (2) underflows to S = 0; in log
+ * space it is merely far off: log10 S = -log10(1 + A^400) = -400 log10 A
+ * here (A_df = 1, S_df = 1), so the residuals are -399, -798, -1197
+ * against y = -1, -2, -3 (mean -2, SS_tot = 2).  log10(0) made it -inf. */
+static void test_r2_log_without_underflow(void **state)
+{
+    (void)state;
+    const double A[3] = { 10, 100, 1000 }, S[3] = { 0.1, 0.01, 0.001 };
+    double r2 = dfle_eq2_r2(1.0, 1.0, 400.0, 3, A, S, DFLE_RESIDUALS_LOG);
+    assert_true(isfinite(r2));
+    assert_close(r2, 1.0 - (399.0 * 399 + 798.0 * 798 + 1197.0 * 1197) / 2.0, 1e-12, 0);
+}
+
 static void test_r2_by_hand(void **state)
 {
     (void)state;
@@ -791,6 +804,7 @@ int main(void)
         cmocka_unit_test(test_eq2_eval),
         cmocka_unit_test(test_log_fit_unbiased_with_lognormal_noise),
         cmocka_unit_test(test_r2_by_hand),
+        cmocka_unit_test(test_r2_log_without_underflow),
         cmocka_unit_test(test_bins_geometric_mean),
         cmocka_unit_test(test_residuals_checked),
     };

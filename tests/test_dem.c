@@ -646,6 +646,18 @@ static void test_damaged_files(void **state)
     assert_int_equal(dfle_dem_read(p, NULL, &d, &err), DFLE_EINVAL);
     assert_null(d);
     assert_msg_contains(err.msg, "word.asc' line 7: 'x' is not a number");
+    /* A header value GDAL would read as NoData 0, making the real
+     * marker's cells elevations. */
+    snprintf(text, sizeof text, "%sNODATA_value abc\n1 2 3\n4 -9999 6\n7 8 9\n", head);
+    p = write_tmp("nodata_word.asc", text);
+    assert_int_equal(dfle_dem_read(p, NULL, &d, &err), DFLE_EINVAL);
+    assert_null(d);
+    assert_msg_contains(err.msg, "line 6: the header's NODATA_value is 'abc', not a number");
+    snprintf(text, sizeof text, "ncols 3\nnrows 3\nxllcorner 0\nyllcorner 0 0\ncellsize 10\n"
+             "1 2 3\n4 5 6\n7 8 9\n");
+    p = write_tmp("two_words.asc", text);
+    assert_int_equal(dfle_dem_read(p, NULL, &d, &err), DFLE_EINVAL);
+    assert_msg_contains(err.msg, "yllcorner is '0 0'");
     /* A decimal comma. */
     snprintf(text, sizeof text, "%s1 2 3\n4 5,5 6\n7 8 9\n", head);
     p = write_tmp("comma.asc", text);

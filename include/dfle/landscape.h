@@ -24,7 +24,10 @@
  *    model's per-node root solve (solver.h, dfle_solver_node_slope).
  *  - Hillslope cells (A < A_0) are not eroded by channel processes: they
  *    rise with uplift until their slope to the receiver reaches S_c
- *    (THRESHOLD), or diffuse (DIFFUSION, implicit).
+ *    (THRESHOLD), or diffuse (DIFFUSION, implicit).  With THRESHOLD and
+ *    cap_channels (the default) S_c caps channel cells too: it is the
+ *    steepest slope the material holds, and a channel head steeper than
+ *    the hillslopes beside it has no steady state (doc/landscape.md).
  *  - Every root of the routing (a cell that drains off the grid, or the
  *    lowest pit of a region with no way out) is a base level, held at
  *    its elevation.
@@ -100,6 +103,7 @@ typedef struct dfle_landscape_opts {
     double k_w, b;               /* channel width w = k_w A^b [m] (0.05, 0.3) */
     int hillslope;               /* enum dfle_hillslope          (THRESHOLD) */
     double S_c;                  /* THRESHOLD: critical slope [-] > 0 (0.8) */
+    int cap_channels;            /* THRESHOLD: S_c caps channel cells too (1) */
     double D;                    /* DIFFUSION: diffusivity [m^2/yr] > 0 (0.01) */
     dfle_landscape_field U;      /* uplift [m/yr] > 0             (5e-4)   */
     dfle_landscape_field K_scale;  /* multiplier of K, >= 0         (1)      */

@@ -584,10 +584,15 @@ static void fit_stats(const double *p, size_t n, const double *A, const double *
     int lg = space == DFLE_RESIDUALS_LOG;
     for (size_t i = 0; i < n; i++)
         mean += (lg ? log10(S[i]) : S[i]) / (double)n;
+    /* log10 of the model from its logarithm (eq2_model_log): Eq. (2)
+     * underflows to S = 0 far past A_df when a2 is large, and log10(0)
+     * made R^2 -inf and the RMS inf for a fit that is merely poor there. */
+    const double u[3] = { log(p[0]), log(p[1]), p[2] };
     for (size_t i = 0; i < n; i++) {
         double y = lg ? log10(S[i]) : S[i];
-        double f = dfle_eq2_eval(p[0], p[1], p[2], A[i]);
-        double r = (lg ? log10(f) : f) - y;
+        double f = lg ? eq2_model_log(u, log(A[i]), NULL) / log(10.0)
+                      : dfle_eq2_eval(p[0], p[1], p[2], A[i]);
+        double r = f - y;
         ss_res += r * r;
         ss_tot += (y - mean) * (y - mean);
     }

@@ -95,7 +95,7 @@ static int simplex(job *jb, double *u, const double *step, double *fval, int *co
     gsl_vector *x = gsl_vector_alloc(n), *ss = gsl_vector_alloc(n);
     gsl_multimin_function fn;
     double mean_step = 0, *trial = malloc(n * sizeof *trial);
-    int st = DFLE_OK;
+    int st = DFLE_OK, iterated = 0;
 
     *converged = 0;
     if (s == NULL || x == NULL || ss == NULL || trial == NULL) {
@@ -137,6 +137,7 @@ static int simplex(job *jb, double *u, const double *step, double *fval, int *co
             goto fatal;
         if (it != GSL_SUCCESS)
             break;
+        iterated = 1;
         if (gsl_multimin_test_size(gsl_multimin_fminimizer_size(s),
                                    (jb->o->tol > 0 ? jb->o->tol : 1e-6) * mean_step) ==
             GSL_SUCCESS) {
@@ -144,8 +145,17 @@ static int simplex(job *jb, double *u, const double *step, double *fval, int *co
             break;
         }
     }
-    memcpy(u, gsl_multimin_fminimizer_x(s)->data, n * sizeof *u);
-    *fval = gsl_multimin_fminimizer_minimum(s);
+    /* GSL sets the minimizer's best point and value in iterate, not in
+     * set: with no successful iteration (a simplex that cannot make
+     * progress from the start) they are unset, and the start stands. */
+    if (iterated) {
+        memcpy(u, gsl_multimin_fminimizer_x(s)->data, n * sizeof *u);
+        *fval = gsl_multimin_fminimizer_minimum(s);
+    } else {
+        *fval = rss_at(jb, u);
+        if (jb->status != DFLE_OK)
+            goto fatal;
+    }
     goto done;
 fatal:
     st = jb->status;

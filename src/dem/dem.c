@@ -22,6 +22,7 @@
 #include <math.h>
 #include <stdlib.h>
 #include <string.h>
+#include <strings.h> /* strcasecmp */
 
 #include "base/gdal_lib.h" /* GDAL, loaded by the first dfle_dem_read */
 
@@ -98,6 +99,33 @@ static int check_geometry(const char *path, const double gt[6], int nx, int ny, 
     return DFLE_OK;
 }
 
+/* A header keyword's value must be one number: GDAL reads
+ * "NODATA_value abc" as NoData 0, so that the file's real marker (say
+ * -9999) becomes an elevation and the cells it marks deep pits. */
+static int check_header_value(const char *path, size_t line, const char *key, char *value,
+                              dfle_error *err)
+{
+    static const char *const keys[] = { "ncols", "nrows", "xllcorner", "yllcorner", "xllcenter",
+                                         "yllcenter", "cellsize", "dx", "dy", "nodata_value" };
+    size_t i, len = strlen(value);
+    char *start = value, *end;
+
+    for (i = 0; i < sizeof keys / sizeof keys[0]; i++)
+        if (strcasecmp(key, keys[i]) == 0)
+            break;
+    if (i == sizeof keys / sizeof keys[0])
+        return DFLE_OK; /* a keyword GDAL knows and we do not: its business */
+    while (len > 0 && (value[len - 1] == ' ' || value[len - 1] == '\t' || value[len - 1] == '\r'))
+        value[--len] = '\0';
+    while (*start == ' ' || *start == '\t')
+        start++;
+    (void)strtod(start, &end);
+    if (end == start || *end != '\0')
+        return dfle_error_set(err, DFLE_EINVAL, "dem: '%s' line %zu: the header's %s is '%s', "
+                              "not a number; is the header damaged?", path, line, key, start);
+    return DFLE_OK;
+}
+
 /* GDAL's ESRI ASCII reader takes a word it cannot parse ("x", "1,5")
  * as 0 and ignores values past the last row, both without a word; a
  * hand-edited or script-written grid gets both wrong often enough to
@@ -128,8 +156,13 @@ static int check_ascii_values(const char *path, size_t n, dfle_error *err)
         /* Header lines start with a keyword (ncols, cellsize, ...):
          * skip the line; values begin at the first numeric word. */
         if (in_header && ((word[0] >= 'a' && word[0] <= 'z') || (word[0] >= 'A' && word[0] <= 'Z'))) {
+            char value[128];
+            size_t vlen = 0;
             while ((c = getc(f)) != EOF && c != '\n')
-                ;
+                if (vlen + 1 < sizeof value)
+                    value[vlen++] = (char)c;
+            value[vlen] = '\0';
+            st = check_header_value(path, line, word, value, err);
             line++;
             continue;
         }

@@ -31,6 +31,7 @@ void dfle_landscape_opts_default(dfle_landscape_opts *o)
     o->b = 0.3;
     o->hillslope = DFLE_HILLSLOPE_THRESHOLD;
     o->S_c = 0.8;
+    o->cap_channels = 1;
     o->D = 0.01;
     o->U.value = 5e-4;
     o->K_scale.value = 1.0;
@@ -48,12 +49,15 @@ static int check_field(const dfle_landscape *ls, const ls_field *f, dfle_error *
         if (isnan(ls->z[c]))
             continue;
         v = ls_value(f, c);
-        if (!(isfinite(v) && (f->strict ? v > f->lo : v >= f->lo)))
+        if (!(isfinite(v) && (f->strict ? v > f->lo : v >= f->lo))) {
+            char when[64] = "";
+            if (f->fn != NULL) /* a function of time: when it gave it */
+                snprintf(when, sizeof when, " at t = %g yr", ls->time);
             return dfle_error_set(err, DFLE_EINVAL,
                                   "landscape: %s is %g at cell %zu (row %zu, column %zu)%s; it "
                                   "must be finite and %s %g", f->name, v, c, c / ls->nx,
-                                  c % ls->nx, f->fn != NULL ? " at t = " : "",
-                                  f->strict ? ">" : ">=", f->lo);
+                                  c % ls->nx, when, f->strict ? ">" : ">=", f->lo);
+        }
         if (f->grid == NULL)
             break; /* uniform: one check does */
     }
@@ -135,6 +139,7 @@ void dfle_landscape_free(dfle_landscape *ls)
     dfle_network_free(ls->net);
     dfle_drainage_free(ls->dr);
     free(ls->z);
+    free(ls->z_undo);
     free(ls->rcv_prev);
     free(ls->dzdt);
     free(ls->U.grid);
@@ -337,6 +342,7 @@ size_t dfle_landscape_memory(const dfle_landscape *ls)
 {
     size_t b = sizeof *ls + dfle_drainage_memory(ls->dr);
     b += ls->n * (sizeof *ls->z + sizeof *ls->rcv_prev + sizeof *ls->dzdt);
+    b += (ls->z_undo != NULL) * ls->n * sizeof *ls->z_undo;
     b += (ls->U.grid != NULL) * ls->n * sizeof(double);
     b += (ls->K_scale.grid != NULL) * ls->n * sizeof(double);
     b += (ls->df_scale.grid != NULL) * ls->n * sizeof(double);

@@ -8,7 +8,11 @@
  *    S = (U / K A^m)^(1/n).  Where flows arrive: the model's per-node
  *    root solve of E_f + E_df = U (solver.h, dfle_solver_node_slope),
  *    which also says whether the flows go on (tau >= tau_y at that
- *    slope: exactly the runout rule).  Elevations then follow from base
+ *    slope: exactly the runout rule).  With threshold hillslopes and
+ *    cap_channels, a slope above S_c is held at S_c and the flows go on
+ *    or stop by their verdict there (a head steeper than the hillslope
+ *    beside it loses its donors to it, and back, every round: no steady
+ *    network; doc/landscape.md).  Elevations then follow from base
  *    level up, z = z_r + S L, in stack order.
  *  - Threshold hillslopes (A < A_0).  A hillslope cell rises with U
  *    until it stands S_c above its steepest-descent receiver, so at
@@ -145,6 +149,7 @@ static int channel_slopes(dfle_landscape *ls, double *S, double *flows, dfle_err
         for (size_t k = 0; k < ls->n_data; k++)
             flows[k] = src[k];
     }
+    const int cap = ls->o.hillslope == DFLE_HILLSLOPE_THRESHOLD && ls->o.cap_channels;
     for (size_t k = n_stack; k-- > 0;) {
         const size_t c = stack[k], r = rcv[c];
         const double U = ls_value(&ls->U, c);
@@ -167,6 +172,18 @@ static int channel_slopes(dfle_landscape *ls, double *S, double *flows, dfle_err
                                         &S[c], &goes_on, err);
             if (st != DFLE_OK)
                 return st;
+            if (cap && S[c] > ls->o.S_c) {
+                /* Held at S_c (E < U there: the rest fails as a
+                 * hillslope does); whether the flows go on is decided
+                 * at that slope, as the model's routing of this surface
+                 * will decide it. */
+                double E;
+                S[c] = ls->o.S_c;
+                st = dfle_model_node_erosion(ls->model, node, S[c], flows[node], &E, &goes_on,
+                                             err);
+                if (st != DFLE_OK)
+                    return st;
+            }
             if (goes_on)
                 flows[ls->node_of[r]] += flows[node];
         } else {
@@ -177,6 +194,8 @@ static int channel_slopes(dfle_landscape *ls, double *S, double *flows, dfle_err
                                       "erosion and no debris flow reaches it", c, c / ls->nx,
                                       c % ls->nx, A[c]);
             S[c] = pow(U / (Kc * pow(A[c], ls->m_exp)), 1.0 / ls->n_exp);
+            if (cap && S[c] > ls->o.S_c)
+                S[c] = ls->o.S_c;
         }
     }
     return DFLE_OK;

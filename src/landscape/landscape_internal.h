@@ -112,6 +112,9 @@ struct dfle_landscape {
     double time;               /* [yr]                                  */
 
     double *z;                 /* n: elevations, NaN = NoData           */
+    double *z_undo;            /* n: z before the step under way (made on
+                                * the first step; a step that leaves no
+                                * surface is undone from it)            */
     dfle_drainage *dr;
     int routed;                /* the routing matches z                 */
     uint32_t *rcv_prev;        /* receivers of the previous routing     */

@@ -35,7 +35,9 @@
 #include <string.h>
 
 /* The direct rounds give up when they have not reached a new fewest
- * number of receiver changes for this many rounds. */
+ * number of receiver changes for this many rounds, or for as many
+ * rounds as the grid is wide (the square root of its data cells), if
+ * that is more (run_direct says why). */
 #define DIRECT_STALL 30
 
 void dfle_landscape_run_opts_default(dfle_landscape_run_opts *o)
@@ -132,6 +134,20 @@ static double fraction(const dfle_landscape_run_opts *o, double t, double max_ti
     return f < 0 ? 0 : f > 1 ? 1 : f;
 }
 
+/* Channel cells of the current routing steeper than S_c. */
+static size_t steeper_channels(dfle_landscape *ls)
+{
+    const uint32_t *rcv = dfle_drainage_receivers(ls->dr);
+    const unsigned char *dir = dfle_drainage_dir(ls->dr);
+    const double *A = dfle_drainage_area(ls->dr);
+    size_t k = 0;
+    for (size_t c = 0; c < ls->n; c++)
+        if (rcv[c] != c && A[c] >= ls->o.A0 &&
+            ls->z[c] - ls->z[rcv[c]] > ls->o.S_c * (1.0 + 1e-9) * ls->len[dir[c]])
+            k++;
+    return k;
+}
+
 /* Rounds of the direct method until the criterion holds.  DFLE_EFIT
  * (with why) when a cell has no steady slope (*stalled = 0: nothing to
  * go on from) or when the rounds stop approaching a fixed network
@@ -143,14 +159,22 @@ static double fraction(const dfle_landscape_run_opts *o, double t, double max_ti
  * needed grow with the size of the grid: about 30 on 100 x 100 cells
  * from noise, 50-70 on 200 x 200.  The rounds stop when the criterion
  * holds (the last rcv_tol-stable routings count towards stable_steps);
- * they give up when the fewest changes so far came DIRECT_STALL rounds
+ * they give up when the fewest changes so far came `patience` rounds
  * ago (a network that cycles between near-equal routings), or after
- * max_steps rounds. */
+ * max_steps rounds.  The patience is DIRECT_STALL rounds or as many as
+ * the grid is wide: a capture (a basin switching outlets) changes
+ * hundreds of receivers and then needs rounds in proportion to the
+ * length of its flow paths to settle, since each round moves the
+ * network about one cell further; on 300 x 300 cells draining to one
+ * edge the changes stayed above their fewest for 147 rounds after
+ * such a capture and then fell below rcv_tol. */
 static int run_direct(dfle_landscape *ls, const dfle_landscape_run_opts *o,
                       dfle_landscape_result *res, dfle_landscape_status *st, int *stalled,
                       dfle_error *err)
 {
     size_t rounds = 0, fewest = SIZE_MAX, fewest_at = 0;
+    const size_t wide = (size_t)sqrt((double)ls->n_data);
+    const size_t patience = wide > DIRECT_STALL ? wide : DIRECT_STALL;
     int s;
 
     *stalled = 0;
@@ -180,7 +204,7 @@ static int run_direct(dfle_landscape *ls, const dfle_landscape_run_opts *o,
                 return dfle_error_set(err, DFLE_ECANCELED, "landscape: run stopped by its step "
                                       "callback");
         }
-        if (rounds >= o->max_steps || (rounds > 0 && rounds - fewest_at >= DIRECT_STALL)) {
+        if (rounds >= o->max_steps || (rounds > 0 && rounds - fewest_at >= patience)) {
             const char *why = rounds >= o->max_steps ? "reached max_steps"
                                                      : "stopped approaching a fixed network";
             *stalled = 1;
@@ -190,6 +214,18 @@ static int run_direct(dfle_landscape *ls, const dfle_landscape_run_opts *o,
                                       "|dz/dt| > tol U (allowed %.3g%%; cells below divides "
                                       "that flip)", why, rounds, 100 * st->frac_above,
                                       100 * (1 - o->quantile));
+            if (ls->o.hillslope == DFLE_HILLSLOPE_THRESHOLD && !ls->o.cap_channels) {
+                /* The likely cause, named (doc/landscape.md, "Channels
+                 * steeper than S_c"): such heads have no steady network. */
+                size_t steep = steeper_channels(ls);
+                if (steep > 0)
+                    return dfle_error_set(err, DFLE_EFIT, "the direct rounds %s after %zu "
+                                          "rounds (%zu cells changed receiver in the last, %zu "
+                                          "allowed; %zu channel cells are steeper than S_c, "
+                                          "cap_channels = false)", why, rounds,
+                                          ls->rcv_changes,
+                                          (size_t)floor(ls->rcv_tol * (double)ls->n_data), steep);
+            }
             return dfle_error_set(err, DFLE_EFIT, "the direct rounds %s after %zu rounds (%zu "
                                   "cells changed receiver in the last, %zu allowed; the "
                                   "fewest, %zu, in round %zu)", why, rounds, ls->rcv_changes,

@@ -19,11 +19,14 @@
  * model's per-node root solve (solver.h), E = E_f + E_df; the flows are
  * those routed at the start of the step (lagged one step, as the 1D
  * implicit solver lags the runout).  Hillslope cells rise with U and are
- * capped at S_c above their receiver (THRESHOLD), or diffuse after the
- * sweep (DIFFUSION).  O(n), no linear system, no stability limit.
+ * capped at S_c above their receiver (THRESHOLD; channel cells too with
+ * cap_channels, the excess counted as hillslope volume), or diffuse
+ * after the sweep (DIFFUSION).  O(n), no linear system, no stability
+ * limit.
  */
 #include "landscape/landscape_internal.h"
 
+#include <float.h>
 #include <math.h>
 #include <stdlib.h>
 #include <string.h>
@@ -77,14 +80,18 @@ void ls_ratios(const dfle_landscape *ls, double tol, double quantile, dfle_lands
     size_t hist[Q_BINS], count = 0, above = 0;
     double sum = 0.0, mx = 0.0;
     const int uniform = ls->U.grid == NULL;
-    const double inv_U = 1.0 / ls->U.value;
 
     memset(hist, 0, sizeof hist);
     for (size_t c = 0; c < ls->n; c++) {
         double r;
         if (rcv[c] == c) /* base levels and NoData */
             continue;
-        r = fabs((double)ls->dzdt[c]) * (uniform ? inv_U : 1.0 / ls->U.grid[c]);
+        /* Divided, not multiplied by 1/U: a subnormal U (valid, > 0)
+         * has 1/U = inf, and 0 * inf made the mean NaN where nothing
+         * changed.  A ratio that overflows stops at DBL_MAX, as the
+         * model's rate_ratio does (a result scripts print and compare). */
+        r = fabs((double)ls->dzdt[c]) / (uniform ? ls->U.value : ls->U.grid[c]);
+        r = r <= DBL_MAX ? r : DBL_MAX;
         count++;
         sum += r;
         mx = r > mx ? r : mx;
@@ -92,7 +99,7 @@ void ls_ratios(const dfle_landscape *ls, double tol, double quantile, dfle_lands
         hist[q_bin((float)r)]++;
     }
     st->max_ratio = mx;
-    st->mean_ratio = count > 0 ? sum / (double)count : 0.0;
+    st->mean_ratio = count > 0 ? fmin(sum, DBL_MAX) / (double)count : 0.0; /* (sum may overflow) */
     st->frac_above = count > 0 ? (double)above / (double)count : 0.0;
     st->q_ratio = 0.0;
     if (count > 0) {
@@ -176,6 +183,53 @@ static void status_network(const dfle_landscape *ls, dfle_landscape_status *st)
     st->heads = ls->model != NULL ? ls->heads : 0;
 }
 
+/* A step that failed part-way: the surface as it was, nothing
+ * evaluated. */
+static int step_undone(dfle_landscape *ls, const double *z_before, int status)
+{
+    memcpy(ls->z, z_before, ls->n * sizeof *ls->z);
+    ls->routed = 0;
+    ls->model_z_current = 0;
+    ls->have_rates = 0;
+    return status;
+}
+
+/* The surface before a step, kept in the landscape (so that nothing
+ * leaks if a callback raises through the step), to undo a step that
+ * leaves no surface. */
+static int keep_surface(dfle_landscape *ls, dfle_error *err)
+{
+    if (ls->z_undo == NULL && (ls->z_undo = malloc(ls->n * sizeof *ls->z_undo)) == NULL)
+        return dfle_error_set(err, DFLE_ENOMEM, "landscape: out of memory for a step of %zu cells",
+                              ls->n);
+    memcpy(ls->z_undo, ls->z, ls->n * sizeof *ls->z);
+    return DFLE_OK;
+}
+
+/* Everything a step produced is checked: a step of 1e300 yr, or a U of
+ * 1e300 m/yr, overflowed the volumes and made the diffusion solve NaN,
+ * and the step "succeeded" with a surface that was none.  `vol` holds
+ * the step's volumes [m] (uplift, fluvial, debris flows, hillslope,
+ * change). */
+static int check_surface(dfle_landscape *ls, double dt, const double vol[5], double VU,
+                         double Vh, dfle_error *err)
+{
+    size_t finite = 0;
+    int vol_ok = 1;
+    for (size_t c = 0; c < ls->n; c++)
+        finite += isfinite(ls->z[c]) != 0;
+    for (int k = 0; k < 5; k++) /* each as reported: times the cell area */
+        vol_ok &= isfinite(vol[k] * ls->cell_area) != 0;
+    if (finite == ls->n_data && vol_ok)
+        return DFLE_OK;
+    dfle_error_set(err, DFLE_EINVAL, "landscape: a step of dt = %g yr gave %s (uplift volume %g "
+                   "m^3, hillslope %g m^3); it was undone: take shorter steps, or check U", dt,
+                   finite != ls->n_data ? "elevations that are not finite"
+                                        : "volumes that are not finite",
+                   VU * ls->cell_area, Vh * ls->cell_area);
+    return step_undone(ls, ls->z_undo, DFLE_EINVAL);
+}
+
 /* Cells a debris flow reaches, on the flow just evaluated. */
 static size_t count_reached(const dfle_landscape *ls)
 {
@@ -195,6 +249,7 @@ int ls_implicit_step(dfle_landscape *ls, double dt, double tol, double quantile,
     const double A0 = ls->o.A0, K = ls->K, mexp = ls->m_exp, nexp = ls->n_exp;
     const double Sc = ls->o.S_c, ca = ls->cell_area;
     const int hill = ls->o.hillslope, sqrt_m = mexp == 0.5, n_one = nexp == 1.0;
+    const int cap_ch = hill == DFLE_HILLSLOPE_THRESHOLD && ls->o.cap_channels;
     double *z = ls->z;
     double VU = 0, Vf = 0, Vdf = 0, Vh = 0, dV = 0;
     size_t n_stack, reached = 0;
@@ -202,10 +257,14 @@ int ls_implicit_step(dfle_landscape *ls, double dt, double tol, double quantile,
     double t0 = cpu_seconds(), t1;
 
     double Ln[8]; /* L^n by direction */
+    double *z_before;
     for (int d = 0; d < 8; d++)
         Ln[d] = n_one ? ls->len[d] : pow(ls->len[d], nexp);
     if ((st_ = ls_route(ls, err)) != DFLE_OK)
         return st_;
+    if ((st_ = keep_surface(ls, err)) != DFLE_OK)
+        return st_;
+    z_before = ls->z_undo;
     t1 = cpu_seconds();
     if (ls->model != NULL) {
         if ((st_ = ls_model_evaluate(ls, err)) != DFLE_OK)
@@ -247,7 +306,7 @@ int ls_implicit_step(dfle_landscape *ls, double dt, double tol, double quantile,
                 st_ = dfle_solver_node_slope(ls->model, node, U + (z0 - z[r]) / dt, L / dt, flows,
                                              Sm[node], &S, NULL, err);
                 if (st_ != DFLE_OK)
-                    return st_;
+                    return step_undone(ls, z_before, st_);
                 zn = z[r] + S * L;
                 Ef = ls_fluvial_rate(ls, c, A[c], S) * dt;
                 Vf += Ef;
@@ -263,6 +322,10 @@ int ls_implicit_step(dfle_landscape *ls, double dt, double tol, double quantile,
                     zn = z[r] + d;
                     Vf += d0 - d;
                 }
+            }
+            if (cap_ch && zn > z[r] + Sc * L) { /* S_c caps channels too */
+                Vh += zn - (z[r] + Sc * L);
+                zn = z[r] + Sc * L;
             }
         } else if (hill == DFLE_HILLSLOPE_THRESHOLD) {
             const double cap = z[r] + Sc * L;
@@ -284,7 +347,7 @@ int ls_implicit_step(dfle_landscape *ls, double dt, double tol, double quantile,
         for (size_t c = 0; c < ls->n; c++)
             before += isnan(z[c]) ? 0.0 : z[c];
         if ((st_ = ls_diffuse(ls, dt, err)) != DFLE_OK)
-            return st_;
+            return step_undone(ls, z_before, st_);
         for (size_t c = 0; c < ls->n; c++)
             after += isnan(z[c]) ? 0.0 : z[c];
         /* What diffusion moved into channel and base cells left the
@@ -292,6 +355,9 @@ int ls_implicit_step(dfle_landscape *ls, double dt, double tol, double quantile,
         Vh += before - after;
         dV += after - before;
     }
+    if ((st_ = check_surface(ls, dt, (const double[5]){VU, Vf, Vdf, Vh, dV}, VU, Vh, err))
+        != DFLE_OK)
+        return st_;
     if (st != NULL) {
         st->route_seconds = t1 - t0;
         st->solve_seconds = cpu_seconds() - t1;
@@ -338,6 +404,7 @@ int ls_evaluate_rates(dfle_landscape *ls, double tol, double quantile,
     const uint32_t *rcv;
     const unsigned char *dir;
     const double *A, *Edf = NULL;
+    const int cap = ls->o.hillslope == DFLE_HILLSLOPE_THRESHOLD && ls->o.cap_channels;
     int s;
 
     if ((s = ls_route(ls, err)) != DFLE_OK)
@@ -361,9 +428,11 @@ int ls_evaluate_rates(dfle_landscape *ls, double tol, double quantile,
         }
         U = ls_value(&ls->U, c);
         S = (ls->z[c] - ls->z[rcv[c]]) / ls->len[dir[c]];
-        if (A[c] >= ls->o.A0)
+        if (A[c] >= ls->o.A0) {
             r = U - ls_fluvial_rate(ls, c, A[c], S) - (Edf != NULL ? Edf[ls->node_of[c]] : 0.0);
-        else if (ls->o.hillslope == DFLE_HILLSLOPE_THRESHOLD)
+            if (r > 0 && cap && S >= ls->o.S_c * (1.0 - 1e-9))
+                r = 0.0; /* held at S_c: what erosion leaves fails */
+        } else if (ls->o.hillslope == DFLE_HILLSLOPE_THRESHOLD)
             r = S >= ls->o.S_c * (1.0 - 1e-9) ? 0.0 : U; /* held at S_c, or rising */
         else if (ls->o.hillslope == DFLE_HILLSLOPE_DIFFUSION)
             r = U + laplacian(ls, c);
@@ -416,6 +485,8 @@ int ls_explicit_step(dfle_landscape *ls, double dt_cap, double cfl, double tol,
         double h = fmin(ls->o.dx, ls->o.dy);
         dt = fmin(dt, cfl * h * h / (4.0 * ls->o.D));
     }
+    if ((s = keep_surface(ls, err)) != DFLE_OK)
+        return s;
     /* Rates were evaluated at the old surface: apply them, then the
      * threshold in stack order (receivers first). */
     for (size_t k = 0; k < n_stack; k++) {
@@ -430,6 +501,11 @@ int ls_explicit_step(dfle_landscape *ls, double dt_cap, double cfl, double tol,
             double Ef = ls_fluvial_rate(ls, c, A[c], S > 0 ? S : 0);
             Vf += Ef * dt;
             Vdf += (U - ls->dzdt[c]) * dt - Ef * dt;
+            if (ls->o.hillslope == DFLE_HILLSLOPE_THRESHOLD && ls->o.cap_channels &&
+                zn > ls->z[r] + ls->o.S_c * ls->len[dir[c]]) { /* S_c caps channels too */
+                Vh += zn - (ls->z[r] + ls->o.S_c * ls->len[dir[c]]);
+                zn = ls->z[r] + ls->o.S_c * ls->len[dir[c]];
+            }
         }
         if (!(A[c] >= ls->o.A0) && ls->o.hillslope == DFLE_HILLSLOPE_THRESHOLD) {
             double cap = ls->z[r] + ls->o.S_c * ls->len[dir[c]];
@@ -446,6 +522,8 @@ int ls_explicit_step(dfle_landscape *ls, double dt_cap, double cfl, double tol,
     }
     ls->routed = 0;
     ls->model_z_current = 0;
+    if ((s = check_surface(ls, dt, (const double[5]){VU, Vf, Vdf, Vh, dV}, VU, Vh, err)) != DFLE_OK)
+        return s;
     *dt_out = dt;
     if (st != NULL) {
         ls_ratios(ls, tol, quantile, st);

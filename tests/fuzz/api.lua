@@ -181,6 +181,7 @@ local function run_opts(S, steady)
         o.method = r.pick{ "explicit", "implicit" }
         if r.chance(0.3) then o.rtol = 1e-2 end
         if r.chance(0.3) then o.record = { 0, o.years / 2, o.years } end
+        if o.record and r.chance(0.3) then o.netcdf = S.path("nc") end
     end
     return o
 end
@@ -420,6 +421,145 @@ T["dfle.profile:write_csv"] = function(S)
 end
 T["dfle.profile:channel"] = function(S) return pack({ dx = S.r.pick{ 5, 50 } }) end
 
+T["dfle.channel:params"] = function(S) return pack() end
+T["dfle.fluvial:params"] = function(S) return pack() end
+T["dfle.model:params"] = function(S) return pack() end
+T["dfle.model:write_record"] = function(S)
+    local p = S.path("json")
+    return pack(p), nil, S.legal and "write" or nil
+end
+T["dfle.profile:main_stem"] = function(S) return pack() end
+T["dfle.dem:write_geotiff"] = function(S)
+    return pack(S.path("tif"), S.r.chance(0.5) and { layers = { S.r.pick{ "z", "area", "d8", "slope", "channels" } } } or nil)
+end
+
+-- Outputs of a script's own: tables, fits, directories.
+local function a_fit(S)
+    local ok, fit = pcall(dfle.fit_slope_area, sa_source(S), S.r.chance(0.5) and { residuals = "log" } or nil)
+    if ok and type(fit) == "table" then return fit end
+    return { S_df = 0.8, A_df = 3e4, a2 = 0.9 } -- a fit made by hand
+end
+T["dfle.write_fit"] = function(S)
+    return pack(a_fit(S), S.path("csv"), S.r.chance(0.3) and { record = false } or nil)
+end
+T["dfle.write_bins"] = function(S)
+    return pack(a_fit(S), S.path("csv"), S.r.chance(0.3) and { record = false } or nil)
+end
+T["dfle.write_csv"] = function(S)
+    local r = S.r
+    local o = { columns = { "U", "S_df", "note" }, units = { U = "m/yr", S_df = "-" },
+                about = "a table", record = r.chance(0.5) }
+    if r.chance(0.5) then
+        o.rows = { { U = 1e-4, S_df = 0.8, note = "a" }, { U = 2e-4, S_df = 0.7, note = "b,c" } }
+    else
+        o.data = { U = { 1e-4, 2e-4 }, S_df = { 0.8, 0.7 }, note = { "a", true } }
+    end
+    if r.chance(0.3) then o.params = { tol = 1e-3, law = { k_df = 1e-4 } } end
+    if r.chance(0.2) and S:has("dfle.model") then o.params = { model = S:get("dfle.model") } end
+    return pack(S.path("csv"), o)
+end
+T["dfle.mkdir"] = function(S) return pack(S.path("d")) end
+-- (the script's own arg holds seed=N ...: a positional argument, refused
+-- unless the options take one; --help would end the process)
+T["dfle.args"] = function(S)
+    local out = S.r.chance(0.5)
+    return pack({ usage = "fuzz", about = "a", flags = { quick = "q" },
+                  options = { data = { "DIR", "d", default = "x" } }, output = out,
+                  arg = S.r.pick{ {}, { "--quick" }, { "--data", "in" }, { "--data=in", "--quick" },
+                                  { "--qiuck" }, { out and S.path("d") or "x" } } })
+end
+
+-- Landscapes: a few cells, a few steps.
+local function landscape_opts(S)
+    local r = S.r
+    local o = { nx = r.pick{ 3, 6, 8 }, ny = r.pick{ 3, 5 }, dx = r.pick{ 10, 30 } }
+    if r.chance(0.3) then o.noise = { amplitude = 1, seed = r.range(1, 5) } end
+    if r.chance(0.2) then
+        o.z = S.cb("z", function(x, y) return 0.01 * x + 0.02 * y end)
+    end
+    if r.chance(0.2) then o.edges = r.pick{ "closed", "open", { north = "closed" } } end
+    if r.chance(0.2) then o.hillslope = r.pick{ "threshold", "diffusion", "uplift" } end
+    if r.chance(0.2) then o.combine = r.pick{ "any", "count" } end
+    if r.chance(0.1) then o.combine = S.cb("combine", function(count, A) return 1 end) end
+    if r.chance(0.2) then o.U = S.cb("U", function(x, y) return 5e-4 end) end
+    if r.chance(0.2) then o.router = false end
+    return o
+end
+T["dfle.landscape"] = function(S)
+    return pack(landscape_opts(S)), { [1] = { nx = true, ny = true } }
+end
+T["dfle.landscape:run"] = function(S)
+    local r = S.r
+    return pack({ years = r.pick{ 100, 1000 }, dt = 500, max_steps = 5, progress = false,
+                  method = r.pick{ "implicit", "explicit" },
+                  record = r.chance(0.3) and { 0, 500 } or nil,
+                  netcdf = r.chance(0.2) and S.path("nc") or nil }),
+           { [1] = { years = true, max_steps = true, dt = true, record = true } }
+end
+T["dfle.landscape:run_to_steady"] = function(S)
+    return pack({ max_steps = 5, max_time = 1e4, progress = false,
+                  method = S.r.pick{ "direct", "implicit" } }),
+           { [1] = { max_steps = true, max_time = true } }
+end
+T["dfle.landscape:step"] = function(S) return pack(S.r.pick{ 10, 100, 1000 }) end
+T["dfle.landscape:get"] = function(S)
+    return pack(S.r.pick{ "z", "A", "S", "E_f", "E_df", "reach", "channel", "dzdt", "U", "base" })
+end
+T["dfle.landscape:fields"] = function(S) return pack() end
+T["dfle.landscape:set_z"] = function(S, self)
+    local ok, n = pcall(function() return self.n end)
+    local z = {}
+    for i = 1, (ok and math.type(n) == "integer" and n <= 1000 and n or 9) do z[i] = 100 - i end
+    return pack(z)
+end
+T["dfle.landscape:write_geotiff"] = function(S)
+    return pack(S.path("tif"), S.r.chance(0.5) and { "z", "A" } or nil)
+end
+T["dfle.landscape:plot"] = function(S) return pack(S.path("png"), { title = "l" }) end
+T["dfle.landscape:slope_area"] = function(S) return pack() end
+T["dfle.landscape:dem"] = function(S) return pack() end
+
+-- Inversions: a handful of walkers and steps on a tiny model.
+local function invert_opts(S)
+    local r = S.r
+    local ch = { dx = 50, A_max = 5e4 }
+    local A_, S_ = {}, {}
+    for i = 1, 6 do A_[i] = 2e3 * 1.6^i; S_[i] = 0.8 / (1 + (A_[i] / 3e4)^0.9) end
+    local o = {
+        data = { A = A_, S = S_ }, channel = dfle.channel(ch),
+        build = S.cb("build", function(p, channel)
+            return dfle.model{ channel = channel, U = p.U, law = dfle.law.power{} }
+        end),
+        params = { U = { 1e-4, 1e-3, log = r.chance(0.5) } },
+        walkers = r.pick{ 4, 6 }, steps = r.pick{ 0, 3, 6 }, burn = 1, seed = r.range(0, 9),
+        run = { max_steps = 20, max_time = 1e5 }, lsq = r.chance(0.3),
+    }
+    if r.chance(0.3) then o.out = S.path("csv") end
+    if r.chance(0.2) then o.sigma = 0.1 end
+    if r.chance(0.2) and S:has("dfle.profile") then
+        o.data = S:get("dfle.profile"); o.channel = { dx = 50 }; o.nbins = 5
+    end
+    return o
+end
+A.invert_opts = invert_opts
+T["dfle.invert"] = function(S)
+    return pack(invert_opts(S)), { [1] = { walkers = true, steps = true, burn = true, run = true,
+                                           nbins = true } }
+end
+T["dfle.ensemble:write_netcdf"] = function(S)
+    local p = S.path("nc")
+    return pack(p), nil, S.legal and "write" or nil
+end
+T["dfle.inversion:predict"] = function(S) return pack({ n = S.r.pick{ 1, 3 } }), { [1] = { n = true } } end
+T["dfle.plot.corner"] = function(S)
+    return pack(S:get("inversion"), S.path("png"), S.r.chance(0.5) and { title = "c", nbins = 5 } or nil),
+           { [3] = { nbins = true } }
+end
+T["dfle.plot.posterior_predictive"] = function(S)
+    return pack(S:get("inversion"), S.path("png"), { n = S.r.pick{ 1, 3 }, title = "pp" }),
+           { [3] = { n = true } }
+end
+
 ---------------------------------------------------------------------------
 -- Kinds of pooled object and how to make one (valid arguments, no
 -- mutation: the pool holds working objects; hostile ones come from the
@@ -456,6 +596,14 @@ MAKE["dfle.profile"] = function(S)
     for i = 2, #A_ do if A_[i] > A_[best] then best = i end end
     return dem:profile{ outlet = { E[best], N[best] }, radius = 0 }
 end
+MAKE["dfle.landscape"] = function(S) return dfle.landscape(landscape_opts(S)) end
+-- (no chain file: the pool's inversions must not depend on a file that
+-- a fuzzer sharing the directory may hold locked)
+MAKE["inversion"] = function(S)
+    local o = invert_opts(S)
+    o.out = nil
+    return dfle.invert(o)
+end
 MAKE["ensemble"] = function(S)
     return dfle.ensemble(A.ensemble_spec(S, S.inputs.good_ensemble_csv(S)))
 end
@@ -469,6 +617,9 @@ A.SELF = {
     ["dfle.model"] = { "dfle.model", "dfle.model.process" },
     ["dfle.dem"] = { "dfle.dem" },
     ["dfle.profile"] = { "dfle.profile" },
+    ["dfle.landscape"] = { "dfle.landscape" },
+    ["dfle.inversion"] = { "inversion" },
+    ["dfle.ensemble"] = { "ensemble" },
 }
 
 return A

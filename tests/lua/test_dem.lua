@@ -304,7 +304,7 @@ tests["write_geotiff: filled z, area, D8, slope and channel mask, read back"] = 
         T.ok(band[4]:at(e, n) >= 0 or a ~= a, "slopes of a filled DEM are >= 0")
     end
     raises(function() return dem:write_geotiff(tif, { layers = { "channels" } }) end, "needs A_min")
-    raises(function() return dem:write_geotiff(tif, { layers = { "zz" } }) end, "invalid option 'zz'")
+    raises(function() return dem:write_geotiff(tif, { layers = { "zz" } }) end, "a layer must be 'z', 'area', 'd8', 'slope' or 'channels' (got 'zz')")
     raises(function() return dem:write_geotiff(tif, { layers = { "z", "z" } }) end, "listed twice")
     raises(function() return dem:write_geotiff("/no/such/dir/x.tif") end, "/no/such/dir/x.tif")
 end

@@ -165,4 +165,169 @@ tests["a channel whose distances overflow is refused"] = function()
                   "dfle.channel:")
 end
 
+tests["landscape options name themselves, not 'bad argument #-2'"] = function()
+    local ls = dfle.landscape{ nx = 4, ny = 3, dx = 30 }
+    local function no_argno(msg) T.ok(not msg:find("bad argument", 1, true), msg) end
+    no_argno(T.raises_here(function() return ls:run{ years = 10, method = "inf" } end,
+             "dfle.landscape:run: method must be 'explicit', 'implicit', 'direct' or 'auto' (got 'inf')"))
+    no_argno(T.raises_here(function() return ls:run{ years = 10, method = {} } end,
+             "dfle.landscape:run: method must be a string, got table"))
+    no_argno(T.raises_here(function() return ls:plot(T.tmpname(".png"), { title = coroutine.create(print) }) end,
+             "dfle.landscape:plot: title must be a string, got thread"))
+    no_argno(T.raises_here(function() return ls:write_geotiff(T.tmpname(".tif"), { print }) end,
+             "dfle.landscape:write_geotiff:", "must be a string, got function"))
+    no_argno(T.raises_here(function() return dfle.landscape{ nx = 4, ny = 3, dx = 30, hillslope = "steep" } end,
+             "dfle.landscape: hillslope must be 'threshold', 'diffusion' or 'uplift' (got 'steep')"))
+    no_argno(T.raises_here(function() return dfle.landscape{ nx = 4, ny = 3, dx = 30, combine = "all" } end,
+             "dfle.landscape: combine must be 'any' or 'count' (got 'all')"))
+end
+
+tests["dfle.args checks its own table, at the script's line"] = function()
+    -- a number for flags was 'dfle.args:11: bad argument #1 to 'for iterator''
+    T.raises_here(function() return dfle.args{ flags = 3 } end, "dfle.args: flags must be a table, got number")
+    T.raises_here(function() return dfle.args{ options = "x" } end, "dfle.args: options must be a table")
+    T.raises_here(function() return dfle.args{ flags = { quick = 1 } } end, "dfle.args: flags are name = \"help text\"")
+    T.raises_here(function() return dfle.args{ options = { [2] = { "A", "b" } } } end, "dfle.args: option names")
+    T.raises_here(function() return dfle.args{ usage = {} } end, "dfle.args: usage must be a string")
+    T.raises_here(function() return dfle.args{ arg = { "--quick", 5 }, flags = { quick = "q" } } end,
+                  "dfle.args: arg[2] must be a string, got number")
+    T.eq(dfle.args{ arg = { "--quick" }, flags = { quick = "q" } }.quick, true)
+end
+
+tests["errors of calls an inversion makes for the script carry the script's line"] = function()
+    -- p:channel and res:predict raised from C, with no position at all
+    local dem = dfle.dem.read(T.data .. "/dem/small/testdem1.dem")
+    dem:fill()
+    local p = dem:network{ A_min = dem.dx * dem.dy }
+    local spec = { data = p, channel = { dx = 1000 }, nbins = 3,
+                   build = function(q, ch) return dfle.model{ channel = ch, U = q.U } end,
+                   params = { U = { 1e-4, 1e-3 } }, walkers = 4, steps = 0, workers = 1 }
+    T.raises_here(function() return dfle.invert(spec) end,
+                  "dfle.invert: the data's channel: dfle.profile: the profile is", "less than 2 dx")
+    local A_, S_ = {}, {}
+    for i = 1, 6 do A_[i] = 2e3 * 1.6^i; S_[i] = 0.8 / (1 + (A_[i] / 3e4)^0.9) end
+    local res = dfle.invert{ data = { A = A_, S = S_ }, channel = dfle.channel{ dx = 50, A_max = 5e4 },
+                             build = function(q, ch) return dfle.model{ channel = ch, U = q.U } end,
+                             params = { U = { 1e-4, 1e-3 } }, walkers = 4, steps = 0, workers = 1 }
+    T.raises_here(function() return dfle.plot.posterior_predictive(res, T.tmpname(".png")) end,
+                  "dfle.inversion:predict: there are no posterior samples")
+end
+
+tests["an inversion of a few steps is never 'converged', nor has more effective samples than samples"] = function()
+    -- 2 steps after burn-in: the lag-1 correlation of two values is
+    -- -1/2, so tau = 0; that made converged = true, no warning and
+    -- ess = 7e16 (nsamples / 1e-16)
+    local A_, S_ = {}, {}
+    for i = 1, 6 do A_[i] = 2e3 * 1.6^i; S_[i] = 0.8 / (1 + (A_[i] / 3e4)^0.9) end
+    for seed = 0, 3 do
+        local res = dfle.invert{ data = { A = A_, S = S_ }, channel = dfle.channel{ dx = 50, A_max = 5e4 },
+            build = function(q, ch) return dfle.model{ channel = ch, U = q.U, law = dfle.law.power{} } end,
+            params = { U = { 1e-4, 1e-3 } }, walkers = 4, steps = 3, burn = 1, seed = seed,
+            workers = 1, lsq = false }
+        T.eq(res.converged, false)
+        T.ok(res.ess <= res.nsamples, "ess " .. res.ess .. " > nsamples " .. res.nsamples)
+        T.ok(#res.warnings >= 1 and res.warnings[1]:find("too short", 1, true), "warned")
+    end
+end
+
+tests["a landscape of cells no grid has is refused"] = function()
+    -- 1e300 m cells: areas inf, debris-flow volumes NaN, dem:at inf
+    T.raises_here(function() return dfle.landscape{ nx = 6, ny = 5, dx = 1e300 } end,
+                  "dfle.landscape: dx and dy are cell sizes from 1e-06 to 1e+06 m")
+    T.raises_here(function() return dfle.landscape{ nx = 6, ny = 5, dx = 30, dy = 5e-324 } end,
+                  "dfle.landscape: dx and dy are cell sizes")
+    T.eq(dfle.landscape{ nx = 6, ny = 5, dx = 1e6 }.dx, 1e6)
+end
+
+tests["an output whose record's name would be too long is refused before it is written"] = function()
+    -- a 255-byte name.csv is legal, name.json is 256 bytes: the CSV was
+    -- written, then the record failed, leaving a file naming a record
+    -- that is not there
+    local dir = T.tmpname()
+    os.remove(dir)
+    os.execute("mkdir -p " .. T.shquote(dir))
+    local m = dfle.model{ channel = dfle.channel{ dx = 50, A_max = 5e4 } }
+    local name = dir .. "/" .. string.rep("n", 251) .. ".csv"
+    T.raises_here(function() return m:write_csv(name) end,
+                  "dfle.model:write_csv: the JSON record beside", "would have a name of 256 bytes")
+    T.eq(io.open(name), nil)
+    m:write_csv(name, { record = false })
+    T.ok(io.open(name) ~= nil, "written without a record")
+    os.execute("rm -rf " .. T.shquote(dir))
+end
+
+tests["a landscape's steady-state ratios stay numbers for the smallest uplift"] = function()
+    -- |dz/dt| * (1/U) with U = 5e-324: 1/U = inf, 0 * inf = NaN
+    local ls = dfle.landscape{ nx = 3, ny = 3, dx = 30, U = 5e-324 }
+    local r = ls:step(1e7)
+    T.ok(r.mean_ratio == r.mean_ratio, "mean_ratio " .. tostring(r.mean_ratio))
+    T.ok(r.q_ratio == r.q_ratio and r.max_ratio == r.max_ratio, "q_ratio, max_ratio")
+    -- where the surface does change, the ratio overflowed to inf
+    ls = dfle.landscape{ nx = 4, ny = 4, dx = 30, U = 5e-324, noise = { amplitude = 50, seed = 3 } }
+    r = ls:step(10)
+    for _, k in ipairs{ "q_ratio", "mean_ratio", "max_ratio" } do
+        T.ok(r[k] > 0 and r[k] < math.huge, k .. " = " .. tostring(r[k]))
+    end
+    -- and a U(x, y) that gives an invalid value says when
+    T.raises_here(function() return dfle.landscape{ nx = 3, ny = 3, dx = 30,
+                                                    U = function(x, y) return 0 end } end,
+                  "U (uplift, m/yr) is 0 at cell 0 (row 0, column 0) at t = 0 yr; it must be")
+end
+
+tests["a landscape step that leaves no surface is an error, and undone"] = function()
+    -- dt = 1e300 yr with diffusion made every elevation NaN and the step
+    -- returned as if nothing happened; U = 1e300 m/yr overflowed the volumes
+    local ls = dfle.landscape{ nx = 8, ny = 3, dx = 30, hillslope = "diffusion" }
+    local z0 = ls:get("z")
+    T.raises_here(function() return ls:step(1e300) end,
+                  "dfle.landscape: a step of dt = 1e+300 yr gave elevations that are not finite",
+                  "it was undone")
+    local z1 = ls:get("z")
+    for i = 1, #z0 do T.eq(z1[i], z0[i]) end
+    T.eq(ls.time, 0)
+    ls = dfle.landscape{ nx = 8, ny = 3, dx = 30, U = 1e300 }
+    T.raises_here(function() return ls:step(1e10) end, "gave volumes that are not finite")
+    T.ok(ls:step(10).dt == 10, "a sane step afterwards")
+    -- volumes that overflow only once multiplied by the cell area
+    -- (V_hillslope = inf, the sum of the volumes finite)
+    ls = dfle.landscape{ nx = 6, ny = 5, dx = 10 }
+    local z = {}
+    for i = 1, 30 do z[i] = i * 5e305 end
+    ls:set_z(z)
+    T.raises_here(function() return ls:step(1) end, "gave volumes that are not finite")
+    -- the explicit method's steps too
+    ls = dfle.landscape{ nx = 3, ny = 3, dx = 30, router = false, U = 1e300 }
+    T.raises_here(function() return ls:run{ years = 1e10, dt = 1e10, method = "explicit", max_steps = 5 } end,
+                  "gave volumes that are not finite", "it was undone")
+    T.eq(ls.time, 0)
+end
+
+tests["a closed object in an options table is named, not 'bad argument #-1'"] = function()
+    local ch = dfle.channel{ dx = 50, A_max = 5e4 }
+    debug.getmetatable(ch).__gc(ch)
+    local A_, S_ = {}, {}
+    for i = 1, 6 do A_[i] = 2e3 * 1.6^i; S_[i] = 0.8 / (1 + (A_[i] / 3e4)^0.9) end
+    local msg = T.raises_here(function() return dfle.invert{ data = { A = A_, S = S_ }, channel = ch,
+        build = function(q, c) return dfle.model{ channel = c, U = q.U } end,
+        params = { U = { 1e-4, 1e-3 } }, walkers = 4, steps = 0, workers = 1 } end,
+        "dfle.channel has been closed")
+    T.ok(not msg:find("bad argument", 1, true), msg)
+end
+
+tests["ens:write_netcdf checks the count against the rows"] = function()
+    -- a changed count sized the buffers: Lua's bare 'block too big'
+    local dir = T.tmpname()
+    os.remove(dir)
+    os.execute("mkdir -p " .. T.shquote(dir))
+    local ens = dfle.ensemble{ params = { k_df = { 5e-5, 1e-3 } }, n = 2, seed = 1, workers = 1,
+        out = dir .. "/e.csv", outputs = { "S_df" },
+        build = function(p) return dfle.model{ channel = dfle.channel{ dx = 50, A_max = 5e4 },
+                                               law = dfle.law.power{ k_df = p.k_df } } end }
+    ens.count = -2459827872551929411
+    T.raises_here(function() return ens:write_netcdf(dir .. "/e.nc") end,
+                  "dfle.ensemble:write_netcdf: the result's count (-2459827872551929411) is not "
+                  .. "the number of rows in data.index (2)")
+    os.execute("rm -rf " .. T.shquote(dir))
+end
+
 return tests

@@ -26,7 +26,9 @@ tests["a grid one cell wide reproduces the 1D model's steady state"] = function(
   local m = dfle.model{ channel = ch }           -- Fig. 9 components
   local r1 = m:run_to_steady{ method = "direct" }
   T.ok(r1.converged, "1D direct")
-  local ls = column(ny, dy)                       -- the same defaults
+  -- the same defaults; the 1D model has no threshold slope (its slopes
+  -- near the head, 0.88, stand above the landscape's S_c = 0.8)
+  local ls = column(ny, dy, { cap_channels = false })
   local r2 = ls:run_to_steady{}
   T.ok(r2.converged, "landscape: " .. r2.note)
   local z1, z2 = m:get("z"), ls:get("z")
@@ -90,14 +92,17 @@ tests["mass balance: uplift minus erosion equals the change in volume, every ste
 end
 
 tests["mass balance: E_f evaluated after a step matches the step's erosion"] = function()
+  -- the fluvial law alone: its slopes at the smallest areas (1.3) are
+  -- not held at S_c
   local fl = dfle.fluvial.stream_power{ K = 2e-5, m = 0.5, n = 2 }
   local ls = dfle.landscape{ nx = 20, ny = 16, dx = 30, fluvial = fl, router = false,
-                             U = 1e-3, A0 = 0, noise = { seed = 9 } }
+                             U = 1e-3, A0 = 0, cap_channels = false,
+                             noise = { seed = 9 } }
   ls:run_to_steady{}
   -- the same surface, uplift doubled: one small step
   local z0 = ls:get("z")
   local ls2 = dfle.landscape{ nx = 20, ny = 16, dx = 30, fluvial = fl, router = false,
-                              U = 2e-3, A0 = 0, z = z0 }
+                              U = 2e-3, A0 = 0, cap_channels = false, z = z0 }
   ls2:step(50)
   local z1, Ef, base = ls2:get("z"), ls2:get("E_f"), ls2:get("base")
   for i = 1, #z1 do
@@ -240,6 +245,49 @@ tests["debris-flow reach on a synthetic network, checked by hand"] = function()
          "a Lua frequency function")
 end
 
+-- Debris-flow heads steeper than S_c (the model's root there is about
+-- 0.88 > 0.6): a head's donors drain to the lower hillslope beside it,
+-- which then becomes the head, and back, so with cap_channels = false
+-- no network holds; with the cap (the default) the rounds reach a
+-- network that does not change at all (rcv_tol = 0).
+tests["S_c caps channel cells: heads steeper than S_c settle, uncapped they cycle"] = function()
+  local function grid(cap)
+    return dfle.landscape{ nx = 40, ny = 30, dx = 30, A0 = 1e4, S_c = 0.6, U = 1e-3,
+                           cap_channels = cap, noise = { amplitude = 1, seed = 3 },
+                           edges = { south = "base_level", north = "closed", east = "closed",
+                                     west = "closed" } }
+  end
+  local ls = grid(true)
+  local r = ls:run_to_steady{ rcv_tol = 0 }
+  T.ok(r.converged and r.method == "direct" and r.rcv_changes == 0, r.note)
+  local S, ch, base = ls:get("S"), ls:get("channel"), ls:get("base")
+  local capped, steepest = 0, 0
+  for i = 1, #S do
+    if ch[i] > 0 and base[i] == 0 then
+      steepest = math.max(steepest, S[i])
+      capped = capped + (S[i] >= 0.6 * (1 - 1e-9) and 1 or 0)
+    end
+  end
+  T.ok(steepest <= 0.6 * (1 + 1e-9), "steepest channel slope " .. steepest)
+  T.ok(capped > 10, "channel cells held at S_c: " .. capped)
+  -- implicit steps (which cap channels the same way) stay there, and
+  -- what the cap removes is hillslope volume in the balance
+  local z0 = ls:get("z")
+  local s = ls:run{ years = 3e3, dt = 1e3 }
+  T.ok(s.q_ratio < 1e-3 and s.rcv_changes == 0, "implicit steps: q_ratio " .. s.q_ratio)
+  local dz = 0
+  for i, z in ipairs(ls:get("z")) do dz = math.max(dz, math.abs(z - z0[i])) end
+  T.ok(dz < 1e-6, "steady surface moved by " .. dz .. " m")
+  T.close(s.dV, s.V_uplift - s.V_fluvial - s.V_df - s.V_hillslope, 1e-8, 1e-6 * s.V_uplift,
+          "balance")
+  T.ok(s.V_hillslope > 0.5 * s.V_uplift, "the cap removes: " .. s.V_hillslope)
+  -- uncapped, the same grid never settles, and says so
+  local u = grid(false):run_to_steady{ rcv_tol = 0, max_time = 2e4, progress = false }
+  T.ok(not u.converged and u.fallback, u.note)
+  T.has(u.note, "stopped approaching a fixed network", "channel cells are steeper than S_c",
+        "receivers still change")
+end
+
 tests["debris flows + fluvial: direct steady state meets the criterion"] = function()
   local ls = dfle.landscape{ nx = 30, ny = 30, dx = 20, U = 5e-4, A0 = 2000, S_c = 1,
                              noise = { seed = 4, amplitude = 2 } }
@@ -359,7 +407,7 @@ tests["errors name the parameter"] = function()
   end
   err({}, "'nx' and 'ny'")
   err({ nx = 4, ny = 4, U = -1 }, "U (uplift")
-  err({ nx = 4, ny = 4, hillslope = "landslide" }, "invalid option 'landslide'")
+  err({ nx = 4, ny = 4, hillslope = "landslide" }, "hillslope must be 'threshold', 'diffusion' or 'uplift' (got 'landslide')")
   err({ nx = 4, ny = 4, edges = "wall" }, "\"base_level\", \"closed\" or \"open\"")
   err({ nx = 4, ny = 4, z = { 1, 2 } }, "'z' has 2 values")
   err({ nx = 4, ny = 4, S_c = 0 }, "S_c")

@@ -202,7 +202,7 @@ static int l_dem_write_geotiff(lua_State *L)
                           "slope, channels", fn);
         for (lua_Integer k = 1; k <= (lua_Integer)lua_rawlen(L, -1); k++) {
             lua_rawgeti(L, -1, k);
-            names[nb++] = all[luaL_checkoption(L, -1, NULL, all)];
+            names[nb++] = all[dfle_lua_check_option(L, -1, fn, "a layer", all)];
             lua_pop(L, 1);
         }
     } else {

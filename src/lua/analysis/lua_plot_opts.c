@@ -224,7 +224,8 @@ void dfle_lua_plot_opts(lua_State *L, int idx, const char *fn, unsigned which,
         append_keys(keys, &nk, axes_keys);
     if (np > 15)
         np = 15;
-    memcpy(nums, params, np * sizeof *nums);
+    if (np > 0) /* params may be NULL when there are none: memcpy must not see it */
+        memcpy(nums, params, np * sizeof *nums);
     nums[np] = (dfle_lua_param){"dpi", &dpi};
     dfle_lua_read_params(L, idx, fn, nums, np + 1, keys);
     if (!lua_istable(L, idx))

@@ -171,6 +171,12 @@ void dfle_lua_warn(lua_State *L, const char *fn, const char *msg);
  * "direct").  `fn` and `what` name it in the error ("dfle.<fn>: <what>
  * contains a NUL byte"). */
 const char *dfle_lua_check_string(lua_State *L, int idx, const char *fn, const char *what);
+/* The index in `choices` (NULL-terminated) of the string at idx; any
+ * other value raises "dfle.<fn>: <what> must be 'a', 'b' or 'c' (got
+ * 'x')" (luaL_checkoption names a field read onto the stack as
+ * "bad argument #-2"). */
+int dfle_lua_check_option(lua_State *L, int idx, const char *fn, const char *what,
+                          const char *const *choices);
 /* Push `s` (len bytes) as it can be shown in a message: at most 60
  * characters, NUL and control bytes as \ddd, "..." and the length after
  * a cut; returns the pushed string. */

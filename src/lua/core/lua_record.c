@@ -196,6 +196,13 @@ void dfle_lua_note_file(lua_State *L, const char *path)
     lua_pop(L, 1);
 }
 
+/* The longest file name (one path component) of Linux file systems. */
+#ifdef NAME_MAX
+#define RECORD_NAME_MAX NAME_MAX
+#else
+#define RECORD_NAME_MAX 255
+#endif
+
 const char *dfle_lua_record_path(lua_State *L, dfle_record *rec, int opts, const char *path,
                                 const char *fn)
 {
@@ -233,6 +240,19 @@ const char *dfle_lua_record_path(lua_State *L, dfle_record *rec, int opts, const
         lua_pop(L, 1);
         lua_pushnil(L);
         return NULL;
+    }
+    {
+        /* Checked before the output is written: a name of 252-255 bytes
+         * is legal, its record's (".json" in place of ".csv", or added)
+         * may not be, and the output must not be left without the
+         * record its comment lines name. */
+        const char *base = strrchr(jpath, '/');
+        size_t blen = strlen(base != NULL ? base + 1 : jpath);
+        if (blen > RECORD_NAME_MAX)
+            luaL_error(L, "dfle.%s: the JSON record beside '%s' would have a name of %d bytes, "
+                          "more than a file name can hold (%d); give a shorter name, record = "
+                          "'other.json', or record = false",
+                       fn, path, (int)blen, RECORD_NAME_MAX);
     }
     dfle_record_section(rec, NULL, NULL);
     dfle_record_text(rec, "record", jpath);

@@ -271,6 +271,16 @@ void *dfle_lua_check_object(lua_State *L, int arg, const char *tname)
 {
     dfle_lua_object *o;
     int top = lua_gettop(L);
+    if (arg < 0) {
+        /* A field read onto the stack is no argument: luaL_checkudata and
+         * luaL_argerror would say "bad argument #-1 to 'invert'". */
+        o = luaL_testudata(L, arg, tname);
+        if (o == NULL)
+            luaL_error(L, "%s expected, got %s", tname, dfle_lua_typename(L, arg));
+        if (is_closed(o))
+            luaL_error(L, "%s has been closed", tname);
+        return o->ptr;
+    }
     check_colon(L, arg, tname);
     lua_settop(L, top);
     o = luaL_checkudata(L, arg, tname);

@@ -74,7 +74,12 @@ const char *dfle_lua_shown(lua_State *L, const char *s, size_t len)
 const char *dfle_lua_check_string(lua_State *L, int idx, const char *fn, const char *what)
 {
     size_t len;
-    const char *s = luaL_checklstring(L, idx, &len);
+    const char *s;
+    /* A field read onto the stack is no argument: luaL_checklstring would
+     * say "bad argument #-2 to 'run'". */
+    if (idx < 0 && lua_type(L, idx) != LUA_TSTRING && lua_type(L, idx) != LUA_TNUMBER)
+        luaL_error(L, "dfle.%s: %s must be a string, got %s", fn, what, luaL_typename(L, idx));
+    s = luaL_checklstring(L, idx, &len);
     if (strlen(s) != len)
         luaL_error(L, "dfle.%s: %s contains a NUL byte ('%s')", fn, what,
                    dfle_lua_shown(L, s, len));
@@ -416,4 +421,29 @@ const char *dfle_lua_opt_string(lua_State *L, int idx, const char *key, const ch
         lua_pop(L, 1);
     }
     return s;
+}
+
+int dfle_lua_check_option(lua_State *L, int idx, const char *fn, const char *what,
+                          const char *const *choices)
+{
+    const char *name = dfle_lua_check_string(L, idx, fn, what);
+    luaL_Buffer b;
+    int k;
+
+    for (k = 0; choices[k] != NULL; k++)
+        if (strcmp(choices[k], name) == 0)
+            return k;
+    luaL_buffinit(L, &b);
+    for (k = 0; choices[k] != NULL; k++) {
+        if (k > 0)
+            luaL_addstring(&b, choices[k + 1] == NULL ? " or " : ", ");
+        lua_pushfstring(L, "'%s'", choices[k]);
+        luaL_addvalue(&b);
+    }
+    luaL_pushresult(&b);
+    {
+        const char *list = lua_tostring(L, -1);
+        const char *shown = dfle_lua_shown(L, name, strlen(name));
+        return luaL_error(L, "dfle.%s: %s must be %s (got '%s')", fn, what, list, shown);
+    }
 }

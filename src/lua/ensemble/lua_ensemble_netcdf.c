@@ -92,6 +92,16 @@ static int l_write_netcdf(lua_State *L)
     nrows = (size_t)lua_tointeger(L, data + 3);
     if (nrows == 0)
         return luaL_error(L, "dfle.%s: the ensemble has no rows yet; nothing to write", fn);
+    /* A script may change the table: a count its columns do not hold
+     * would size the buffers below (a huge one raised Lua's bare "block
+     * too big"). */
+    if (lua_getfield(L, data, "index") != LUA_TTABLE ||
+        (size_t)lua_rawlen(L, -1) != nrows || lua_tointeger(L, data + 3) < 0)
+        return luaL_error(L, "dfle.%s: the result's count (%I) is not the number of rows in "
+                             "data.index (%I): was the table changed?", fn,
+                          lua_tointeger(L, data + 3),
+                          (lua_Integer)(lua_istable(L, -1) ? lua_rawlen(L, -1) : 0));
+    lua_pop(L, 1);
     nin = (size_t)lua_rawlen(L, data + 1);
     nout = (size_t)lua_rawlen(L, data + 2);
     ncols = 1 + nin + nout;

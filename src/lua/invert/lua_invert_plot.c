@@ -195,7 +195,11 @@ static int l_predictive(lua_State *L)
     lua_createtable(L, 0, 1);
     lua_pushnumber(L, n);
     lua_setfield(L, -2, "n");
-    lua_call(L, 2, 1);
+    /* predict's errors raised again from here, which a script called: a
+     * C function called from C has no position to give them. */
+    if (lua_pcall(L, 2, 1, 0) != LUA_OK)
+        return luaL_error(L, "%s", lua_isstring(L, -1) ? lua_tostring(L, -1)
+                                                        : "dfle.inversion:predict failed");
     pred = lua_gettop(L);
     for (int k = 0; k < 8; k++) {
         size_t len;

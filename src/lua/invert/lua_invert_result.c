@@ -77,7 +77,7 @@ void inv_push_result(lua_State *L, int ctx, inv_run *R, int lsq_idx, double elap
     int res, names, warn;
     size_t tally[INV_NSTATUS] = {0};
     double *tau = lua_newuserdatauv(L, (d + 1) * sizeof *tau, 0);
-    double tau_max = 0;
+    double tau_max = 0, tau_use;
     int windowed = 1;
 
     lua_newtable(L);
@@ -160,7 +160,12 @@ void inv_push_result(lua_State *L, int ctx, inv_run *R, int lsq_idx, double elap
         }
         lua_setfield(L, res, "tau");
         lua_pushnumber(L, tau_max), lua_setfield(L, res, "tau_max");
-        ess = isfinite(tau_max) && tau_max > 0 ? (lua_Integer)((double)m / tau_max) : 0;
+        /* An estimate below 1 step (a few steps after burn-in give tau
+         * = 0 by chance: the lag-1 correlation of two values is -1/2)
+         * counts as 1, so that a short chain is never "converged" with
+         * more effective samples than samples. */
+        tau_use = fmax(tau_max, 1.0);
+        ess = isfinite(tau_use) ? (lua_Integer)((double)m / tau_use) : 0;
         lua_pushinteger(L, ess), lua_setfield(L, res, "ess");
         /* acceptance and failures over steps 1 .. N */
         lua_createtable(L, (int)K, 0);
@@ -189,22 +194,22 @@ void inv_push_result(lua_State *L, int ctx, inv_run *R, int lsq_idx, double elap
         set_num(L, "log_like", R->LL[best]);
         lua_setfield(L, res, "best");
         /* what to trust: emcee's rule of thumb, N > 50 tau */
-        lua_pushboolean(L, windowed && isfinite(tau_max) && (double)npost >= 50 * tau_max);
+        lua_pushboolean(L, windowed && isfinite(tau_use) && (double)npost >= 50 * tau_use);
         lua_setfield(L, res, "converged");
         if (!windowed || !isfinite(tau_max))
             add_warning(L, warn, "the chain is too short to estimate the autocorrelation time "
                                  "(%zu steps after burn-in); the intervals are unreliable: run "
                                  "many more steps", npost);
-        else if ((double)npost < 50 * tau_max && npost < 100)
+        else if ((double)npost < 50 * tau_use && npost < 100)
             add_warning(L, warn, "the chain is too short: %zu steps after burn-in are fewer than "
                                  "50 autocorrelation times (tau = %.1f steps, itself "
                                  "underestimated on so short a chain); the intervals are rough: "
                                  "run many more steps", npost, tau_max);
-        else if ((double)npost < 50 * tau_max)
+        else if ((double)npost < 50 * tau_use)
             add_warning(L, warn, "the chain is too short: %zu steps after burn-in are fewer than "
                                  "50 autocorrelation times (tau = %.1f steps); the intervals are "
                                  "rough, run at least %.0f steps", npost, tau_max,
-                        ceil(50 * tau_max + (double)burn));
+                        ceil(50 * tau_use + (double)burn));
         if (isfinite(tau_max) && (double)burn < 2 * tau_max)
             add_warning(L, warn, "burn-in (%zu steps) is shorter than 2 autocorrelation times "
                                  "(tau = %.1f): the start may still show in the samples", burn,

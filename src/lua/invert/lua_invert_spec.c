@@ -116,6 +116,16 @@ static void text_value(lua_State *L, dfle_lua_text *p, int idx)
 /* ------------------------------------------------------------------ */
 /* Names and priors.                                                   */
 
+/* lua_call of a dfle method from here, its error raised again from
+ * dfle.invert, which has the script's position (a method called from C
+ * has none to give). */
+static void call_method(lua_State *L, int nargs, const char *what)
+{
+    if (lua_pcall(L, nargs, 1, 0) != LUA_OK)
+        luaL_error(L, "dfle.invert: %s: %s", what,
+                   lua_isstring(L, -1) ? lua_tostring(L, -1) : "failed");
+}
+
 static void check_name(lua_State *L, const char *what, const char *name)
 {
     static const char *const reserved[] = {"index", "step", "walker", "log_post", "log_like",
@@ -540,7 +550,7 @@ void inv_read_spec(lua_State *L, int arg, inv_run **box)
                 lua_getfield(L, arg, "data");
                 lua_getfield(L, -1, "main_stem");
                 lua_insert(L, -2);
-                lua_call(L, 1, 1);
+                call_method(L, 1, "the data's main stem");
                 lua_getfield(L, -1, "channel");
                 lua_insert(L, -2);
                 if (t == LUA_TNIL) {
@@ -548,7 +558,7 @@ void inv_read_spec(lua_State *L, int arg, inv_run **box)
                 } else {
                     lua_pushvalue(L, opts);
                 }
-                lua_call(L, 2, 1);
+                call_method(L, 2, "the data's channel");
                 lua_remove(L, opts);
             }
         } else {

@@ -347,7 +347,8 @@ static int l_landscape_new(lua_State *L)
                                     {"S_c", &o.S_c}, {"D", &o.D}, {"x0", &x0}, {"y0", &y0}};
         static const char *const others[] = {"z", "noise", "dem", "outlet", "outlets", "edges",
                                              "nodata", "fluvial", "router", "law", "combine",
-                                             "hillslope", "U", "K", "k_e", "k_df", NULL};
+                                             "hillslope", "cap_channels", "U", "K", "k_e", "k_df",
+                                             NULL};
         dfle_lua_read_params(L, 1, "landscape", p, sizeof p / sizeof p[0], others);
     }
     /* The userdata first (valid and empty), so refs made below are
@@ -399,6 +400,15 @@ static int l_landscape_new(lua_State *L)
         dy = dx;
     if (!(dx > 0 && dy > 0))
         luaL_error(L, "dfle.landscape: dx and dy must be > 0 m (got %f, %f)", dx, dy);
+    /* Cells of 1e300 m made areas and volumes inf and NaN: sizes no
+     * grid has (the DEM reader draws the same line at 1000 km), and a
+     * grid whose far edge is no number, are refused. */
+    if (!(dx >= 1e-6 && dx <= 1e6 && dy >= 1e-6 && dy <= 1e6))
+        luaL_error(L, "dfle.landscape: dx and dy are cell sizes from 1e-06 to 1e+06 m (got %f, "
+                      "%f)", dx, dy);
+    if (!(isfinite(x0) && isfinite(nx * dx + x0) && (isnan(y0) || isfinite(y0 - ny * dy))))
+        luaL_error(L, "dfle.landscape: x0 and y0 must be finite, and the grid's far corner too "
+                      "(got x0 = %f, y0 = %f)", x0, y0);
     if (nx * ny > 2e9)
         luaL_error(L, "dfle.landscape: %f x %f cells is too many", nx, ny);
     o.nx = (size_t)nx;
@@ -561,7 +571,14 @@ static int l_landscape_new(lua_State *L)
     /* Hillslopes. */
     if (lua_getfield(L, 1, "hillslope") != LUA_TNIL) {
         static const char *const rules[] = {"threshold", "diffusion", "uplift", NULL};
-        o.hillslope = luaL_checkoption(L, -1, NULL, rules);
+        o.hillslope = dfle_lua_check_option(L, -1, "landscape", "hillslope", rules);
+    }
+    lua_pop(L, 1);
+    if (lua_getfield(L, 1, "cap_channels") != LUA_TNIL) {
+        if (!lua_isboolean(L, -1))
+            luaL_error(L, "dfle.landscape: parameter 'cap_channels' must be a boolean (got %s)",
+                       luaL_typename(L, -1));
+        o.cap_channels = lua_toboolean(L, -1);
     }
     lua_pop(L, 1);
 
@@ -627,7 +644,7 @@ static int l_landscape_new(lua_State *L)
         /* How joined debris flows combine. */
         if (lua_getfield(L, 1, "combine") == LUA_TSTRING) {
             static const char *const rules[] = {"any", "count", NULL};
-            o.df_combine = luaL_checkoption(L, -1, NULL, rules);
+            o.df_combine = dfle_lua_check_option(L, -1, "landscape", "combine", rules);
         } else if (lua_isfunction(L, -1)) {
             lua_pushvalue(L, -1);
             u->ref_combine = luaL_ref(L, LUA_REGISTRYINDEX);
@@ -868,8 +885,7 @@ static int landscape_run(lua_State *L, int steady)
     o.stable_steps = (size_t)dfle_lua_check_whole(L, stable, fn, "stable_steps", 0, 1e9);
     o.method = steady ? DFLE_METHOD_AUTO : DFLE_METHOD_IMPLICIT;
     if (lua_istable(L, 2) && lua_getfield(L, 2, "method") != LUA_TNIL) {
-        dfle_lua_check_string(L, -1, fn, "method");
-        o.method = luaL_checkoption(L, -1, NULL, methods);
+        o.method = dfle_lua_check_option(L, -1, fn, "method", methods);
         if (!steady && o.method == DFLE_METHOD_DIRECT)
             luaL_error(L, "dfle.landscape:run: method 'direct' finds steady states only; use "
                           "run_to_steady, or 'implicit' or 'explicit' here");
@@ -893,7 +909,9 @@ static int landscape_run(lua_State *L, int steady)
             ctx.fields[0] = DFLE_LS_Z;
             ctx.nf = 1;
         } else {
-            luaL_checktype(L, -1, LUA_TTABLE);
+            if (!lua_istable(L, -1))
+                luaL_error(L, "dfle.%s: 'fields' must list 1 to %d field names, got %s", fn,
+                           DFLE_LS_NFIELDS, luaL_typename(L, -1));
             ctx.nf = lua_rawlen(L, -1);
             if (ctx.nf == 0 || ctx.nf > DFLE_LS_NFIELDS)
                 luaL_error(L, "dfle.%s: 'fields' must list 1 to %d field names", fn,
