@@ -45,15 +45,16 @@
 /* Widths w = k_w A^b are tabled for areas of up to this many cells. */
 #define LS_W_TABLE 4096
 
-/* x^p for one fixed exponent p, several times faster than pow (the
- * implicit fluvial sweep calls it once or twice a cell for n != 1):
+/* x^p for one fixed exponent p, faster than pow (the
+ * implicit fluvial sweep calls it about three times a cell for n != 1):
  * x = 2^e m with m in [1, 2), m = m_k (1 + delta), m_k the centre of
  * one of LS_POW_M slices of [1, 2) (|delta| < 1 / (2 LS_POW_M)), so
  *   x^p = (2^e)^p  m_k^p  (1 + delta)^p,
  * the first two from tables made with pow, the last a binomial series
- * to delta^5 (the next term is below 1e-16 for p <= 6).  A few ulps from pow's
- * value; x outside 2^-LS_POW_E .. 2^LS_POW_E (or not a positive
- * normal number) goes to pow. */
+ * to delta^5 (the next term is below 1e-16 for p <= 6).  A few ulps
+ * from pow's value in about a third of its time; x outside
+ * 2^-LS_POW_E .. 2^LS_POW_E (or not a positive normal number) goes to
+ * pow. */
 #define LS_POW_BITS 8
 #define LS_POW_M (1 << LS_POW_BITS)
 #define LS_POW_E 64
