@@ -131,6 +131,7 @@ int dfle_drainage_new(const dfle_drainage_opts *opts, dfle_drainage **out, dfle_
                                                 : sqrt(opts->dx * opts->dx + opts->dy * opts->dy);
         dr->step[k] = (long long)dfle_drainage_dr[k] * (long long)opts->nx + dfle_drainage_dc[k];
     }
+    dr->inv_nx = 1.0 / (double)opts->nx;
     dr->rcv = malloc(n * sizeof *dr->rcv);
     dr->dir = malloc(n);
     dr->don_off = malloc((n + 1) * sizeof *dr->don_off);
@@ -210,8 +211,17 @@ unsigned char drainage_code(const dfle_drainage *dr, size_t a, size_t b)
 {
     /* [dr + 1][dc + 1] -> k; the centre is not a neighbour. */
     static const unsigned char code[3][3] = {{5, 6, 7}, {4, DIR_SINK, 0}, {3, 2, 1}};
-    long long drow = (long long)(b / dr->o.nx) - (long long)(a / dr->o.nx);
-    long long dcol = (long long)(b % dr->o.nx) - (long long)(a % dr->o.nx);
+    long long nx = (long long)dr->o.nx, d = (long long)b - (long long)a, drow, dcol;
+    /* With 3 or more columns the index difference alone names the
+     * neighbour (no division: carving asks this of every cell it
+     * reverses). */
+    if (nx >= 3) {
+        drow = d > 1 ? 1 : d < -1 ? -1 : 0;
+        dcol = d - drow * nx;
+    } else {
+        drow = (long long)(b / dr->o.nx) - (long long)(a / dr->o.nx);
+        dcol = (long long)(b % dr->o.nx) - (long long)(a % dr->o.nx);
+    }
     assert(drow >= -1 && drow <= 1 && dcol >= -1 && dcol <= 1 && (drow != 0 || dcol != 0));
     return code[drow + 1][dcol + 1];
 }
@@ -298,7 +308,6 @@ int dfle_drainage_route(dfle_drainage *dr, const double *z, dfle_error *err)
     }
     if ((st = drainage_stack(dr, n_data, err)) != DFLE_OK)
         return st;
-    drainage_area(dr);
     dr->counts.data = n_data;
     for (size_t i = 0; i < dr->n; i++) {
         dr->counts.outlets += dr->dir[i] == DIR_OUT;

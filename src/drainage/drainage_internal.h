@@ -21,6 +21,15 @@
 #define DIR_SINK DFLE_DRAINAGE_DIR_SINK
 #define DIR_NODATA DFLE_DRAINAGE_DIR_NODATA
 
+/* Loops that visit the grid in no spatial order (a FIFO of the flow
+ * tree) fetch the cells of coming iterations this far ahead. */
+#define DRAINAGE_AHEAD 8
+#if defined(__GNUC__) || defined(__clang__)
+#define DRAINAGE_PREFETCH(p) __builtin_prefetch(p)
+#else
+#define DRAINAGE_PREFETCH(p) ((void)(p))
+#endif
+
 /* Basin-graph workspace (drainage_basins.c), sized by the number of
  * basins and links, grown on demand and kept. */
 typedef struct drainage_link {
@@ -62,6 +71,7 @@ struct dfle_drainage {
     size_t n;
     double len[8];          /* distance to neighbour k [m]              */
     long long step[8];      /* index offset of neighbour k              */
+    double inv_nx;          /* 1 / nx, for drainage_row                  */
 
     unsigned char *outlet;  /* n: cells that always drain off, or NULL  */
     double hysteresis;      /* relative slope margin to keep a receiver */
@@ -105,6 +115,18 @@ static inline long long drainage_nb(const dfle_drainage *dr, size_t r, size_t c,
     return rr * (long long)dr->o.nx + cc;
 }
 
+/* The row of cell i without a division (the basin graph asks it of
+ * most cells): the product is within one of the row, then corrected. */
+static inline uint32_t drainage_row(const dfle_drainage *dr, uint32_t i)
+{
+    uint32_t nx = (uint32_t)dr->o.nx, r = (uint32_t)((double)i * dr->inv_nx);
+    if ((uint64_t)r * nx > i)
+        r--;
+    else if ((uint64_t)(r + 1) * nx <= i)
+        r++;
+    return r;
+}
+
 /* 1 if cell (r, c) is not on the grid's outer ring, so all eight
  * neighbours exist and are i + step[k]. */
 static inline int drainage_interior(const dfle_drainage *dr, size_t r, size_t c)
@@ -142,11 +164,10 @@ size_t drainage_d8(dfle_drainage *dr, const double *z, size_t *n_data, int *infi
 int drainage_flats(dfle_drainage *dr, const double *z, size_t n_sinks, dfle_error *err);
 
 /* drainage_tree.c: donors from rcv; the stack in the order of the
- * options (DFLE_ENUMERIC on a cycle, which would be a bug), which also
- * sets area to 1 a data cell and NaN elsewhere; then area. */
+ * options (DFLE_ENUMERIC on a cycle, which would be a bug) and drainage
+ * area (NaN on NoData). */
 void drainage_donors(dfle_drainage *dr);
 int drainage_stack(dfle_drainage *dr, size_t n_data, dfle_error *err);
-void drainage_area(dfle_drainage *dr);
 
 /* drainage_basins.c: reroute every sink through the basin graph.
  * Needs donors; borrows stack and work[0]; leaves donors stale. */

@@ -28,35 +28,54 @@ void drainage_donors(dfle_drainage *dr)
     memset(off, 0, (n + 1) * sizeof *off);
     for (size_t i = 0; i < n; i++)
         if (dr->rcv[i] != i)
-            off[dr->rcv[i] + 1]++;
-    for (size_t i = 0; i < n; i++)
-        off[i + 1] += off[i];
-    /* off[r] serves as r's cursor, ending at r + 1's start; shifting
-     * back by one restores the starts without a second array. */
-    for (size_t i = 0; i < n; i++)
+            off[dr->rcv[i]]++;
+    for (size_t i = 1; i < n; i++)
+        off[i] += off[i - 1];
+    off[n] = off[n - 1];
+    /* off[r] is now the end of r's donors and serves as its cursor,
+     * filled backwards: it ends at r's start, and each list ascends. */
+    for (size_t i = n; i-- > 0;)
         if (dr->rcv[i] != i)
-            dr->don[off[dr->rcv[i]]++] = (uint32_t)i;
-    memmove(off + 1, off, n * sizeof *off);
-    off[0] = 0;
+            dr->don[--off[dr->rcv[i]]] = (uint32_t)i;
 }
 
 /* Kahn's algorithm, written from the end of the stack so that it reads
- * roots first with no reversal; the FIFO is the stack itself. */
+ * roots first with no reversal; the FIFO is the stack itself.  A cell
+ * enters the FIFO once all its donors have left it, so its area in
+ * whole cells is complete when it leaves: area is summed on the way,
+ * with no second pass down the stack (the sums are of whole numbers,
+ * exact in a double in any order, as stack_area's).  The FIFO visits
+ * the grid in no spatial order, so the receivers of coming cells are
+ * fetched ahead (two stages: the receiver's data needs the receiver). */
 static size_t kahn(dfle_drainage *dr, size_t n_data, unsigned char *left)
 {
     uint32_t *s = dr->stack + n_data - 1; /* s[-t]: the t-th cell out */
+    const uint32_t *rcv = dr->rcv;
+    double *area = dr->area, cell = dr->o.dx * dr->o.dy;
     size_t head = 0, tail = 0;
     for (size_t i = 0; i < dr->n; i++) {
         int data = dr->dir[i] != DIR_NODATA;
         left[i] = (unsigned char)(dr->don_off[i + 1] - dr->don_off[i]); /* at most 8 */
-        dr->area[i] = data ? 1.0 : NAN;
+        area[i] = data ? 1.0 : NAN;
         if (left[i] == 0 && data)
             *(s - tail++) = (uint32_t)i;
     }
     while (head < tail) {
-        uint32_t c = *(s - head++), r = dr->rcv[c];
-        if (r != c && --left[r] == 0)
-            *(s - tail++) = r;
+        uint32_t c = *(s - head++), r = rcv[c];
+        double cells = area[c];
+        if (head + 2 * DRAINAGE_AHEAD < tail) {
+            DRAINAGE_PREFETCH(&rcv[*(s - head - 2 * DRAINAGE_AHEAD)]);
+            r = rcv[*(s - head - DRAINAGE_AHEAD)];
+            DRAINAGE_PREFETCH(&area[r]);
+            DRAINAGE_PREFETCH(&left[r]);
+            r = rcv[c];
+        }
+        area[c] = cells * cell;
+        if (r != c) {
+            area[r] += cells;
+            if (--left[r] == 0)
+                *(s - tail++) = r;
+        }
     }
     return tail;
 }
@@ -99,6 +118,22 @@ static size_t depth_first(dfle_drainage *dr, unsigned char *next)
     return t;
 }
 
+/* Area after depth_first: whole cells, passed down the stack from its
+ * end (every donor before its receiver) and scaled as each is complete:
+ * exact in a double, so the areas leaving the grid add up to exactly
+ * cells x cell area, in any order. */
+static void stack_area(dfle_drainage *dr)
+{
+    double cell = dr->o.dx * dr->o.dy;
+    for (size_t j = dr->n_stack; j > 0; j--) {
+        uint32_t c = dr->stack[j - 1], r = dr->rcv[c];
+        double cells = dr->area[c];
+        dr->area[c] = cells * cell;
+        if (r != c)
+            dr->area[r] += cells;
+    }
+}
+
 int drainage_stack(dfle_drainage *dr, size_t n_data, dfle_error *err)
 {
     unsigned char *scratch = drainage_mark(dr);
@@ -111,21 +146,7 @@ int drainage_stack(dfle_drainage *dr, size_t n_data, dfle_error *err)
         return dfle_error_set(err, DFLE_ENUMERIC, "drainage: flow directions form a cycle "
                               "(%zu of %zu cells ordered); this is a bug in dfle", dr->n_stack,
                               n_data);
+    if (dr->o.order != DFLE_DRAINAGE_KAHN)
+        stack_area(dr);
     return DFLE_OK;
-}
-
-void drainage_area(dfle_drainage *dr)
-{
-    /* Whole cells, passed down the stack from its end (every donor
-     * before its receiver) and scaled as each is complete: exact in a
-     * double, so the areas leaving the grid add up to exactly cells x
-     * cell area, in any order. */
-    double cell = dr->o.dx * dr->o.dy;
-    for (size_t j = dr->n_stack; j > 0; j--) {
-        uint32_t c = dr->stack[j - 1], r = dr->rcv[c];
-        double cells = dr->area[c];
-        dr->area[c] = cells * cell;
-        if (r != c)
-            dr->area[r] += cells;
-    }
 }

@@ -294,6 +294,8 @@ int dfle_landscape_new(const dfle_landscape_opts *o, dfle_landscape **out, dfle_
         ls->K = dfle_fluvial_K(o->fluvial);
         ls->m_exp = dfle_fluvial_m(o->fluvial);
         ls->n_exp = dfle_fluvial_n(o->fluvial);
+        ls_pow_init(&ls->pow_n, ls->n_exp);
+        ls_pow_init(&ls->pow_inv_n, 1.0 / ls->n_exp);
     }
     if ((st = init_field(ls, &ls->U, &o->U, "U (uplift, m/yr)", 0.0, 1, err)) != DFLE_OK ||
         (st = init_field(ls, &ls->K_scale, &o->K_scale, "the fluvial erodibility scale", 0.0, 0,

@@ -117,26 +117,51 @@ void ls_ratios(const dfle_landscape *ls, double tol, double quantile, dfle_lands
     }
 }
 
-/* d + F d^n = d0 for 0 < d < d0 (see the file comment): Halley's
- * iteration, cubic, one pow a step for f, f' and f'', kept inside the
- * bracket.  It starts at d0 when erosion there, F d0^n, is at most d0
- * (the root is then within a factor 2 of d0), else at the upper bound
- * (d0/F)^(1/n), where F d^n = d0 needs no pow. */
-static double fluvial_delta(double d0, double F, double n)
+void ls_pow_init(ls_pow *t, double p)
 {
-    double lo = 0.0, hi = d0, d = d0, Fd = F * pow(d0, n);
-    if (Fd > d0) {
-        d = d0 * pow(d0 / Fd, 1.0 / n);
-        Fd = d0;
+    t->p = p;
+    t->table = p > 0 && p <= 6;
+    for (int e = -LS_POW_E; e <= LS_POW_E; e++)
+        t->two_e[e + LS_POW_E] = pow(ldexp(1.0, e), p); /* 2^e exact */
+    for (int k = 0; k < LS_POW_M; k++) {
+        double m = 1.0 + (k + 0.5) / LS_POW_M;
+        t->m_p[k] = pow(m, p);
+        t->inv_m[k] = 1.0 / m;
+    }
+    t->c[0] = 1.0;
+    for (int j = 1; j < 6; j++)
+        t->c[j] = t->c[j - 1] * (p - (j - 1)) / j;
+}
+
+/* d + F d^n = d0 for 0 < d < d0 (see the file comment): Halley's
+ * iteration, cubic, one power a step for f, f' and f'', kept inside the
+ * bracket.  It starts at the upper bound u = (d0/F)^(1/n), where
+ * F u^n = d0 needs no power, when u < d0, else at d0 (erosion there,
+ * F d0^n, is then at most d0 and the root within a factor 2 of d0).
+ * The powers are ls_pow's tables: a few ulps, where the root needs the
+ * residual to about 1e-15. */
+static double fluvial_delta(double d0, double F, const ls_pow *pn, const ls_pow *pinv)
+{
+    const double n = pn->p;
+    const double nn1 = n * (n - 1.0);
+    double lo = 0.0, hi = d0, d = ls_pow_eval(pinv, d0 / F), Fd = d0;
+    if (!(d < d0)) {
+        d = d0;
+        Fd = F * ls_pow_eval(pn, d0);
     }
     for (int it = 0; it < 100; it++) {
-        const double f = d + Fd - d0, f1 = 1.0 + n * Fd / d, f2 = n * (n - 1.0) * Fd / (d * d);
-        const double step = 2.0 * f * f1 / (2.0 * f1 * f1 - f * f2);
+        /* Halley's step 2 f f' / (2 f'^2 - f f'') with f' = g / d, g = d + n F d^n,
+         * and f'' = n (n - 1) F d^n / d^2, multiplied through by d^2: one
+         * division. */
+        const double f = d + Fd - d0, g = d + n * Fd;
+        const double step = 2.0 * f * g * d / (2.0 * g * g - f * nn1 * Fd);
         double next = d - step;
-        /* Cubic convergence: once a step is this small the error after
-         * it is ~1e-21 (tested before the bracket, which round-off at the
-         * root can leave on either side). */
-        if (fabs(step) <= 1e-7 * d)
+        /* Cubic convergence: the relative error after a step of
+         * relative size s is about n^2 s^3, so s <= 1e-5 leaves ~5e-15,
+         * the powers' own accuracy, and below the round-off of z = z_r + d
+         * wherever z >= 50 d (tested before the bracket, which round-off
+         * at the root can leave on either side). */
+        if (fabs(step) <= 1e-5 * d)
             return next;
         if (f > 0)
             hi = d;
@@ -145,7 +170,7 @@ static double fluvial_delta(double d0, double F, double n)
         if (!(next > lo && next < hi))
             next = 0.5 * (lo + hi);
         d = next;
-        Fd = F * pow(d, n);
+        Fd = F * ls_pow_eval(pn, d);
     }
     return d;
 }
@@ -292,7 +317,8 @@ int ls_implicit_step(dfle_landscape *ls, double dt, double tol, double quantile,
                 const double Am = sqrt_m ? sqrt(A[c]) : pow(A[c], mexp);
                 const double F = K * ls_value(&ls->K_scale, c) * Am * dt / Ln[dir[c]];
                 if (d0 > 0 && F > 0) {
-                    const double d = n_one ? d0 / (1.0 + F) : fluvial_delta(d0, F, nexp);
+                    const double d = n_one ? d0 / (1.0 + F)
+                                           : fluvial_delta(d0, F, &ls->pow_n, &ls->pow_inv_n);
                     zn = z[r] + d;
                     Vf += d0 - d;
                 }
