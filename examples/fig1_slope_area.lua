@@ -33,21 +33,13 @@ local opts = dfle.args{
   about = "The paper's Fig. 1 from a real DEM.",
   flags = { quick = "the same run: it takes seconds either way (for the test suite)" },
   options = { data = { "DIR", "the data directory, holding dem/ (default: $DFLE_DATA_DIR)",
-                       default = os.getenv("DFLE_DATA_DIR") } },
+                       env = "DFLE_DATA_DIR",
+                       needs = { "dem/srtm_bigtujunga30m_utm11.tif", "the Big Tujunga DEM" } } },
   output = true,
 }
 local outdir = opts.output
 
--- The DEM: --data DIR or $DFLE_DATA_DIR, the directory holding dem/.
-local dem_file = (opts.data or "") .. "/dem/srtm_bigtujunga30m_utm11.tif"
-local probe = opts.data and io.open(dem_file)
-if not probe then
-  io.stderr:write(("%s: needs the Big Tujunga DEM, dem/srtm_bigtujunga30m_utm11.tif: "
-                   .. "pass --data DIR or set DFLE_DATA_DIR to the directory holding dem/%s\n")
-                  :format(arg[0], opts.data and (" (not in " .. opts.data .. ")") or ""))
-  os.exit(2)
-end
-probe:close()
+local dem_file = opts.data_file
 local path = dem_file
 
 -- Each catchment is drawn in the colour the paper names it by (the

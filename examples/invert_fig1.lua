@@ -34,21 +34,13 @@ local opts = dfle.args{
   about = "The posterior of U for the two Fig. 1 catchments of the Big Tujunga DEM.",
   flags = { quick = "a very short chain on a coarse channel (for the test suite and the gallery)" },
   options = { data = { "DIR", "the data directory, holding dem/ (default: $DFLE_DATA_DIR)",
-                       default = os.getenv("DFLE_DATA_DIR") } },
+                       env = "DFLE_DATA_DIR",
+                       needs = { "dem/srtm_bigtujunga30m_utm11.tif", "the Big Tujunga DEM" } } },
   output = true,
 }
 local quick, outdir = opts.quick, opts.output
 
--- The DEM: --data DIR or $DFLE_DATA_DIR, the directory holding dem/.
-local path = (opts.data or "") .. "/dem/srtm_bigtujunga30m_utm11.tif"
-local probe = opts.data and io.open(path, "rb")
-if not probe then
-  io.stderr:write(("%s: needs the Big Tujunga DEM, dem/srtm_bigtujunga30m_utm11.tif: "
-                   .. "pass --data DIR or set DFLE_DATA_DIR to the directory holding dem/%s\n")
-                  :format(arg[0], opts.data and (" (not in " .. opts.data .. ")") or ""))
-  os.exit(2)
-end
-probe:close()
+local path = opts.data_file
 
 local catchments = {
   { name = "black", E = 396887, N = 3799338 },

@@ -31,19 +31,12 @@ local opts = dfle.args{
   about = "The Big Tujunga catchment evolved to steady state; its slope-area against the DEM's.",
   flags = { quick = "a 90 m grid, no transient (for the test suite)" },
   options = { data = { "DIR", "the data directory, holding dem/ (default: $DFLE_DATA_DIR)",
-                       default = os.getenv("DFLE_DATA_DIR") } },
+                       env = "DFLE_DATA_DIR",
+                       needs = { "dem/srtm_bigtujunga30m_utm11.tif", "the Big Tujunga DEM" } } },
   output = true,
 }
 local quick, outdir = opts.quick, opts.output
-local path = (opts.data or "") .. "/dem/srtm_bigtujunga30m_utm11.tif"
-local probe = opts.data and io.open(path, "rb")
-if not probe then
-  io.stderr:write(("%s: needs the Big Tujunga DEM, dem/srtm_bigtujunga30m_utm11.tif: "
-                   .. "pass --data DIR or set DFLE_DATA_DIR to the directory holding dem/%s\n")
-                  :format(arg[0], opts.data and (" (not in " .. opts.data .. ")") or ""))
-  os.exit(2)
-end
-probe:close()
+local path = opts.data_file
 local function out(name) return outdir .. "/" .. name end
 
 local outlet = { 396887, 3799338 }

@@ -190,6 +190,20 @@ local o = dfle.args{ options = { data = { "DIR", "the data", default = "" } } }
 print("data=" .. tostring(o.data))
 ]=])
     T.has(run(""), "data=nil")
+    -- env and needs: a default from the environment, a file it must hold
+    T.write_file(script, [=[
+local o = dfle.args{ options = { data = { "DIR", "the data", env = "DFLE_T_DATA",
+                                          needs = { "sub/f.txt", "the test file" } } } }
+print("file=" .. o.data_file)
+]=])
+    local out2, ok2, code2 = sh("DFLE_T_DATA=" .. q(dir) .. " " .. q(T.dfle) .. " -q " .. q(script))
+    T.eq(ok2, nil); T.eq(code2, 2)
+    T.has(out2, "needs the test file, sub/f.txt", "--data DIR", "DFLE_T_DATA", "holding sub/",
+          "(not in " .. dir .. ")")
+    os.execute("mkdir -p " .. q(dir .. "/sub"))
+    T.write_file(dir .. "/sub/f.txt", "x")
+    T.has(sh("DFLE_T_DATA=" .. q(dir) .. " " .. q(T.dfle) .. " -q " .. q(script)), "file=" .. dir .. "/sub/f.txt")
+    T.has(run("--data " .. q(dir)), "file=" .. dir .. "/sub/f.txt")
     os.execute("rm -rf " .. q(dir))
 end
 

@@ -7,10 +7,11 @@
  *     about   = "The paper's Fig. 1 from a real DEM.",
  *     flags   = { quick = "a fast version (for the test suite)" },
  *     options = { data = { "DIR", "data directory (default: $DFLE_DATA_DIR)",
- *                          default = os.getenv("DFLE_DATA_DIR") } },
+ *                          env = "DFLE_DATA_DIR",
+ *                          needs = { "dem/srtm_bigtujunga30m_utm11.tif", "the DEM" } } },
  *     output  = true,   -- an output directory, default ".", created
  *   }
- *   o.quick, o.data, o.output
+ *   o.quick, o.data, o.data_file, o.output
  *
  * Why in the binding: every example parsed its arguments by hand, so a
  * misspelt flag (--qiuck) or --help became the output directory and the
@@ -19,7 +20,8 @@
  * done: --help (usage on stdout, exit 0), an error naming an unknown
  * option and listing the known ones, values for --name VALUE or
  * --name=VALUE, at most one positional argument, and the output
- * directory made (like mkdir -p).  The parser is a few lines of Lua,
+ * directory made (like mkdir -p), and a data file that is missing named
+ * with the option and variable that point at it.  The parser is a few lines of Lua,
  * kept here as a chunk loaded when the module opens.
  */
 #include "lua/core/dfle_lua.h"
@@ -91,7 +93,11 @@ static const char args_chunk[] =
     "for name in pairs(flags) do names[#names + 1] = name end\n"
     "for name, o in pairs(options) do\n"
     "  if type(o) ~= 'table' or type(o[1]) ~= 'string' or type(o[2]) ~= 'string' then\n"
-    "    error(('dfle.args: option %q must be {\\\"VALUE\\\", \\\"help text\\\", default = ...}'):format(name), 3)\n"
+    "    error(('dfle.args: option %q must be {\\\"VALUE\\\", \\\"help text\\\", default = ..., env = ..., needs = ...}'):format(name), 3)\n"
+    "  end\n"
+    "  if o.env ~= nil and type(o.env) ~= 'string' then error(('dfle.args: option %q: env must be a string'):format(name), 3) end\n"
+    "  if o.needs ~= nil and (type(o.needs) ~= 'table' or type(o.needs[1]) ~= 'string' or (o.needs[2] ~= nil and type(o.needs[2]) ~= 'string')) then\n"
+    "    error(('dfle.args: option %q: needs must be {\\\"relative/file\\\", \\\"what it is\\\"}'):format(name), 3)\n"
     "  end\n"
     "  names[#names + 1] = name\n"
     "end\n"
@@ -120,7 +126,11 @@ static const char args_chunk[] =
     "local r = {}\n"
     "for n in pairs(flags) do r[n] = false end\n"
     "-- an empty default (an environment variable set to '') is no default\n"
-    "for n, o in pairs(options) do if o.default ~= '' then r[n] = o.default end end\n"
+    "for n, o in pairs(options) do\n"
+    "  local d = o.default\n"
+    "  if d == nil and o.env then d = os.getenv(o.env) end\n"
+    "  if d ~= '' then r[n] = d end\n"
+    "end\n"
     "local positional = {}\n"
     "local i = 1\n"
     "while i <= #argv do\n"
@@ -156,6 +166,24 @@ static const char args_chunk[] =
     "  if not ok then error((tostring(e):gsub('^dfle%.args:%d+: ', '')), 3) end\n"
     "elseif #positional > 0 then\n"
     "  error(('unexpected argument %q (options: %s)'):format(positional[1], known()), 3)\n"
+    "end\n"
+    "-- needs: a directory option that must hold a file; without it, say\n"
+    "-- what is needed and how to point at it, and stop (status 2)\n"
+    "for _, n in ipairs(names) do\n"
+    "  local o = options[n]\n"
+    "  if o and o.needs then\n"
+    "    local file = r[n] and (r[n] .. '/' .. o.needs[1])\n"
+    "    local probe = file and io.open(file, 'rb')\n"
+    "    if not probe then\n"
+    "      local top = o.needs[1]:match('^([^/]+/)') or o.needs[1]\n"
+    "      io.stderr:write(('%s: needs %s%s: pass --%s %s%s to the directory holding %s%s\\n'):format(\n"
+    "        argv[0] or 'script', o.needs[2] and (o.needs[2] .. ', ') or '', o.needs[1], n, o[1],\n"
+    "        o.env and (' or set ' .. o.env) or '', top, r[n] and (' (not in ' .. r[n] .. ')') or ''))\n"
+    "      os.exit(2)\n"
+    "    end\n"
+    "    probe:close()\n"
+    "    r[n .. '_file'] = file\n"
+    "  end\n"
     "end\n"
     "return r\n";
 
