@@ -1065,6 +1065,42 @@ static void test_panels_and_sheet(void **state)
     assert_msg_contains(err.msg, "is not a PNG image");
 }
 
+static dfle_plot_map map_for_script;
+static int map_plot(fixture *fx, dfle_error *err)
+{
+    return dfle_plot_hillshade(fx->path, &map_for_script, err);
+}
+
+/* The map's legend names a colour only where the map shows it: reach is
+ * painted over channels, so with every channel reached there is no
+ * channel entry; with one channel cell beyond the reach there is. */
+static void test_map_legend(void **state)
+{
+    fixture *fx = *state;
+    char prog[600];
+    double z[16], ch[16], reach[16];
+    dfle_error err = {0};
+    for (int i = 0; i < 16; i++) {
+        z[i] = 100.0 - (double)(i / 4) * 10.0 + (double)(i % 4);
+        ch[i] = (i % 4) == 1;
+        reach[i] = ch[i];
+    }
+    map_for_script = (dfle_plot_map){.nx = 4, .ny = 4, .x0 = 0, .y0 = 120, .dx = 30, .dy = 30,
+                                     .z = z, .channel = ch, .reach = reach};
+    teeing_gnuplot(fx, prog, sizeof prog);
+    in_dir(fx, "map.png");
+    assert_ok(with_gnuplot(prog, map_plot, fx, &err), &err);
+    assert_non_null(strstr(last_script(fx), "Debris-flow reach"));
+    assert_null(strstr(last_script(fx), "Channel"));
+    reach[13] = 0; /* the channel's last cell: rivers only */
+    assert_ok(with_gnuplot(prog, map_plot, fx, &err), &err);
+    assert_non_null(strstr(last_script(fx), "Channels beyond the debris-flow reach"));
+    map_for_script.reach = NULL; /* a DEM's map: channels only */
+    assert_ok(with_gnuplot(prog, map_plot, fx, &err), &err);
+    assert_non_null(strstr(last_script(fx), "Channel network"));
+    assert_null(strstr(last_script(fx), "Debris-flow reach"));
+}
+
 int main(void)
 {
     const struct CMUnitTest tests[] = {
@@ -1095,6 +1131,7 @@ int main(void)
         cmocka_unit_test_setup_teardown(test_pdf_and_svg, setup, teardown),
         cmocka_unit_test_setup_teardown(test_missing_terminal, setup, teardown),
         cmocka_unit_test_setup_teardown(test_panels_and_sheet, setup, teardown),
+        cmocka_unit_test_setup_teardown(test_map_legend, setup, teardown),
     };
     return cmocka_run_group_tests(tests, NULL, NULL);
 }

@@ -201,7 +201,8 @@ int dfle_plot_sheet(const char *path, const dfle_plot_opts *opts, const char *co
 /* A map: shaded relief of z (Horn's slope and aspect, light from the
  * north-west at 45 degrees) over a hypsometric tint with its colour
  * box, the channel cells in blue and the cells debris flows reach in
- * vermillion on top, axes in km of map coordinates, equal scales.  Grids
+ * vermillion on top (the legend names a colour only where the map shows
+ * it: no channel entry when every channel cell is reached), axes in km of map coordinates, equal scales.  Grids
  * of more than 1.5e6 cells are drawn every k-th cell. */
 typedef struct dfle_plot_map {
     size_t nx, ny;            /* columns, rows (row 0 at the north)      */

@@ -366,9 +366,17 @@ int dfle_plot_hillshade(const char *path, const dfle_plot_map *m, dfle_error *er
             "%.17g):(int($3) >> 16 & 255):(int($3) >> 8 & 255):(int($3) & 255) with rgbimage "
             "notitle, ", m->x0 / 1000, sx, m->y0 / 1000, sy);
     fputs("$cb using 1:2:3 with image notitle", r.f); /* the colour box's scale */
-    if (m->channel != NULL) {
+    /* Reach is painted over channels, so the channel colour shows only
+     * where no debris flow goes: no legend entry for a colour the map
+     * does not show (every channel reached). */
+    int channel_seen = 0;
+    for (size_t i = 0; m->channel != NULL && !channel_seen && i < m->nx * m->ny; i++)
+        channel_seen = m->channel[i] > 0 && !(m->reach != NULL && m->reach[i] > 0);
+    if (channel_seen) {
         fputs(", NaN with lines lw 6 lc rgb '#0072B2' title ", r.f);
-        dfle_gp_str(r.f, m->channel_label != NULL ? m->channel_label : "Channel network");
+        dfle_gp_str(r.f, m->channel_label != NULL ? m->channel_label
+                         : m->reach != NULL ? "Channels beyond the debris-flow reach"
+                                            : "Channel network");
     }
     if (m->reach != NULL) {
         fputs(", NaN with lines lw 6 lc rgb '#D55E00' title ", r.f);

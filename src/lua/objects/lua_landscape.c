@@ -1062,7 +1062,8 @@ static int l_plot(lua_State *L)
         m.channel = get_field(L, DFLE_LS_CHANNEL, "dfle.landscape:plot");
     if (reach)
         m.reach = get_field(L, DFLE_LS_REACH, "dfle.landscape:plot");
-    snprintf(chlab, sizeof chlab, "Channel network (A ≥ A_0)");
+    snprintf(chlab, sizeof chlab, reach ? "Channels beyond the debris-flow reach (A ≥ A_0)"
+                                        : "Channel network (A ≥ A_0)");
     m.channel_label = chlab;
     if (dfle_plot_hillshade(path, &m, &err) != DFLE_OK)
         return dfle_lua_raise(L, &err);
