@@ -68,19 +68,6 @@ static int time_routing(size_t side, const double *z, enum dfle_drainage_depress
     return st != DFLE_OK;
 }
 
-/* Slope of log t against log n, least squares. */
-static double exponent(const double *n, const double *t, int k)
-{
-    double sx = 0, sy = 0, sxx = 0, sxy = 0;
-    for (int i = 0; i < k; i++) {
-        double x = log(n[i]), y = log(t[i]);
-        sx += x;
-        sy += y;
-        sxx += x * x;
-        sxy += x * y;
-    }
-    return (k * sxy - sx * sy) / (k * sxx - sx * sx);
-}
 
 int main(int argc, char **argv)
 {

@@ -26,18 +26,6 @@
 
 #include "bench.h"
 
-static double exponent(const double *n, const double *t, int k)
-{
-    double sx = 0, sy = 0, sxx = 0, sxy = 0;
-    for (int i = 0; i < k; i++) {
-        double x = log(n[i]), y = log(t[i]);
-        sx += x;
-        sy += y;
-        sxx += x * x;
-        sxy += x * y;
-    }
-    return (k * sxy - sx * sy) / (k * sxx - sx * sx);
-}
 
 typedef struct figures {
     double first, route, solve, step, bytes;
