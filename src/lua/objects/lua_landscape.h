@@ -1,0 +1,48 @@
+/*
+ * lua_landscape.h - what the two halves of dfle.landscape's binding
+ * share: the userdata (its components held as user values, the Lua
+ * callbacks of fields and of the combine rule) and the two functions
+ * that cross between construction (lua_landscape_new.c) and the
+ * methods (lua_landscape.c).  Internal to the binding.
+ */
+#ifndef DFLE_LUA_LANDSCAPE_H
+#define DFLE_LUA_LANDSCAPE_H
+
+#include "lua/core/dfle_lua.h"
+
+#include "dfle/landscape.h"
+
+#define DFLE_LUA_LANDSCAPE "dfle.landscape"
+
+enum { UV_FLUVIAL = 1, UV_ROUTER, UV_LAW, UV_CRS, UV_COUNT = UV_CRS };
+enum { F_U, F_K, F_DF, F_COUNT };
+
+struct lua_ls;
+typedef struct field_cb {
+    struct lua_ls *u;
+    int ref;          /* the Lua function, or LUA_NOREF */
+    double divide_by; /* a scale: the value over the component's own */
+    int with_t;       /* f(x, y, t): called every step */
+    const char *name;
+} field_cb;
+
+typedef struct lua_ls {
+    dfle_landscape *ls;
+    DFLE_LUA_IN_USE;
+    lua_State *L;     /* the thread of the call running now (callbacks) */
+    int ref_combine;
+    field_cb cb[F_COUNT];
+    double x0, y0;    /* north-west corner [m] */
+    size_t nx, ny;    /* the grid, for callbacks (also while it is built) */
+    double dx, dy;
+    const double *zmask; /* elevations whose NaN mark NoData */
+    char *crs;        /* WKT (a string held as user value UV_CRS) or NULL */
+    char cb_err[512]; /* a callback's failure */
+} lua_ls;
+
+/* dfle.landscape{...} -> a landscape (lua_landscape_new.c). */
+int dfle_lua_landscape_new(lua_State *L);
+/* Raise err, preferring a callback's own message (lua_landscape.c). */
+int dfle_lua_ls_raise(lua_State *L, lua_ls *u, const dfle_error *err);
+
+#endif
