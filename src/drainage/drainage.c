@@ -76,10 +76,9 @@ void dfle_drainage_trim(dfle_drainage *dr)
     free(dr->zfill);
     free(dr->heap);
     free(dr->height);
-    free(dr->bg.start); /* all the per-basin arrays */
+    free(dr->bg.block); /* all the per-basin arrays */
     free(dr->bg.link);
-    free(dr->bg.sorted);
-    free(dr->bg.count);
+    free(dr->bg.spare);
     dr->mark = NULL;
     for (int k = 0; k < 3; k++)
         dr->work[k] = NULL;
@@ -384,6 +383,6 @@ size_t dfle_drainage_memory(const dfle_drainage *dr)
     bytes += dr->zfill != NULL ? n * sizeof *dr->zfill : 0;
     bytes += dr->heap_cap * sizeof *dr->heap + dr->height_cap * sizeof *dr->height;
     bytes += b > 0 ? DRAINAGE_BASIN_WORDS(b) * sizeof(uint32_t) : 0;
-    bytes += 2 * dr->bg.link_cap * sizeof *dr->bg.link + dr->bg.count_cap * sizeof(uint32_t);
+    bytes += 2 * dr->bg.link_cap * sizeof *dr->bg.link;
     return bytes;
 }

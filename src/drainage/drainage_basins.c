@@ -13,8 +13,8 @@
  * of its cells that may leave the grid (an OPEN edge or NoData border),
  * at that cell's elevation: there the basin spills off the grid, the
  * cell becoming an outlet, as priority-flood would have it.  The
- * minimum spanning tree of the basins (Kruskal: links by cost,
- * union-find) holds each basin's way out over the lowest passes, which
+ * minimum spanning tree of the basins (Boruvka's rounds, below)
+ * holds each basin's way out over the lowest passes, which
  * is where a flood would spill; oriented from the outside, it gives
  * each basin the link it drains through.  The pit
  * is then joined to that pass by reversing the receivers along the flow
@@ -25,10 +25,12 @@
  * Costs: a pass over the pit basins' cells and their neighbours to find
  * the links (a basin's links are kept unique by remembering, per
  * neighbouring basin, the link it last made, as Cordonnier et al. do; a
- * basin's cells are gathered by a walk up its donors), a radix sort of
- * the links (a link per pair of touching basins), and a walk of each
- * carved path: all linear.  Ties in cost go to the link found first,
- * and links are found in a fixed order, so the result is reproducible.
+ * basin's cells are gathered by a walk up its donors), Boruvka's rounds
+ * over the links (a link per pair of touching basins; each round a pass
+ * over the links left, the components at least halved: no sort, which
+ * took twice as long as the rounds do), and a walk of each carved path.
+ * Ties in cost go to the link found first, and links are found in a
+ * fixed order, so the result is reproducible.
  *
  * A region from which no basin reaches the outside (walled in by CLOSED
  * edges or NoData) keeps one sink, at its lowest pit; its other basins
@@ -55,14 +57,17 @@ static int reserve_basins(drainage_basins *bg, size_t need)
     cap = need + need / 2;
     if ((block = malloc(DRAINAGE_BASIN_WORDS(cap) * sizeof *block)) == NULL)
         return -1;
-    free(bg->start);
-    bg->start = block;
+    free(bg->block);
+    bg->block = block;
+    /* tree[] first, where best_key (8-byte words) overlays it */
+    bg->tree = block;
+    bg->best_key = (uint64_t *)bg->block;
+    bg->start = bg->tree + 2 * cap;
     bg->owner = bg->start + cap + 1;
     bg->pos = bg->owner + cap;
     bg->up = bg->pos + cap;
     bg->tree_off = bg->up + cap;
-    bg->tree = bg->tree_off + cap + 1;
-    bg->queue = bg->tree + 2 * cap;
+    bg->queue = bg->tree_off + cap + 1;
     bg->in = bg->queue + cap;
     bg->out = bg->in + cap;
     bg->cap = cap;
@@ -80,9 +85,9 @@ static int add_link(drainage_basins *bg, double w, uint32_t a, uint32_t b, uint3
         if (l == NULL)
             return -1;
         bg->link = l;
-        if ((t = realloc(bg->sorted, cap * sizeof *t)) == NULL)
+        if ((t = realloc(bg->spare, cap * sizeof *t)) == NULL)
             return -1;
-        bg->sorted = t;
+        bg->spare = t;
         bg->link_cap = cap;
     }
     bg->link[bg->n_link++] = (drainage_link){w, a, b, i, j};
@@ -201,58 +206,13 @@ static int find_links(dfle_drainage *dr, const double *z, const uint32_t *basin,
 }
 
 /* The bits of w as an unsigned key in the same order (sign flipped
- * for positives, all bits for negatives). */
-static uint64_t sort_key(double w)
+ * for positives, all bits for negatives): a total order of the costs
+ * in which -0 comes before +0. */
+static uint64_t cost_key(double w)
 {
     uint64_t b;
     memcpy(&b, &w, sizeof b);
     return b >> 63 ? ~b : b | 0x8000000000000000ull;
-}
-
-/* Links by cost: a stable LSD radix sort (passes where every key has
- * the same digit are skipped), so ties keep the order the links were
- * found in and the result is reproducible.  Linear, where a comparison
- * sort would make the links the one O(n log n) step.  Many links take
- * 11-bit digits (6 passes, a 48 kB histogram kept with the object: 16-bit
- * digits, 4 passes, scatter each pass over 65536 places and were no
- * faster at 1e5 links, slower at 1e6); few take bytes (8 passes, 8 kB). */
-static int sort_links(drainage_basins *bg)
-{
-    size_t n = bg->n_link;
-    int bits = n > ((size_t)1 << 16) ? 11 : 8, passes = (64 + bits - 1) / bits;
-    size_t radix = (size_t)1 << bits, mask = radix - 1;
-    if (n < 2)
-        return 0;
-    if (bg->count_cap < (size_t)passes * radix) {
-        uint32_t *c = realloc(bg->count, (size_t)passes * radix * sizeof *c);
-        if (c == NULL)
-            return -1;
-        bg->count = c;
-        bg->count_cap = (size_t)passes * radix;
-    }
-    memset(bg->count, 0, (size_t)passes * radix * sizeof *bg->count);
-    for (size_t l = 0; l < n; l++) {
-        uint64_t key = sort_key(bg->link[l].w);
-        for (int d = 0; d < passes; d++)
-            bg->count[(size_t)d * radix + ((key >> (bits * d)) & mask)]++;
-    }
-    for (int d = 0; d < passes; d++) {
-        uint32_t sum = 0, *at = bg->count + (size_t)d * radix;
-        drainage_link *t;
-        if (at[(sort_key(bg->link[0].w) >> (bits * d)) & mask] == n)
-            continue;
-        for (size_t v = 0; v < radix; v++) {
-            uint32_t c = at[v];
-            at[v] = sum;
-            sum += c;
-        }
-        for (size_t l = 0; l < n; l++)
-            bg->sorted[at[(sort_key(bg->link[l].w) >> (bits * d)) & mask]++] = bg->link[l];
-        t = bg->link;
-        bg->link = bg->sorted;
-        bg->sorted = t;
-    }
-    return 0;
 }
 
 static uint32_t find(uint32_t *up, uint32_t x)
@@ -264,21 +224,82 @@ static uint32_t find(uint32_t *up, uint32_t x)
     return x;
 }
 
-/* Kruskal: keep the links that join two components, cheapest first
- * (links sorted); they end up at the front of the link array.  Returns
- * how many. */
-static size_t spanning_tree(drainage_basins *bg, uint32_t n_basins)
+/* The minimum spanning forest of the basin graph by Boruvka's rounds:
+ * each component takes its cheapest link to another, until none has
+ * one.  Links are ordered by cost and then by the order they were
+ * found, a total order, so the forest is unique and is the one Kruskal
+ * would build from a stable sort of the links; but no sort is needed.
+ * Each round is one pass over the links that still join two components
+ * (the others are dropped, in place and in order), and at least halves
+ * the components.  Components are numbered afresh after each round and
+ * the links renamed to those numbers, so a round's union-find is small
+ * and stays in cache (finding roots among all the basins' numbers, a
+ * cache miss a link, took three times as long).  The forest's links go
+ * to the front of the link array, named by basin again.  Returns how
+ * many. */
+static size_t spanning_tree(drainage_basins *bg, const uint32_t *basin, uint32_t n_basins)
 {
-    size_t n_tree = 0;
-    for (uint32_t b = 0; b <= n_basins; b++)
-        bg->up[b] = b;
-    for (size_t l = 0; l < bg->n_link && n_tree < n_basins; l++) {
-        uint32_t ra = find(bg->up, bg->link[l].a), rb = find(bg->up, bg->link[l].b);
-        if (ra == rb)
-            continue;
-        bg->up[ra] = rb;
-        bg->link[n_tree++] = bg->link[l];
+    /* Per component; none of these holds anything between calls. */
+    uint32_t *best = bg->pos, *up = bg->up, *name = bg->queue;
+    uint64_t *best_key = bg->best_key;
+    drainage_link *tree = bg->spare, *t;
+    size_t n_tree = 0, n_live = bg->n_link, n_comp = (size_t)n_basins + 1;
+    for (size_t c = 0; c < n_comp; c++)
+        name[c] = (uint32_t)c; /* round one: components are basins */
+    while (n_live > 0) {
+        size_t kept = 0, next = 0;
+        for (size_t c = 0; c < n_comp; c++) {
+            up[c] = (uint32_t)c;
+            best[c] = NONE;
+        }
+        for (size_t l = 0; l < n_live; l++) {
+            drainage_link lk = bg->link[l];
+            uint64_t key;
+            lk.a = name[lk.a];
+            lk.b = name[lk.b];
+            if (lk.a == lk.b)
+                continue;
+            key = cost_key(lk.w);
+            /* Equal costs: the link found first, already there. */
+            if (best[lk.a] == NONE || key < best_key[lk.a]) {
+                best[lk.a] = (uint32_t)kept;
+                best_key[lk.a] = key;
+            }
+            if (best[lk.b] == NONE || key < best_key[lk.b]) {
+                best[lk.b] = (uint32_t)kept;
+                best_key[lk.b] = key;
+            }
+            bg->link[kept++] = lk;
+        }
+        n_live = kept;
+        /* The links chosen make no cycle (the order is total), but a
+         * link chosen from both sides is taken once. */
+        for (size_t c = 0; c < n_comp; c++) {
+            const drainage_link *lk;
+            uint32_t ra, rb;
+            if (best[c] == NONE)
+                continue;
+            lk = &bg->link[best[c]];
+            if ((ra = find(up, lk->a)) == (rb = find(up, lk->b)))
+                continue;
+            up[ra] = rb;
+            tree[n_tree] = *lk;
+            tree[n_tree].a = basin[lk->i];
+            tree[n_tree++].b = lk->j == NONE ? 0 : basin[lk->j];
+        }
+        /* Number the new components: roots first, then each the root's. */
+        for (size_t c = 0; c < n_comp; c++)
+            if (find(up, (uint32_t)c) == c)
+                best[c] = (uint32_t)next++;
+        for (size_t c = 0; c < n_comp; c++)
+            name[c] = best[find(up, (uint32_t)c)];
+        if (next == n_comp) /* no link joined two: the rest are apart */
+            break;
+        n_comp = next;
     }
+    t = bg->link;
+    bg->link = bg->spare;
+    bg->spare = t;
     return n_tree;
 }
 
@@ -335,8 +356,16 @@ static void orient(dfle_drainage *dr, const double *z, uint32_t n_basins, size_t
     orient_from(bg, 0);
     if (n_tree == n_basins)
         return;
-    for (uint32_t b = 0; b <= n_basins; b++)
+    /* Components of the forest (spanning_tree numbered them afresh each
+     * round, so up[] is theirs no more). */
+    for (uint32_t b = 0; b <= n_basins; b++) {
         lowest[b] = NONE;
+        bg->up[b] = b;
+    }
+    for (size_t t = 0; t < n_tree; t++) {
+        uint32_t ra = find(bg->up, bg->link[t].a), rb = find(bg->up, bg->link[t].b);
+        bg->up[ra] = rb;
+    }
     for (uint32_t b = 1; b <= n_basins; b++) {
         uint32_t c = find(bg->up, b), pit = dr->stack[bg->start[b]];
         if (bg->in[b] != NONE)
@@ -387,9 +416,9 @@ int drainage_carve(dfle_drainage *dr, const double *z, dfle_error *err)
         goto nomem;
     n_basins = (uint32_t)label_basins(dr, basin, dr->stack);
     assert(n_basins == dr->counts.pits);
-    if (find_links(dr, z, basin, dr->stack, n_basins) != 0 || sort_links(bg) != 0)
+    if (find_links(dr, z, basin, dr->stack, n_basins) != 0)
         goto nomem;
-    n_tree = spanning_tree(bg, n_basins);
+    n_tree = spanning_tree(bg, basin, n_basins);
     orient(dr, z, n_basins, n_tree);
     for (uint32_t b = 1; b <= n_basins; b++)
         if (bg->in[b] != ROOT)

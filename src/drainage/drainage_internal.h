@@ -40,22 +40,22 @@ typedef struct drainage_link {
 
 typedef struct drainage_basins {
     size_t cap;          /* basins the arrays below can hold; they are
-                            one block of DRAINAGE_BASIN_WORDS(cap), from
-                            `start`                                      */
+                            one block of DRAINAGE_BASIN_WORDS(cap)      */
+    void *block;
     uint32_t *start;     /* cap + 1: basin b's cells are members[start[b] ..
                             start[b + 1]) (members borrow the stack)     */
     uint32_t *owner;     /* cap: basin that last made a link to b        */
     uint32_t *pos;       /* cap: that link's index                       */
     uint32_t *up;        /* cap: union-find parent                       */
     uint32_t *tree_off;  /* cap + 1: tree links by basin (compressed rows) */
-    uint32_t *tree;      /* 2 cap                                        */
+    uint32_t *tree;      /* 2 cap; best_key, cap 8-byte words, overlays it
+                            while the spanning tree is built   */
+    uint64_t *best_key;
     uint32_t *queue;     /* cap                                          */
     uint32_t *in, *out;  /* cap each: the pass a basin drains over, from
                             its cell `in` to `out` in the next basin    */
-    drainage_link *link, *sorted; /* link_cap each; sorted: radix scratch */
+    drainage_link *link, *spare; /* link_cap each; spare: the spanning tree */
     size_t n_link, link_cap;
-    uint32_t *count;     /* radix histograms, count_cap                  */
-    size_t count_cap;
 } drainage_basins;
 
 #define DRAINAGE_BASIN_WORDS(cap) (10 * (cap) + 2)
