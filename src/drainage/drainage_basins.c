@@ -74,23 +74,20 @@ static int reserve_basins(drainage_basins *bg, size_t need)
     return 0;
 }
 
-static int add_link(drainage_basins *bg, double w, uint32_t a, uint32_t b, uint32_t i,
-                    uint32_t j)
+/* Room for more links (out of the way of the search's hot loop). */
+static int grow_links(drainage_basins *bg)
 {
-    if (bg->n_link >= ROOT) /* pos[] holds link indices as uint32 */
+    size_t cap = bg->link_cap ? 2 * bg->link_cap : 1024;
+    drainage_link *l, *t;
+    if (cap > ROOT) /* pos[] holds link indices as uint32 */
+        cap = ROOT;
+    if (cap <= bg->link_cap || (l = realloc(bg->link, cap * sizeof *l)) == NULL)
         return -1;
-    if (bg->n_link == bg->link_cap) {
-        size_t cap = bg->link_cap ? 2 * bg->link_cap : 1024;
-        drainage_link *l = realloc(bg->link, cap * sizeof *l), *t;
-        if (l == NULL)
-            return -1;
-        bg->link = l;
-        if ((t = realloc(bg->spare, cap * sizeof *t)) == NULL)
-            return -1;
-        bg->spare = t;
-        bg->link_cap = cap;
-    }
-    bg->link[bg->n_link++] = (drainage_link){w, a, b, i, j};
+    bg->link = l;
+    if ((t = realloc(bg->spare, cap * sizeof *t)) == NULL)
+        return -1;
+    bg->spare = t;
+    bg->link_cap = cap;
     return 0;
 }
 
@@ -126,13 +123,17 @@ static size_t label_basins(dfle_drainage *dr, uint32_t *basin, uint32_t *members
 
 /* Basin a may reach basin b (0: outside) over i -> j at cost w; keep
  * the cheapest such pass per pair (the first of equal ones). */
-static int offer(drainage_basins *bg, uint32_t a, uint32_t b, double w, uint32_t i, uint32_t j)
+static inline int offer(drainage_basins *bg, uint32_t a, uint32_t b, double w, uint32_t i,
+                        uint32_t j)
 {
     drainage_link *l;
     if (bg->owner[b] != a) {
+        if (bg->n_link == bg->link_cap && grow_links(bg) != 0)
+            return -1;
         bg->owner[b] = a;
         bg->pos[b] = (uint32_t)bg->n_link;
-        return add_link(bg, w, a, b, i, j);
+        bg->link[bg->n_link++] = (drainage_link){w, a, b, i, j};
+        return 0;
     }
     l = &bg->link[bg->pos[b]];
     if (w < l->w) {
@@ -158,8 +159,9 @@ static int find_links(dfle_drainage *dr, const double *z, const uint32_t *basin,
         bg->owner[b] = NONE;
     for (uint32_t a = 1; a <= n_basins; a++) {
         for (uint32_t m = bg->start[a]; m < bg->start[a + 1]; m++) {
-            uint32_t i = members[m], r = drainage_row(dr, i), c = i - r * nx, across[8];
+            uint32_t i = members[m], r = drainage_row(dr, i), c = i - r * nx, across[8], to[8];
             int interior = drainage_interior(dr, r, c), at_border = 0, n_across = 0;
+            const double zi = z[i];
             /* A big basin's members, in breadth-first order, leap about
              * the grid: fetch the three rows around a coming one. */
             if (m + DRAINAGE_AHEAD < end) {
@@ -181,24 +183,27 @@ static int find_links(dfle_drainage *dr, const double *z, const uint32_t *basin,
                     uint32_t nb = (uint32_t)((long long)i + dr->step[k]), b = basin[nb];
                     at_border |= b == NONE;
                     across[n_across] = nb;
-                    n_across += (b != a) & (b != NONE) & ((b == 0) | (b > a));
+                    to[n_across] = b;
+                    n_across += (b - 1u >= a) & (b != NONE); /* b == 0 or b > a */
                 }
             } else {
                 for (int k = 0; k < 8; k++) {
                     long long nb = drainage_nb(dr, r, c, k);
                     uint32_t b = nb < 0 ? NONE : basin[nb];
                     at_border |= b == NONE;
-                    if (b != a && b != NONE && (b == 0 || b > a))
-                        across[n_across++] = (uint32_t)nb;
+                    if (b != a && b != NONE && (b == 0 || b > a)) {
+                        across[n_across] = (uint32_t)nb;
+                        to[n_across++] = b;
+                    }
                 }
             }
             for (int q = 0; q < n_across; q++) {
                 uint32_t j = across[q];
-                if (offer(bg, a, basin[j], z[i] > z[j] ? z[i] : z[j], i, j) != 0)
+                if (offer(bg, a, to[q], zi > z[j] ? zi : z[j], i, j) != 0)
                     return -1;
             }
             if (at_border && drainage_exit(dr, z, i) != DFLE_DRAINAGE_CLOSED &&
-                offer(bg, a, 0, z[i], i, NONE) != 0)
+                offer(bg, a, 0, zi, i, NONE) != 0)
                 return -1;
         }
     }
@@ -244,6 +249,7 @@ static size_t spanning_tree(drainage_basins *bg, const uint32_t *basin, uint32_t
     uint64_t *best_key = bg->best_key;
     drainage_link *tree = bg->spare, *t;
     size_t n_tree = 0, n_live = bg->n_link, n_comp = (size_t)n_basins + 1;
+    int first = 1;
     for (size_t c = 0; c < n_comp; c++)
         name[c] = (uint32_t)c; /* round one: components are basins */
     while (n_live > 0) {
@@ -284,8 +290,11 @@ static size_t spanning_tree(drainage_basins *bg, const uint32_t *basin, uint32_t
                 continue;
             up[ra] = rb;
             tree[n_tree] = *lk;
-            tree[n_tree].a = basin[lk->i];
-            tree[n_tree++].b = lk->j == NONE ? 0 : basin[lk->j];
+            if (!first) { /* named by component: by basin again */
+                tree[n_tree].a = basin[lk->i];
+                tree[n_tree].b = lk->j == NONE ? 0 : basin[lk->j];
+            }
+            n_tree++;
         }
         /* Number the new components: roots first, then each the root's. */
         for (size_t c = 0; c < n_comp; c++)
@@ -296,6 +305,7 @@ static size_t spanning_tree(drainage_basins *bg, const uint32_t *basin, uint32_t
         if (next == n_comp) /* no link joined two: the rest are apart */
             break;
         n_comp = next;
+        first = 0;
     }
     t = bg->link;
     bg->link = bg->spare;
