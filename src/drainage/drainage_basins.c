@@ -59,10 +59,8 @@ static int reserve_basins(drainage_basins *bg, size_t need)
         return -1;
     free(bg->block);
     bg->block = block;
-    /* tree[] first, where best_key (8-byte words) overlays it */
-    bg->tree = block;
-    bg->best_key = (uint64_t *)bg->block;
-    bg->start = bg->tree + 2 * cap;
+    bg->best_key = (uint64_t *)bg->block; /* first: 8-byte words */
+    bg->start = block + 2 * cap;
     bg->owner = bg->start + cap + 1;
     bg->pos = bg->owner + cap;
     bg->up = bg->pos + cap;
@@ -315,9 +313,9 @@ static size_t spanning_tree(drainage_basins *bg, const uint32_t *basin, uint32_t
 
 /* Breadth-first from `root` over the tree links: each basin reached
  * drains over the link it was reached by, from its cell in[] to out[].
- * (Recording the cells, not the link, keeps the carving below from
- * chasing links scattered by the sort.) */
-static void orient_from(drainage_basins *bg, uint32_t root)
+ * A basin's links are listed with it (adj), each with the two cells,
+ * so the walk reads one place per basin rather than chasing links. */
+static void orient_from(drainage_basins *bg, const drainage_adj *adj, uint32_t root)
 {
     size_t head = 0, tail = 0;
     bg->in[root] = ROOT;
@@ -325,18 +323,16 @@ static void orient_from(drainage_basins *bg, uint32_t root)
     while (head < tail) {
         uint32_t a = bg->queue[head++];
         if (head + 2 * DRAINAGE_AHEAD < tail) { /* basins in no spatial order */
-            uint32_t q = bg->queue[head + DRAINAGE_AHEAD];
             DRAINAGE_PREFETCH(&bg->tree_off[bg->queue[head + 2 * DRAINAGE_AHEAD]]);
-            DRAINAGE_PREFETCH(&bg->link[bg->tree[bg->tree_off[q]]]);
+            DRAINAGE_PREFETCH(&adj[bg->tree_off[bg->queue[head + DRAINAGE_AHEAD]]]);
         }
         for (uint32_t t = bg->tree_off[a]; t < bg->tree_off[a + 1]; t++) {
-            const drainage_link *l = &bg->link[bg->tree[t]];
-            uint32_t b = l->a == a ? l->b : l->a;
-            if (bg->in[b] != NONE)
+            const drainage_adj e = adj[t];
+            if (bg->in[e.to] != NONE)
                 continue;
-            bg->in[b] = l->a == b ? l->i : l->j;
-            bg->out[b] = l->a == b ? l->j : l->i;
-            bg->queue[tail++] = b;
+            bg->in[e.to] = e.in;
+            bg->out[e.to] = e.out;
+            bg->queue[tail++] = e.to;
         }
     }
 }
@@ -347,6 +343,8 @@ static void orient(dfle_drainage *dr, const double *z, uint32_t n_basins, size_t
 {
     drainage_basins *bg = &dr->bg;
     uint32_t *lowest = bg->owner; /* per component; owner[] is done */
+    /* 2 n_tree entries of 12 bytes in the n_link >= n_tree links' room */
+    drainage_adj *adj = (drainage_adj *)(void *)bg->spare;
     memset(bg->tree_off, 0, ((size_t)n_basins + 2) * sizeof *bg->tree_off);
     for (size_t t = 0; t < n_tree; t++) {
         bg->tree_off[bg->link[t].a + 1]++;
@@ -355,15 +353,16 @@ static void orient(dfle_drainage *dr, const double *z, uint32_t n_basins, size_t
     for (uint32_t b = 0; b <= n_basins; b++)
         bg->tree_off[b + 1] += bg->tree_off[b];
     for (size_t t = 0; t < n_tree; t++) { /* tree_off[x] as cursor, as for donors */
-        bg->tree[bg->tree_off[bg->link[t].a]++] = (uint32_t)t;
-        bg->tree[bg->tree_off[bg->link[t].b]++] = (uint32_t)t;
+        const drainage_link *l = &bg->link[t];
+        adj[bg->tree_off[l->a]++] = (drainage_adj){l->b, l->j, l->i};
+        adj[bg->tree_off[l->b]++] = (drainage_adj){l->a, l->i, l->j};
     }
     memmove(bg->tree_off + 1, bg->tree_off, ((size_t)n_basins + 1) * sizeof *bg->tree_off);
     bg->tree_off[0] = 0;
 
     for (uint32_t b = 0; b <= n_basins; b++)
         bg->in[b] = NONE;
-    orient_from(bg, 0);
+    orient_from(bg, adj, 0);
     if (n_tree == n_basins)
         return;
     /* Components of the forest (spanning_tree numbered them afresh each
@@ -385,7 +384,7 @@ static void orient(dfle_drainage *dr, const double *z, uint32_t n_basins, size_t
     }
     for (uint32_t b = 1; b <= n_basins; b++)
         if (lowest[b] != NONE)
-            orient_from(bg, lowest[b]);
+            orient_from(bg, adj, lowest[b]);
 }
 
 /* Reverse the receivers from basin b's pass cell down to its pit and

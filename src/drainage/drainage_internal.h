@@ -38,6 +38,12 @@ typedef struct drainage_link {
     uint32_t i, j;   /* the pass: cell i in a, j in b (or off the grid)  */
 } drainage_link;
 
+/* A tree link seen from one of its basins: the basin at the other end
+ * would drain over it from its cell `in` to `out` in this one. */
+typedef struct drainage_adj {
+    uint32_t to, in, out;
+} drainage_adj;
+
 typedef struct drainage_basins {
     size_t cap;          /* basins the arrays below can hold; they are
                             one block of DRAINAGE_BASIN_WORDS(cap)      */
@@ -48,13 +54,12 @@ typedef struct drainage_basins {
     uint32_t *pos;       /* cap: that link's index                       */
     uint32_t *up;        /* cap: union-find parent                       */
     uint32_t *tree_off;  /* cap + 1: tree links by basin (compressed rows) */
-    uint32_t *tree;      /* 2 cap; best_key, cap 8-byte words, overlays it
-                            while the spanning tree is built   */
-    uint64_t *best_key;
+    uint64_t *best_key;  /* cap: a component's cheapest link's cost     */
     uint32_t *queue;     /* cap                                          */
     uint32_t *in, *out;  /* cap each: the pass a basin drains over, from
                             its cell `in` to `out` in the next basin    */
-    drainage_link *link, *spare; /* link_cap each; spare: the spanning tree */
+    drainage_link *link, *spare; /* link_cap each; spare: scratch (the
+                                     spanning tree, its links by basin) */
     size_t n_link, link_cap;
 } drainage_basins;
 
