@@ -308,10 +308,6 @@ int dfle_drainage_route(dfle_drainage *dr, const double *z, dfle_error *err)
     if ((st = drainage_stack(dr, n_data, err)) != DFLE_OK)
         return st;
     dr->counts.data = n_data;
-    for (size_t i = 0; i < dr->n; i++) {
-        dr->counts.outlets += dr->dir[i] == DIR_OUT;
-        dr->counts.sinks += dr->dir[i] == DIR_SINK;
-    }
     dr->routed = 1;
     return DFLE_OK;
 }

@@ -390,12 +390,10 @@ static void orient(dfle_drainage *dr, const double *z, uint32_t n_basins, size_t
 /* Reverse the receivers from basin b's pass cell down to its pit and
  * send the pass cell over the pass (or off the grid).  Returns the
  * cells changed. */
-static size_t carve_path(dfle_drainage *dr, const uint32_t *basin, uint32_t b)
+static size_t carve_path(dfle_drainage *dr, uint32_t b)
 {
     uint32_t cur = dr->bg.in[b], prev = dr->bg.out[b];
     size_t changed = 0;
-    assert(basin[cur] == b && (prev == NONE || basin[prev] != b));
-    (void)basin;
     for (;;) {
         uint32_t next = dr->rcv[cur];
         if (prev == NONE) {
@@ -429,9 +427,14 @@ int drainage_carve(dfle_drainage *dr, const double *z, dfle_error *err)
         goto nomem;
     n_tree = spanning_tree(bg, basin, n_basins);
     orient(dr, z, n_basins, n_tree);
-    for (uint32_t b = 1; b <= n_basins; b++)
+    for (uint32_t b = 1; b <= n_basins; b++) {
+        if (b + DRAINAGE_AHEAD <= n_basins && bg->in[b + DRAINAGE_AHEAD] != ROOT) {
+            DRAINAGE_PREFETCH(&dr->rcv[bg->in[b + DRAINAGE_AHEAD]]); /* pass cells: anywhere */
+            DRAINAGE_PREFETCH(&dr->dir[bg->in[b + DRAINAGE_AHEAD]]);
+        }
         if (bg->in[b] != ROOT)
-            dr->counts.carved += carve_path(dr, basin, b);
+            dr->counts.carved += carve_path(dr, b);
+    }
     dr->counts.basins = n_basins;
     return DFLE_OK;
 nomem:

@@ -169,8 +169,8 @@ size_t drainage_d8(dfle_drainage *dr, const double *z, size_t *n_data, int *infi
 int drainage_flats(dfle_drainage *dr, const double *z, size_t n_sinks, dfle_error *err);
 
 /* drainage_tree.c: donors from rcv; the stack in the order of the
- * options (DFLE_ENUMERIC on a cycle, which would be a bug) and drainage
- * area (NaN on NoData). */
+ * options (DFLE_ENUMERIC on a cycle, which would be a bug), drainage
+ * area (NaN on NoData) and counts.outlets and counts.sinks. */
 void drainage_donors(dfle_drainage *dr);
 int drainage_stack(dfle_drainage *dr, size_t n_data, dfle_error *err);
 

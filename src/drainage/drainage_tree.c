@@ -53,8 +53,11 @@ static size_t kahn(dfle_drainage *dr, size_t n_data, unsigned char *left)
     const uint32_t *rcv = dr->rcv;
     double *area = dr->area, cell = dr->o.dx * dr->o.dy;
     size_t head = 0, tail = 0;
+    size_t outlets = 0, sinks = 0;
     for (size_t i = 0; i < dr->n; i++) {
         int data = dr->dir[i] != DIR_NODATA;
+        outlets += dr->dir[i] == DIR_OUT; /* the counts, on the way */
+        sinks += dr->dir[i] == DIR_SINK;
         left[i] = (unsigned char)(dr->don_off[i + 1] - dr->don_off[i]); /* at most 8 */
         area[i] = data ? 1.0 : NAN;
         if (left[i] == 0 && data)
@@ -77,6 +80,8 @@ static size_t kahn(dfle_drainage *dr, size_t n_data, unsigned char *left)
                 *(s - tail++) = r;
         }
     }
+    dr->counts.outlets = outlets;
+    dr->counts.sinks = sinks;
     return tail;
 }
 
@@ -97,6 +102,8 @@ static size_t depth_first(dfle_drainage *dr, unsigned char *next)
         }
         if (dr->rcv[root] != root)
             continue;
+        dr->counts.outlets += dr->dir[root] == DIR_OUT;
+        dr->counts.sinks += dr->dir[root] == DIR_SINK;
         s[t++] = c;
         next[c] = 0;
         dr->area[c] = 1.0;
