@@ -59,9 +59,10 @@ static int check_opts(const dfle_drainage_opts *o, dfle_error *err)
         o->depressions != DFLE_DRAINAGE_CARVE)
         return dfle_error_set(err, DFLE_EINVAL, "drainage: depressions = %d is not a method "
                               "(KEEP, FILL, CARVE)", (int)o->depressions);
-    if (o->order != DFLE_DRAINAGE_KAHN && o->order != DFLE_DRAINAGE_DEPTH_FIRST)
+    if (o->order != DFLE_DRAINAGE_KAHN && o->order != DFLE_DRAINAGE_DEPTH_FIRST &&
+        o->order != DFLE_DRAINAGE_CHAINS)
         return dfle_error_set(err, DFLE_EINVAL, "drainage: order = %d is not a stack order "
-                              "(KAHN, DEPTH_FIRST)", (int)o->order);
+                              "(KAHN, DEPTH_FIRST, CHAINS)", (int)o->order);
     return DFLE_OK;
 }
 
