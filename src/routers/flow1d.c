@@ -44,16 +44,16 @@ struct dfle_flow1d {
      * c, smax and the volume afresh over the whole grid. */
     int stale;
     double smax;   /* max |u| + c over wet cells [m/s]: the CFL speed     */
+    double phi_k;  /* I0 sqrt(rho / rho_s) / (2 D_eff) [s/m] (phi_wet)   */
     double volume; /* sum of w h dx over the grid, in cell order [m^3]    */
     /* One block; cell arrays have n values, face arrays n + 1 (face k lies
      * between cells k - 1 and k; face 0 is the upstream wall, face n the
-     * outlet).  Per cell, fixed: w, w dx, g_x, g_z, g_z / 2, rho g_z,
-     * w dx g_x and the width step wf[k+1] - wf[k], each computed as the
-     * expressions of Eqs. (8)-(10) would, so results are the same to the
-     * bit.  Per cell, the state and what a step derives from it once: the
+     * outlet).  Per cell, fixed: w, w dx, its reciprocal (a step
+     * multiplies by it: a division costs several multiplications), g_x,
+     * g_z, g_z / 2, w dx g_x and the width step wf[k+1] - wf[k].  Per cell, the state and what a step derives from it once: the
      * velocity u = q/h and wave speed c = sqrt(g_z h) of wet cells (0 in
      * dry ones), used by both faces, the CFL step and friction. */
-    double *w, *wdx, *gx, *gz, *hg, *rgz, *wgx, *dwf; /* cells, geometry */
+    double *w, *wdx, *rwdx, *gx, *gz, *hg, *wgx, *dwf; /* cells, geometry */
     double *h, *q, *u, *c, *limit, *held;             /* cells, state    */
     double *wf, *Fh, *Fq, *face_vol;                  /* faces           */
 };
@@ -144,9 +144,10 @@ int dfle_flow1d_new(size_t n, double dx, const double *w, const double *S,
     f->hi = n;
     f->stale = 1;
     f->smax = f->volume = 0.0;
+    f->phi_k = p->I0 * sqrt(p->rho / p->rho_s) / (2.0 * p->D_eff);
     cell[0] = &f->w; /* first: the block starts at w */
     cell[1] = &f->wdx, cell[2] = &f->gx, cell[3] = &f->gz, cell[4] = &f->hg;
-    cell[5] = &f->rgz, cell[6] = &f->wgx, cell[7] = &f->dwf, cell[8] = &f->h;
+    cell[5] = &f->rwdx, cell[6] = &f->wgx, cell[7] = &f->dwf, cell[8] = &f->h;
     cell[9] = &f->q, cell[10] = &f->u, cell[11] = &f->c, cell[12] = &f->limit;
     cell[13] = &f->held;
     face[0] = &f->wf, face[1] = &f->Fh, face[2] = &f->Fq, face[3] = &f->face_vol;
@@ -165,7 +166,7 @@ int dfle_flow1d_new(size_t n, double dx, const double *w, const double *S,
         f->gx[k] = p->g * sin(theta);
         f->gz[k] = p->g * cos(theta);
         f->hg[k] = 0.5 * f->gz[k];
-        f->rgz[k] = p->rho * f->gz[k];
+        f->rwdx[k] = 1.0 / f->wdx[k];
         f->wgx[k] = f->wdx[k] * f->gx[k];
         f->dwf[k] = f->wf[k + 1] - f->wf[k];
     }
@@ -217,8 +218,15 @@ double dfle_flow1d_pore_length(const dfle_flow1d *f, double t)
  * cannot alias them, and the compiler keeps them in registers. */
 static inline double lambda_of(const dfle_flow1d_params *p, double h, double L)
 {
-    /* 1 - erfc(2h/sqrt(4Dt)) = erf(h/sqrt(Dt)) */
-    return L == 0.0 ? p->lambda0 : p->lambda0 * erf(h / L);
+    /* 1 - erfc(2h/sqrt(4Dt)) = erf(h/sqrt(Dt)).  From x = 6 on, erf(x)
+     * is 1 to the bit (1 - erf(6) = 2e-17, under half an ulp of 1, and
+     * libm returns 1 there): the call is skipped, as it is for most
+     * cells of a flow older than a few seconds. */
+    double x;
+    if (L == 0.0)
+        return p->lambda0;
+    x = h / L;
+    return x >= 6.0 ? p->lambda0 : p->lambda0 * erf(x);
 }
 
 double dfle_flow1d_lambda_at(const dfle_flow1d *f, double h, double L)
@@ -231,18 +239,21 @@ double dfle_flow1d_lambda(const dfle_flow1d *f, double h, double t)
     return dfle_flow1d_lambda_at(f, h, dfle_flow1d_pore_length(f, t));
 }
 
-/* Eq. (10) at depth h > h_dry in a cell with rho g_z = rgz. */
-static inline double phi_wet(const dfle_flow1d_params *p, double rgz, double h, double v)
+/* Eq. (10) at depth h > h_dry where the wave speed is c = sqrt(g_z h):
+ * with P = rho g_z h, sqrt(P / rho_s) = c sqrt(rho / rho_s), so
+ * I = |v| / (phi_k h c) I0 and I / (I0 + I) = |v| / (|v| + phi_k h c),
+ * one division where Eq. (10) as written takes four and a root (c is
+ * at hand in a step).  No 1/0 at rest: phi = mu_s there exactly. */
+static inline double phi_wet(const dfle_flow1d_params *p, double phi_k, double c, double h,
+                             double v)
 {
-    double P = rgz * h; /* basal normal stress rho g_z h [Pa] */
-    double I = (2.0 * fabs(v) / h) * p->D_eff / sqrt(P / p->rho_s);
-    /* Written as (mu_2 - mu_s) I / (I0 + I): no 1/0 at rest. */
-    return p->mu_s + (p->mu_2 - p->mu_s) * I / (p->I0 + I);
+    const double a = fabs(v);
+    return p->mu_s + (p->mu_2 - p->mu_s) * a / (a + phi_k * h * c);
 }
 
 double dfle_flow1d_phi(const dfle_flow1d *f, size_t k, double h, double v)
 {
-    return h > f->p.h_dry ? phi_wet(&f->p, f->rgz[k], h, v) : f->p.mu_s;
+    return h > f->p.h_dry ? phi_wet(&f->p, f->phi_k, sqrt(f->gz[k] * h), h, v) : f->p.mu_s;
 }
 
 double dfle_flow1d_phi_max(const dfle_flow1d *f)
@@ -433,8 +444,8 @@ static void hold_resting_cells(dfle_flow1d *f, double dt, double L, size_t lo, s
             if (!(h[k] > p.h_dry) || q[k] != 0.0)
                 continue;
             push = fabs(momentum_after_fluxes(f, k, dt, h[k], q[k],
-                                              wf[k + 1] * Fq[k + 1] - wf[k] * Fq[k])) /
-                   f->wdx[k];
+                                              wf[k + 1] * Fq[k + 1] - wf[k] * Fq[k])) *
+                   f->rwdx[k];
             held[k] = coulomb_resists(&p, dt, f->gz[k], h[k], p.mu_s, L, push);
             any |= held[k] != 0.0;
         }
@@ -492,20 +503,25 @@ static inline void finish_face(dfle_flow1d *f, size_t k, double dt, double *vol,
 static int update(dfle_flow1d *f, double dt, double L, size_t lo, size_t hi, dfle_error *err)
 {
     const dfle_flow1d_params p = f->p;
-    const double dx = f->dx, drag = dt * 2.0 * p.eta * p.v_f;
-    const double *restrict w = f->w, *restrict wdx = f->wdx, *restrict gz = f->gz,
-                 *restrict rgz = f->rgz, *restrict held = f->held;
+    const double dx = f->dx, phi_k = f->phi_k;
+    /* The drag factor 1 + 2 eta v_f dt / (rho h^2) as rho h^2 + dt 2 eta
+     * v_f over rho h^2 (one division); and dt (1 - lambda0), the first
+     * factor of every Coulomb bound at lambda0 (coulomb multiplies left
+     * to right, so the bound is the same to the bit). */
+    const double drag = dt * 2.0 * p.eta * p.v_f, dt_free = dt * (1.0 - p.lambda0);
+    const double *restrict w = f->w, *restrict rwdx = f->rwdx, *restrict gz = f->gz,
+                 *restrict held = f->held;
     double *restrict hs = f->h, *restrict qa = f->q, *restrict u = f->u, *restrict c = f->c;
     double smax = 0.0, volume = 0.0, fv0, fv1, mf0, mf1;
 
     finish_face(f, lo, dt, &fv0, &mf0);
     for (size_t k = lo; k < hi; k++, fv0 = fv1, mf0 = mf1) {
         const double h0 = hs[k], q0 = qa[k];
-        double vol, h, qs, fc, qn, s, phi;
+        double vol, h, qs, rhh, fc, qn, s, phi, b0;
 
         finish_face(f, k + 1, dt, &fv1, &mf1);
-        vol = wdx[k] * h0 - (fv1 - fv0);
-        h = vol > 0 ? vol / wdx[k] : 0.0; /* only round-off can make vol < 0 */
+        vol = f->wdx[k] * h0 - (fv1 - fv0);
+        h = vol > 0 ? vol * rwdx[k] : 0.0; /* only round-off can make vol < 0 */
         hs[k] = h;
         volume += w[k] * h * dx;
         if (!(h > p.h_dry)) {
@@ -517,9 +533,10 @@ static int update(dfle_flow1d *f, double dt, double L, size_t lo, size_t hi, dfl
             qa[k] = u[k] = 0.0;
             s = c[k];
         } else {
-            qs = momentum_after_fluxes(f, k, dt, h0, q0, mf1 - mf0) / wdx[k];
+            qs = momentum_after_fluxes(f, k, dt, h0, q0, mf1 - mf0) * rwdx[k];
             /* Viscous pore-fluid drag 2 eta v_f v / (rho h), implicitly. */
-            qs /= 1.0 + drag / (p.rho * h * h);
+            rhh = p.rho * h * h;
+            qs = qs * rhh / (rhh + drag);
             /* Coulomb friction (1 - lambda) g_z h phi(I): stop, never
              * reverse.  phi comes from the speed at the start of the step
              * (u, explicit, as the paper's sources): from the speed after
@@ -530,10 +547,14 @@ static int update(dfle_flow1d *f, double dt, double L, size_t lo, size_t hi, dfl
              * cell that stops even then needs neither phi nor the erf,
              * and one that stops at lambda0 needs no erf. */
             qn = 0.0;
-            if (!(fabs(qs) <= coulomb(dt, 1.0 - p.lambda0, gz[k], h, p.mu_s))) {
-                phi = phi_wet(&p, rgz[k], h, u[k]);
-                if (!(fabs(qs) <= coulomb(dt, 1.0 - p.lambda0, gz[k], h, phi))) {
-                    fc = coulomb(dt, 1.0 - lambda_of(&p, h, L), gz[k], h, phi);
+            b0 = dt_free * gz[k] * h; /* coulomb(dt, 1 - lambda0, gz, h, .) / mu */
+            if (!(fabs(qs) <= b0 * p.mu_s)) {
+                phi = phi_wet(&p, phi_k, c[k], h, u[k]);
+                fc = b0 * phi;
+                if (!(fabs(qs) <= fc)) {
+                    const double lambda = lambda_of(&p, h, L);
+                    if (lambda != p.lambda0) /* else fc is the impulse already */
+                        fc = coulomb(dt, 1.0 - lambda, gz[k], h, phi);
                     qn = fabs(qs) <= fc ? 0.0 : qs - copysign(fc, qs);
                 }
             }
