@@ -504,11 +504,13 @@ static int update(dfle_flow1d *f, double dt, double L, size_t lo, size_t hi, dfl
 {
     const dfle_flow1d_params p = f->p;
     const double dx = f->dx, phi_k = f->phi_k;
-    /* The drag factor 1 + 2 eta v_f dt / (rho h^2) as rho h^2 + dt 2 eta
-     * v_f over rho h^2 (one division); and dt (1 - lambda0), the first
-     * factor of every Coulomb bound at lambda0 (coulomb multiplies left
-     * to right, so the bound is the same to the bit). */
-    const double drag = dt * 2.0 * p.eta * p.v_f, dt_free = dt * (1.0 - p.lambda0);
+    /* Per step: the drag 2 eta v_f dt [kg/(m s)]; dt (1 - lambda0), the
+     * first factor of every Coulomb bound at lambda0 (coulomb multiplies
+     * left to right, so the bound is the same to the bit); and 6 L, the
+     * depth from which erf(h / L) is 1 to the bit (lambda_of), 0 while
+     * lambda is lambda0 everywhere. */
+    const double drag = dt * 2.0 * p.eta * p.v_f, dt_free = dt * (1.0 - p.lambda0),
+                 six_L = 6.0 * L;
     const double *restrict w = f->w, *restrict rwdx = f->rwdx, *restrict gz = f->gz,
                  *restrict held = f->held;
     double *restrict hs = f->h, *restrict qa = f->q, *restrict u = f->u, *restrict c = f->c;
@@ -517,7 +519,7 @@ static int update(dfle_flow1d *f, double dt, double L, size_t lo, size_t hi, dfl
     finish_face(f, lo, dt, &fv0, &mf0);
     for (size_t k = lo; k < hi; k++, fv0 = fv1, mf0 = mf1) {
         const double h0 = hs[k], q0 = qa[k];
-        double vol, h, qs, rhh, fc, qn, s, phi, b0;
+        double vol, h, rh, rhh, drag_factor, qs, fc, qn, phi, b0, ck, uk;
 
         finish_face(f, k + 1, dt, &fv1, &mf1);
         vol = f->wdx[k] * h0 - (fv1 - fv0);
@@ -528,46 +530,39 @@ static int update(dfle_flow1d *f, double dt, double L, size_t lo, size_t hi, dfl
             qa[k] = u[k] = c[k] = 0.0;
             continue;
         }
-        c[k] = sqrt(gz[k] * h);
-        if (held[k] != 0.0) {
-            qa[k] = u[k] = 0.0;
-            s = c[k];
-        } else {
-            qs = momentum_after_fluxes(f, k, dt, h0, q0, mf1 - mf0) * rwdx[k];
-            /* Viscous pore-fluid drag 2 eta v_f v / (rho h), implicitly. */
-            rhh = p.rho * h * h;
-            qs = qs * rhh / (rhh + drag);
-            /* Coulomb friction (1 - lambda) g_z h phi(I): stop, never
-             * reverse.  phi comes from the speed at the start of the step
-             * (u, explicit, as the paper's sources): from the speed after
-             * a whole step of free acceleration it would jump towards
-             * mu_2 and stall every flow that starts from rest.  The
-             * impulse is at least its value at phi = mu_s and lambda =
-             * lambda0 (the same operations; rounding is monotone), so a
-             * cell that stops even then needs neither phi nor the erf,
-             * and one that stops at lambda0 needs no erf. */
-            qn = 0.0;
-            b0 = dt_free * gz[k] * h; /* coulomb(dt, 1 - lambda0, gz, h, .) / mu */
-            if (!(fabs(qs) <= b0 * p.mu_s)) {
-                phi = phi_wet(&p, phi_k, c[k], h, u[k]);
-                fc = b0 * phi;
-                if (!(fabs(qs) <= fc)) {
-                    const double lambda = lambda_of(&p, h, L);
-                    if (lambda != p.lambda0) /* else fc is the impulse already */
-                        fc = coulomb(dt, 1.0 - lambda, gz[k], h, phi);
-                    qn = fabs(qs) <= fc ? 0.0 : qs - copysign(fc, qs);
-                }
-            }
-            if (!isfinite(qn))
-                return dfle_error_set(err, DFLE_ENUMERIC,
-                                      "flow1d: discharge not finite in cell %zu (h = %g m)", k + 1,
-                                      h);
-            qa[k] = qn;
-            u[k] = qn == 0.0 ? 0.0 : qn / h;
-            s = fabs(u[k]) + c[k];
-        }
-        if (s > smax)
-            smax = s;
+        /* What depends on h alone first, so that its divisions and root
+         * overlap the momentum balance: 1/h, the implicit viscous drag
+         * 2 eta v_f v / (rho h) as the factor rho h^2 / (rho h^2 + dt 2
+         * eta v_f) on q, the wave speed and phi (Eq. 10, at the speed u
+         * of the start of the step, explicit as the paper's sources:
+         * from the speed after a whole step of free acceleration it
+         * would jump towards mu_2 and stall every flow that starts from
+         * rest). */
+        rh = 1.0 / h;
+        rhh = p.rho * h * h;
+        drag_factor = rhh / (rhh + drag);
+        ck = sqrt(gz[k] * h);
+        phi = phi_wet(&p, phi_k, ck, h, u[k]);
+        qs = momentum_after_fluxes(f, k, dt, h0, q0, mf1 - mf0) * rwdx[k] * drag_factor;
+        /* Coulomb friction (1 - lambda) g_z h phi(I): stop, never
+         * reverse.  At lambda = lambda0 (the impulse's lower bound, by
+         * the same operations: rounding is monotone) a cell that stops
+         * needs no erf, and below 6 L hardly any cell does. */
+        b0 = dt_free * gz[k] * h; /* coulomb(dt, 1 - lambda0, gz, h, .) / mu */
+        fc = b0 * phi;
+        if (!(h >= six_L) && !(fabs(qs) <= fc))
+            fc = coulomb(dt, 1.0 - lambda_of(&p, h, L), gz[k], h, phi);
+        qn = fabs(qs) <= fc ? 0.0 : qs - copysign(fc, qs);
+        /* A held cell stays at rest (hold_resting_cells). */
+        qn = held[k] != 0.0 ? 0.0 : qn;
+        if (!isfinite(qn))
+            return dfle_error_set(err, DFLE_ENUMERIC,
+                                  "flow1d: discharge not finite in cell %zu (h = %g m)", k + 1, h);
+        uk = qn * rh; /* 0 when qn is */
+        qa[k] = qn;
+        u[k] = uk;
+        c[k] = ck;
+        smax = fabs(uk) + ck > smax ? fabs(uk) + ck : smax;
     }
     f->smax = smax;
     f->volume = volume;
