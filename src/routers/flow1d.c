@@ -299,7 +299,7 @@ static inline void hllc(double hL, double qL, double uL, double cL, double hgL, 
                         double *Fq)
 {
     int dryL = !(hL > h_dry), dryR = !(hR > h_dry);
-    double SL, SR, Ss, FhL, FqL, FhR, FqR;
+    double SL, SR, Ss, hs, A, B, FhL, FqL, FhR, FqR;
 
     if (dryL && dryR) {
         *Fh = *Fq = 0.0;
@@ -333,13 +333,19 @@ static inline void hllc(double hL, double qL, double uL, double cL, double hgL, 
         *Fh = FhR, *Fq = FqR;
         return;
     }
-    Ss = (SL * hR * (uR - SR) - SR * hL * (uL - SL)) / (hR * (uR - SR) - hL * (uL - SL));
+    /* The contact speed and the star depth, which for shallow water is
+     * the HLL average h* = (hL (uL - SL) - hR (uR - SR)) / (SR - SL) on
+     * either side of the contact (Toro's hL (SL - uL) / (SL - S*), and
+     * its mirror, rewritten with S*): two divisions side by side, not
+     * one after the other, and h* >= 0 by construction. */
+    A = hR * (uR - SR);
+    B = hL * (uL - SL);
+    Ss = (SL * A - SR * B) / (A - B);
+    hs = (B - A) / (SR - SL);
     if (Ss >= 0) {
-        double hs = hL * (SL - uL) / (SL - Ss);
         *Fh = FhL + SL * (hs - hL);
         *Fq = FqL + SL * (hs * Ss - qL);
     } else {
-        double hs = hR * (SR - uR) / (SR - Ss);
         *Fh = FhR + SR * (hs - hR);
         *Fq = FqR + SR * (hs * Ss - qR);
     }
