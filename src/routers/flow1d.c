@@ -43,6 +43,11 @@ struct dfle_flow1d {
     /* 1 after h or q was handed out for writing: the next step derives u,
      * c, smax and the volume afresh over the whole grid. */
     int stale;
+    /* The wet cells at rest (q = 0) lie in [rest_lo, rest_hi) (empty if
+     * rest_lo >= rest_hi): the only cells friction can hold, so the only
+     * ones hold_resting_cells looks at.  A flow's resting cells are a
+     * few at its tail and front, its window a hundred. */
+    size_t rest_lo, rest_hi;
     double smax;   /* max |u| + c over wet cells [m/s]: the CFL speed     */
     double phi_k;  /* I0 sqrt(rho / rho_s) / (2 D_eff) [s/m] (phi_wet)   */
     double volume; /* sum of w h dx over the grid, in cell order [m^3]    */
@@ -434,12 +439,22 @@ static inline int coulomb_resists(const dfle_flow1d_params *p, double dt, double
  * nothing of friction and would still spill its edges into dry
  * neighbours, so no face may draw volume out of a held cell: there the
  * face is a wall.  Fluxes stay single-valued, volume stays conserved.
- * L: the pore-pressure diffusion length of this step. */
-static void hold_resting_cells(dfle_flow1d *f, double dt, double L, size_t lo, size_t hi)
+ * L: the pore-pressure diffusion length of this step.  Returns whether
+ * any cell is held; held[] is set only then, and only in [rest_lo,
+ * rest_hi) (every other cell of the window is not held). */
+static int hold_resting_cells(dfle_flow1d *f, double dt, double L, size_t lo, size_t hi)
 {
     const size_t n = f->n;
     const dfle_flow1d_params p = f->p;
     int any = 0;
+    /* Elsewhere no cell is held: the window is inside the grid and the
+     * resting cells inside the window (the rest holds no volume). */
+    if (f->rest_lo > lo)
+        lo = f->rest_lo;
+    if (f->rest_hi < hi)
+        hi = f->rest_hi;
+    if (lo >= hi)
+        return 0;
     {
         const double *restrict h = f->h, *restrict q = f->q, *restrict wf = f->wf,
                      *restrict Fq = f->Fq;
@@ -457,14 +472,15 @@ static void hold_resting_cells(dfle_flow1d *f, double dt, double L, size_t lo, s
         }
     }
     if (!any)
-        return;
-    /* Faces lo and hi (inside the grid) lie between dry cells: no flux. */
+        return 0;
+    /* Faces lo..hi touch every held cell. */
     for (size_t k = lo; k <= hi; k++) {
         if (f->Fh[k] > 0 && k > 0 && f->held[k - 1])
             wall_flux(f, k - 1, 1, &f->Fh[k], &f->Fq[k]);
         else if (f->Fh[k] < 0 && k < n && f->held[k])
             wall_flux(f, k, 0, &f->Fh[k], &f->Fq[k]);
     }
+    return 1;
 }
 
 /* Scale each cell's outgoing fluxes so that a step never takes more
@@ -505,8 +521,11 @@ static inline void finish_face(dfle_flow1d *f, size_t k, double dt, double *vol,
 /* The new state of cells [lo, hi): volume and momentum from the face
  * fluxes (each face finished just before the cell below it needs it) and
  * sources, drag, friction; then u, c, the CFL speed and the volume of the
- * new state (summed in cell order, as dfle_flow1d_volume does). */
-static int update(dfle_flow1d *f, double dt, double L, size_t lo, size_t hi, dfle_error *err)
+ * new state (summed in cell order, as dfle_flow1d_volume does), and the
+ * count of cells at rest.  any_held: whether hold_resting_cells held any
+ * cell (else held[] was not set). */
+static int update(dfle_flow1d *f, double dt, double L, size_t lo, size_t hi, int any_held,
+                  dfle_error *err)
 {
     const dfle_flow1d_params p = f->p;
     const double dx = f->dx, phi_k = f->phi_k;
@@ -521,6 +540,7 @@ static int update(dfle_flow1d *f, double dt, double L, size_t lo, size_t hi, dfl
                  *restrict held = f->held;
     double *restrict hs = f->h, *restrict qa = f->q, *restrict u = f->u, *restrict c = f->c;
     double smax = 0.0, volume = 0.0, fv0, fv1, mf0, mf1;
+    size_t rest_lo = hi, rest_hi = lo;
 
     finish_face(f, lo, dt, &fv0, &mf0);
     for (size_t k = lo; k < hi; k++, fv0 = fv1, mf0 = mf1) {
@@ -560,10 +580,15 @@ static int update(dfle_flow1d *f, double dt, double L, size_t lo, size_t hi, dfl
             fc = coulomb(dt, 1.0 - lambda_of(&p, h, L), gz[k], h, phi);
         qn = fabs(qs) <= fc ? 0.0 : qs - copysign(fc, qs);
         /* A held cell stays at rest (hold_resting_cells). */
-        qn = held[k] != 0.0 ? 0.0 : qn;
+        if (any_held && k >= f->rest_lo && k < f->rest_hi && held[k] != 0.0)
+            qn = 0.0;
         if (!isfinite(qn))
             return dfle_error_set(err, DFLE_ENUMERIC,
                                   "flow1d: discharge not finite in cell %zu (h = %g m)", k + 1, h);
+        if (qn == 0.0) {
+            rest_lo = rest_lo < k ? rest_lo : k;
+            rest_hi = k + 1;
+        }
         uk = qn * rh; /* 0 when qn is */
         qa[k] = qn;
         u[k] = uk;
@@ -572,6 +597,8 @@ static int update(dfle_flow1d *f, double dt, double L, size_t lo, size_t hi, dfl
     }
     f->smax = smax;
     f->volume = volume;
+    f->rest_lo = rest_lo;
+    f->rest_hi = rest_hi;
     return DFLE_OK;
 }
 
@@ -612,8 +639,15 @@ static void narrow_window(dfle_flow1d *f)
 /* After the caller wrote h or q: velocities and wave speeds afresh. */
 static void refresh(dfle_flow1d *f)
 {
-    for (size_t k = 0; k < f->n; k++)
+    f->rest_lo = f->n;
+    f->rest_hi = 0;
+    for (size_t k = 0; k < f->n; k++) {
         cell_speeds(f, k, &f->u[k], &f->c[k]);
+        if (f->h[k] > f->p.h_dry && f->q[k] == 0.0) {
+            f->rest_lo = f->rest_lo < k ? f->rest_lo : k;
+            f->rest_hi = k + 1;
+        }
+    }
     f->lo = 0;
     f->hi = f->n;
     f->stale = 0;
@@ -623,7 +657,7 @@ int dfle_flow1d_step(dfle_flow1d *f, double dt, double t_entry, double *outflow,
                      dfle_error *err)
 {
     double L;
-    int st;
+    int st, any_held;
 
     if (!(dt > 0 && isfinite(dt)))
         return dfle_error_set(err, DFLE_EINVAL, "flow1d: time step must be > 0 s (got %g)", dt);
@@ -633,9 +667,9 @@ int dfle_flow1d_step(dfle_flow1d *f, double dt, double t_entry, double *outflow,
         narrow_window(f);
     L = dfle_flow1d_pore_length(f, t_entry);
     compute_fluxes(f, f->lo, f->hi);
-    hold_resting_cells(f, dt, L, f->lo, f->hi);
+    any_held = hold_resting_cells(f, dt, L, f->lo, f->hi);
     limit_outflow(f, dt, f->lo, f->hi);
-    if ((st = update(f, dt, L, f->lo, f->hi, err)) != DFLE_OK) {
+    if ((st = update(f, dt, L, f->lo, f->hi, any_held, err)) != DFLE_OK) {
         f->stale = 1; /* the state is half updated */
         f->lo = 0;
         f->hi = f->n;
