@@ -541,6 +541,8 @@ static int update(dfle_flow1d *f, double dt, double L, size_t lo, size_t hi, int
     double *restrict hs = f->h, *restrict qa = f->q, *restrict u = f->u, *restrict c = f->c;
     double smax = 0.0, volume = 0.0, fv0, fv1, mf0, mf1;
     size_t rest_lo = hi, rest_hi = lo;
+    /* The held cells lie in [hold_lo, hold_lo + hold_n) (hold_resting_cells). */
+    const size_t hold_lo = f->rest_lo, hold_n = any_held ? f->rest_hi - f->rest_lo : 0;
 
     finish_face(f, lo, dt, &fv0, &mf0);
     for (size_t k = lo; k < hi; k++, fv0 = fv1, mf0 = mf1) {
@@ -580,7 +582,7 @@ static int update(dfle_flow1d *f, double dt, double L, size_t lo, size_t hi, int
             fc = coulomb(dt, 1.0 - lambda_of(&p, h, L), gz[k], h, phi);
         qn = fabs(qs) <= fc ? 0.0 : qs - copysign(fc, qs);
         /* A held cell stays at rest (hold_resting_cells). */
-        if (any_held && k >= f->rest_lo && k < f->rest_hi && held[k] != 0.0)
+        if (k - hold_lo < hold_n && held[k] != 0.0) /* k < hold_lo wraps around */
             qn = 0.0;
         if (!isfinite(qn))
             return dfle_error_set(err, DFLE_ENUMERIC,
