@@ -223,15 +223,14 @@ double dfle_flow1d_pore_length(const dfle_flow1d *f, double t)
  * cannot alias them, and the compiler keeps them in registers. */
 static inline double lambda_of(const dfle_flow1d_params *p, double h, double L)
 {
-    /* 1 - erfc(2h/sqrt(4Dt)) = erf(h/sqrt(Dt)).  From x = 6 on, erf(x)
-     * is 1 to the bit (1 - erf(6) = 2e-17, under half an ulp of 1, and
-     * libm returns 1 there): the call is skipped, as it is for most
-     * cells of a flow older than a few seconds. */
-    double x;
-    if (L == 0.0)
+    /* 1 - erfc(2h/sqrt(4Dt)) = erf(h/sqrt(Dt)).  From h / L = 6 on (to
+     * within rounding: from 5.93), erf is 1 to the bit (1 - erf(6) =
+     * 2e-17, under half an ulp of 1, and libm returns 1 there): the
+     * call is skipped, as it is for most cells of a flow older than a
+     * few seconds. */
+    if (L == 0.0 || h >= 6.0 * L)
         return p->lambda0;
-    x = h / L;
-    return x >= 6.0 ? p->lambda0 : p->lambda0 * erf(x);
+    return p->lambda0 * erf(h / L);
 }
 
 double dfle_flow1d_lambda_at(const dfle_flow1d *f, double h, double L)
