@@ -60,8 +60,7 @@ static int l_mkdir(lua_State *L)
 }
 
 static const char args_chunk[] =
-    "local spec = ...\n"
-    "local mkdir = select(2, ...)\n"
+    "local spec, mkdir, mark_usage = ...\n"
     "if type(spec) ~= 'table' then error('dfle.args: expected a table {usage =, flags =, options =, output =}', 3) end\n"
     "for k in pairs(spec) do\n"
     "  if k ~= 'usage' and k ~= 'about' and k ~= 'flags' and k ~= 'options' and k ~= 'output' and k ~= 'arg' then\n"
@@ -122,14 +121,13 @@ static const char args_chunk[] =
     "  io.stdout:write(table.concat(out, '\\n'), '\\n')\n"
     "  os.exit(0)\n"
     "end\n"
-    "-- a mistake on the command line: one line at the script's dfle.args\n"
-    "-- line and status 2, as for dfle's own options (no traceback: the\n"
-    "-- script is not at fault)\n"
+    "-- a mistake on the command line: an error at the script's dfle.args\n"
+    "-- line, marked so that dfle reports it as it does its own options\n"
+    "-- (status 2, no traceback: the script is not at fault)\n"
     "local function usage_error(msg)\n"
     "  local at = debug.getinfo(4, 'Sl')\n"
     "  local where = at and at.currentline > 0 and (at.short_src .. ':' .. at.currentline .. ': ') or ''\n"
-    "  io.stderr:write('dfle: ', where, msg, '\\n')\n"
-    "  os.exit(2)\n"
+    "  error(mark_usage(where .. msg), 0)\n"
     "end\n"
     "local argv = spec.arg or _G.arg or {}\n"
     "local r = {}\n"
@@ -196,14 +194,41 @@ static const char args_chunk[] =
     "end\n"
     "return r\n";
 
-/* dfle.args(spec): the chunk, called with the spec and dfle.mkdir. */
+/* The last command-line mistake dfle.args raised, in the registry. */
+static const char usage_key = 'u';
+
+/* mark_usage(msg) -> msg, remembered as a command-line mistake. */
+static int l_mark_usage(lua_State *L)
+{
+    luaL_checkstring(L, 1);
+    lua_settop(L, 1);
+    lua_pushvalue(L, 1);
+    lua_rawsetp(L, LUA_REGISTRYINDEX, &usage_key);
+    return 1;
+}
+
+int dfle_lua_is_usage_error(lua_State *L, const char *msg)
+{
+    int same;
+    if (msg == NULL)
+        return 0;
+    lua_rawgetp(L, LUA_REGISTRYINDEX, &usage_key);
+    /* the very message: one the script caught long ago is not this */
+    same = lua_type(L, -1) == LUA_TSTRING && strcmp(lua_tostring(L, -1), msg) == 0;
+    lua_pop(L, 1);
+    return same;
+}
+
+/* dfle.args(spec): the chunk, called with the spec, dfle.mkdir and
+ * mark_usage. */
 static int l_args(lua_State *L)
 {
     lua_settop(L, 1);
     lua_pushvalue(L, lua_upvalueindex(1));
     lua_insert(L, 1);
     lua_pushcfunction(L, l_mkdir);
-    lua_call(L, 2, 1);
+    lua_pushcfunction(L, l_mark_usage);
+    lua_call(L, 3, 1);
     return 1;
 }
 
