@@ -21,9 +21,14 @@
  *    lets a pile come to rest on a slope below its friction angle.
  *  - A step works on the wet window only (the cells holding volume and
  *    one more on each side: a first-order step moves volume no further),
- *    and computes nothing twice; where a bound decides (friction), the
- *    exact value is not computed.  Every number stays what the whole-grid
- *    sweep computes, to the bit (doc/process-router.md, the wet window).
+ *    and computes nothing twice; where a bound decides (friction's erf),
+ *    the exact value is not computed.  Every number stays what the
+ *    whole-grid sweep computes, to the bit (doc/process-router.md, the
+ *    wet window).
+ *  - Divisions are few and do not wait for each other (the divider is
+ *    what a step's time is made of): 1 / (w dx) per cell, drag and phi
+ *    in one division each, HLLC's star depth as the HLL average; the
+ *    same numbers to rounding (doc/process-router.md).
  */
 #include "dfle/flow1d.h"
 
@@ -55,9 +60,10 @@ struct dfle_flow1d {
      * between cells k - 1 and k; face 0 is the upstream wall, face n the
      * outlet).  Per cell, fixed: w, w dx, its reciprocal (a step
      * multiplies by it: a division costs several multiplications), g_x,
-     * g_z, g_z / 2, w dx g_x and the width step wf[k+1] - wf[k].  Per cell, the state and what a step derives from it once: the
-     * velocity u = q/h and wave speed c = sqrt(g_z h) of wet cells (0 in
-     * dry ones), used by both faces, the CFL step and friction. */
+     * g_z, g_z / 2, w dx g_x and the width step wf[k+1] - wf[k].  Per
+     * cell, the state and what a step derives from it once: the velocity
+     * u = q/h and wave speed c = sqrt(g_z h) of wet cells (0 in dry
+     * ones), used by both faces, the CFL step and friction. */
     double *w, *wdx, *rwdx, *gx, *gz, *hg, *wgx, *dwf; /* cells, geometry */
     double *h, *q, *u, *c, *limit, *held;             /* cells, state    */
     double *wf, *Fh, *Fq, *face_vol;                  /* faces           */
@@ -521,8 +527,8 @@ static inline void finish_face(dfle_flow1d *f, size_t k, double dt, double *vol,
  * fluxes (each face finished just before the cell below it needs it) and
  * sources, drag, friction; then u, c, the CFL speed and the volume of the
  * new state (summed in cell order, as dfle_flow1d_volume does), and the
- * count of cells at rest.  any_held: whether hold_resting_cells held any
- * cell (else held[] was not set). */
+ * span of the cells at rest.  any_held: whether hold_resting_cells held
+ * any cell (else held[] was not set). */
 static int update(dfle_flow1d *f, double dt, double L, size_t lo, size_t hi, int any_held,
                   dfle_error *err)
 {
@@ -535,8 +541,8 @@ static int update(dfle_flow1d *f, double dt, double L, size_t lo, size_t hi, int
      * lambda is lambda0 everywhere. */
     const double drag = dt * 2.0 * p.eta * p.v_f, dt_free = dt * (1.0 - p.lambda0),
                  six_L = 6.0 * L;
-    const double *restrict w = f->w, *restrict rwdx = f->rwdx, *restrict gz = f->gz,
-                 *restrict held = f->held;
+    const double *restrict w = f->w, *restrict wdx = f->wdx, *restrict rwdx = f->rwdx,
+                 *restrict gz = f->gz, *restrict held = f->held;
     double *restrict hs = f->h, *restrict qa = f->q, *restrict u = f->u, *restrict c = f->c;
     double smax = 0.0, volume = 0.0, fv0, fv1, mf0, mf1;
     size_t rest_lo = hi, rest_hi = lo;
@@ -549,7 +555,7 @@ static int update(dfle_flow1d *f, double dt, double L, size_t lo, size_t hi, int
         double vol, h, rh, rhh, drag_factor, qs, fc, qn, phi, b0, ck, uk;
 
         finish_face(f, k + 1, dt, &fv1, &mf1);
-        vol = f->wdx[k] * h0 - (fv1 - fv0);
+        vol = wdx[k] * h0 - (fv1 - fv0);
         h = vol > 0 ? vol * rwdx[k] : 0.0; /* only round-off can make vol < 0 */
         hs[k] = h;
         volume += w[k] * h * dx;
