@@ -308,13 +308,16 @@ static int l_gather(lua_State *L)
     return 1;
 }
 
-/* The bootstrap threads of a dfle.pawn call that gives none: the
- * command's -j, else (for an ensemble) the workers it ran with (at idx,
- * or 0); 0: dfle.pawn's own default, every core. */
+/* The bootstrap threads of a dfle.pawn call that gives none: 1 inside
+ * an ensemble's sample or an inversion (their workers have the cores
+ * already), else the command's -j, else (for an ensemble) the workers it
+ * ran with (at idx, or 0); 0: dfle.pawn's own default, every core. */
 static lua_Integer default_threads(lua_State *L, int ens)
 {
     const dfle_lua_ensemble_host *host = dfle_lua_ens_host(L);
     lua_Integer n = 0;
+    if (dfle_lua_par_inside(L))
+        return 1;
     if (host != NULL && host->workers > 0)
         return host->workers;
     if (ens != 0 && lua_getfield(L, ens, "workers") == LUA_TNUMBER)

@@ -103,6 +103,9 @@ int dfle_lua_par_enter(lua_State *L, int kind, int arg, lua_Integer *call);
 /* Parallel calls in progress in this state (a sample being run, an
  * inversion evaluating): calls made meanwhile are nested. */
 void dfle_lua_par_depth(lua_State *L, int delta);
+/* 1 while this state runs inside a parallel call (a sample of an
+ * ensemble, an inversion's model): the cores are taken already. */
+int dfle_lua_par_inside(lua_State *L);
 /* The name of a kind in messages: "dfle.ensemble", "dfle.invert". */
 const char *dfle_lua_par_name(int kind);
 const dfle_lua_ensemble_host *dfle_lua_ens_host(lua_State *L);
