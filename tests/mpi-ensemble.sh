@@ -118,11 +118,11 @@ if os.getenv("OMPI_COMM_WORLD_RANK") == os.getenv("VICTIM_RANK") and n == 3 then
   local t = os.time() + 60; while os.time() < t do end
 end
 local t = os.clock() + 0.03; while os.clock() < t do end'
-# lose_rank rank out log "mpirun options" "dfle-mpi options": 3 ranks,
-# one thread each; kill `rank` at its third sample.
+# lose_rank rank out log "mpirun options" "dfle-mpi options": 3 ranks
+# (RANKS), one thread each; kill `rank` at its third sample.
 lose_rank() {
     rm -f victim.pid
-    VICTIM_RANK=$1 $MPIRUN $4 -x VICTIM_RANK -n 3 "$DFLE_MPI" -q -j 1 $5 sweep.lua "$2" \
+    VICTIM_RANK=$1 $MPIRUN $4 -x VICTIM_RANK -n "${RANKS:-3}" "$DFLE_MPI" -q -j 1 $5 sweep.lua "$2" \
         "$VICTIM" > "$3" 2>&1 &
     job=$!
     k=0
@@ -157,6 +157,14 @@ if $MPIRUN --help all 2>/dev/null | grep -q -- --enable-recovery; then
         grep -q "warning: rank 2 (.*) has been silent for [0-9]* s: taken as lost; its [0-9]* samples* go.* to the other ranks" recovered.txt &&
         cmp -s plain.csv recovered.csv
     check "mpirun --enable-recovery, a rank killed mid-job: the others run its samples, the job finishes" $?
+    # The only other rank lost: rank 0's own workers run its samples,
+    # started again if they had run out of samples meanwhile.
+    RANKS=2 lose_rank 1 alone.csv alone.txt --enable-recovery "--rank-timeout 3"
+    s=$?
+    [ $s -eq 0 ] && grep -q "ran=40 count=40 ok=40" alone.txt &&
+        grep -q "warning: rank 1 (.*) has been silent for [0-9]* s: taken as lost; its [0-9]* samples* go.* to rank 0's own workers" alone.txt &&
+        cmp -s plain.csv alone.csv
+    check "mpirun --enable-recovery, the only other rank killed mid-job: rank 0 runs its samples, the job finishes" $?
     # Rank 0 lost: the others stop the job rather than wait for ever.
     # (mpirun's own status is 0 then: it lets ranks fail.)
     lose_rank 0 orphan.csv orphan.txt --enable-recovery "--rank-timeout 3"

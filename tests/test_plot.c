@@ -955,6 +955,16 @@ static void test_factored_ticks(void **state)
     dfle_gp_axis_ticks(&a, 400, 9, 0, NULL);
     assert_false(a.factored);
     assert_non_null(strstr(a.lab[0], "×10^{-6}"));
+    /* thousandths are decimals, factored or not */
+    dfle_gp_axis_range(&a, 0, 1e-3, 9e-3, 0, NULL);
+    a.factor_ok = 1;
+    dfle_gp_axis_ticks(&a, 400, 9, 0, NULL);
+    assert_false(a.factored);
+    assert_true(a.n >= 2);
+    for (size_t i = 0; i < a.n; i++) {
+        assert_null(strstr(a.lab[i], "10^"));
+        assert_true(strncmp(a.lab[i], "0.00", 4) == 0 || strcmp(a.lab[i], "0.01") == 0);
+    }
 }
 
 /* A PDF and an SVG, really drawn: the PDF's magic and trailer, the SVG's

@@ -116,6 +116,9 @@ int dfle_ens_queue_next(dfle_ens_queue *q, size_t *index);
 int dfle_ens_queue_give_back(dfle_ens_queue *q, size_t index, dfle_error *err);
 /* Make every later dfle_ens_queue_next return 0. */
 void dfle_ens_queue_stop(dfle_ens_queue *q);
+/* Indices dfle_ens_queue_next would still hand out (0 once stopped).
+ * Thread-safe. */
+size_t dfle_ens_queue_pending(dfle_ens_queue *q);
 
 /* Whether `index` belongs to shard shard_i of shard_n (rule above). */
 int dfle_ens_in_shard(size_t index, size_t shard_i, size_t shard_n);

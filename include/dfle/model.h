@@ -210,9 +210,12 @@ int dfle_model_node_erosion(dfle_model *m, size_t i, double S, double flows, dou
  * dfle_model_node_dlnS says whether they can now (a law written in Lua
  * can only while its compiled programs can be differentiated: law.h);
  * when they cannot, *dE is NaN and E is what dfle_model_node_erosion
- * gives. */
-int dfle_model_node_erosion_dlnS(dfle_model *m, size_t i, double S, double flows, double *E,
-                                 double *dE, int *goes_on, dfle_error *err);
+ * gives.  lnS is ln S, kept by the caller (Newton steps move it): the
+ * powers of S then cost an exp each instead of a pow or a cbrt, the
+ * bulk of a node solve.  Results agree with dfle_model_node_erosion's
+ * to rounding. */
+int dfle_model_node_erosion_dlnS(dfle_model *m, size_t i, double S, double lnS, double flows,
+                                 double *E, double *dE, int *goes_on, dfle_error *err);
 int dfle_model_node_dlnS(const dfle_model *m);
 /* One-node erosions evaluated (either function above) since creation:
  * what a node solve costs, counted by the model (laws must not count). */

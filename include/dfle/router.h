@@ -59,8 +59,10 @@ typedef struct dfle_router_ops {
      * flow answers S (flow.h: d ln h / d ln S and so on; all 0 where
      * S <= 0).  Where the flow stops (*goes_on = 0, Theta = 0) d->Theta
      * is 0, like Theta.  With it (and the law's rate_dlnS) the node
-     * solvers take Newton steps in ln S; without it they difference E. */
-    int (*node_flow_dlnS)(void *state, const dfle_network *net, size_t i, double S,
+     * solvers take Newton steps in ln S; without it they difference E.
+     * lnS is ln S, which the solvers keep: a power of S then costs an
+     * exp, not a pow or a cbrt (half the cost of a steady state). */
+    int (*node_flow_dlnS)(void *state, const dfle_network *net, size_t i, double S, double lnS,
                           dfle_flow *node, dfle_flow_dlnS *d, int *goes_on, dfle_error *err);
 } dfle_router_ops;
 
@@ -92,7 +94,7 @@ int dfle_router_node_flow(dfle_router *rt, const dfle_network *net, size_t i,
 /* The node_flow_dlnS op, or DFLE_ESTATE (with a message) if the router
  * has none (dfle_router_has_node_flow_dlnS says which). */
 int dfle_router_node_flow_dlnS(dfle_router *rt, const dfle_network *net, size_t i, double S,
-                               dfle_flow *node, dfle_flow_dlnS *d, int *goes_on,
+                               double lnS, dfle_flow *node, dfle_flow_dlnS *d, int *goes_on,
                                dfle_error *err);
 int dfle_router_has_node_flow_dlnS(const dfle_router *rt);
 

@@ -149,6 +149,7 @@ typedef struct cli {
     int warn_off;  /* warn("@off") */
     int warn_cont; /* a warning is being continued (lua_warning tocont) */
     int load_error; /* the script failed to load (no traceback wanted) */
+    int usage_error; /* dfle.args refused the script's arguments (exit 2) */
     int script; /* index of the script in argv */
     int argc;
     char **argv;
@@ -168,6 +169,10 @@ static int msghandler(lua_State *L)
     const char *msg = lua_tostring(L, 1);
     if (current_cli != NULL && current_cli->load_error && msg != NULL)
         return 1;
+    if (current_cli != NULL && dfle_lua_is_usage_error(L, msg)) {
+        current_cli->usage_error = 1; /* like dfle's own options: no traceback */
+        return 1;
+    }
     if (msg == NULL) {
         if (luaL_callmeta(L, 1, "__tostring") && lua_type(L, -1) == LUA_TSTRING)
             return 1;
@@ -565,7 +570,7 @@ int main(int argc, char **argv)
     } else if (status != LUA_OK) {
         const char *msg = lua_tostring(L, -1);
         fprintf(stderr, "%s: %s\n", progname, msg != NULL ? msg : "(error object is not a string)");
-        status = EXIT_FAILURE;
+        status = c.usage_error ? 2 : EXIT_FAILURE;
     } else {
         status = EXIT_SUCCESS;
     }

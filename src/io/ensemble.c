@@ -556,6 +556,15 @@ int dfle_ens_queue_next(dfle_ens_queue *q, size_t *index)
     return got;
 }
 
+size_t dfle_ens_queue_pending(dfle_ens_queue *q)
+{
+    size_t n;
+    pthread_mutex_lock(&q->lock);
+    n = q->stopped ? 0 : q->total - q->handed;
+    pthread_mutex_unlock(&q->lock);
+    return n;
+}
+
 int dfle_ens_queue_give_back(dfle_ens_queue *q, size_t index, dfle_error *err)
 {
     int st = DFLE_OK;

@@ -115,7 +115,9 @@ void dfle_gp_axis_range(dfle_gp_axis *a, int log, double dlo, double dhi, double
 }
 
 /* A label of v in linear steps of `step`: fixed decimals for ordinary
- * magnitudes, "m×10^{e}" for tiny or huge ones. */
+ * magnitudes, "m×10^{e}" for tiny or huge ones.  Down to 0.001 decimals
+ * read better ("0.003", not "3×10^{-3}"; slopes and rates in m/yr often
+ * sit there); below it a run of zeros does not. */
 static void label_linear(char *buf, size_t cap, double v, double step, double amax)
 {
     int pstep = (int)floor(log10(step) + 1e-9);
@@ -123,7 +125,7 @@ static void label_linear(char *buf, size_t cap, double v, double step, double am
         v = 0;
     if (v == 0) {
         snprintf(buf, cap, "0");
-    } else if (amax >= 1e5 || amax < 1e-2) {
+    } else if (amax >= 1e5 || amax < 1e-3) {
         int e = (int)floor(log10(fabs(v)) + 1e-9), d = e - pstep;
         double m = v / pow(10.0, e);
         /* a mantissa of 2.5 needs one decimal more than its step */
@@ -196,7 +198,7 @@ static int label_factored(dfle_gp_axis *a, double step)
     for (size_t i = 0; i < a->n; i++)
         amax = fmax(amax, fabs(a->v[i]));
     a->factored = 0;
-    if (!a->factor_ok || a->n == 0 || !(amax >= 1e5 || amax < 1e-2))
+    if (!a->factor_ok || a->n == 0 || !(amax >= 1e5 || amax < 1e-3))
         return 0;
     /* the factor of the spacing, unless the labels would get long */
     e = (int)floor(log10(step) + 1e-9);

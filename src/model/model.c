@@ -102,9 +102,10 @@ static int model_alloc(dfle_model *m, dfle_error *err)
 void dfle_model_sync_domain(dfle_model *m)
 {
     const unsigned long long v = dfle_network_version(m->net);
-    const double *L = dfle_network_length(m->net), *A = dfle_network_A(m->net);
+    const double *L, *A;
     if (v == m->net_version)
-        return;
+        return; /* the common case: every node solve asks */
+    L = dfle_network_length(m->net), A = dfle_network_A(m->net);
     for (size_t i = 0; i < m->n; i++)
         m->inv_len[i] = 1.0 / L[i];
     m->channel = dfle_network_channel(m->net);

@@ -357,9 +357,10 @@ static dfle_flow flow_at(const dfle_flow *f, size_t i)
 }
 
 /* E_f + E_df at node i for slope S, and d(E_f + E_df)/d ln S into *dE
- * when dE is set (the caller has checked dfle_model_node_dlnS). */
-static int node_erosion(dfle_model *m, size_t i, double S, double flows, double *E, double *dE,
-                        int *goes_on, dfle_error *err)
+ * when dE is set (the caller has checked dfle_model_node_dlnS); lnS = ln S
+ * then. */
+static int node_erosion(dfle_model *m, size_t i, double S, double lnS, double flows, double *E,
+                        double *dE, int *goes_on, dfle_error *err)
 {
     double e = 0.0, de = 0.0;
     assert(i < m->n);
@@ -374,7 +375,7 @@ static int node_erosion(dfle_model *m, size_t i, double S, double flows, double 
     }
     if (m->fl != NULL) {
         const double n_s = dfle_fluvial_n(m->fl);
-        e = m->KAm[i] * pow(S, n_s);
+        e = m->KAm[i] * (dE != NULL ? exp(n_s * lnS) : pow(S, n_s));
         de = n_s * e; /* E_f = K A^m S^n_s */
     }
     if (flows > 0 && m->rt != NULL) {
@@ -387,7 +388,7 @@ static int node_erosion(dfle_model *m, size_t i, double S, double flows, double 
         if (dfle_router_is_local(m->rt)) {
             /* The flow at this node follows its slope: re-evaluate it. */
             if (dE != NULL)
-                st = dfle_router_node_flow_dlnS(m->rt, m->net, i, S, &m->node, dp = &dflow,
+                st = dfle_router_node_flow_dlnS(m->rt, m->net, i, S, lnS, &m->node, dp = &dflow,
                                                 goes_on, err);
             else
                 st = dfle_router_node_flow(m->rt, m->net, i, S, &m->node, goes_on, err);
@@ -444,7 +445,7 @@ static int node_erosion(dfle_model *m, size_t i, double S, double flows, double 
 int dfle_model_node_erosion(dfle_model *m, size_t i, double S, double flows, double *E,
                             int *goes_on, dfle_error *err)
 {
-    return node_erosion(m, i, S, flows, E, NULL, goes_on, err);
+    return node_erosion(m, i, S, NAN, flows, E, NULL, goes_on, err);
 }
 
 /* Asked each time: a law written in Lua offers rate_dlnS only while its
@@ -455,14 +456,14 @@ int dfle_model_node_dlnS(const dfle_model *m)
                              (!dfle_router_is_local(m->rt) || dfle_router_has_node_flow_dlnS(m->rt)));
 }
 
-int dfle_model_node_erosion_dlnS(dfle_model *m, size_t i, double S, double flows, double *E,
-                                 double *dE, int *goes_on, dfle_error *err)
+int dfle_model_node_erosion_dlnS(dfle_model *m, size_t i, double S, double lnS, double flows,
+                                 double *E, double *dE, int *goes_on, dfle_error *err)
 {
     if (!dfle_model_node_dlnS(m)) {
         *dE = NAN;
-        return node_erosion(m, i, S, flows, E, NULL, goes_on, err);
+        return node_erosion(m, i, S, NAN, flows, E, NULL, goes_on, err);
     }
-    return node_erosion(m, i, S, flows, E, dE, goes_on, err);
+    return node_erosion(m, i, S, lnS, flows, E, dE, goes_on, err);
 }
 
 size_t dfle_model_node_evaluations(const dfle_model *m) { return m->node_evaluations; }

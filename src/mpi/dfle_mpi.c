@@ -298,15 +298,17 @@ static void lose(int r, const char *why)
     dfle_link_forget(r);
     for (int k = 1; k < dfle_link_size; k++)
         others += in_ensemble(&S.peers[k]);
-    if (back > 0 && others > 0)
-        note(1, "rank %d (%s) %s: taken as lost; its %zu sample%s go%s to the other ranks", r,
-             S.nodes[r], why, back, back == 1 ? "" : "s", back == 1 ? "es" : "");
+    if (back > 0)
+        note(1, "rank %d (%s) %s: taken as lost; its %zu sample%s go%s to %s", r, S.nodes[r],
+             why, back, back == 1 ? "" : "s", back == 1 ? "es" : "",
+             others > 0 ? "the other ranks" : "rank 0's own workers");
     else
         note(1, "rank %d (%s) %s: taken as lost", r, S.nodes[r], why);
-    if (back > 0 && others == 0)
-        set_error("rank %d (%s) was lost holding %zu sample%s, and no other rank is left to "
-                  "run them",
-                  r, S.nodes[r], back, back == 1 ? "" : "s");
+    /* No other rank is left in it: the ensemble is rank 0's alone now,
+     * whose worker threads run what is left (started again if they had
+     * run out of samples already: lua_ensemble_pool.c). */
+    if (others == 0 && S.active && !S.finished)
+        end_ensemble();
 }
 
 /* "R <seq> <want>\n<f><row>\n...": rows to append, and a request. */

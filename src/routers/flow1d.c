@@ -21,9 +21,14 @@
  *    lets a pile come to rest on a slope below its friction angle.
  *  - A step works on the wet window only (the cells holding volume and
  *    one more on each side: a first-order step moves volume no further),
- *    and computes nothing twice; where a bound decides (friction), the
- *    exact value is not computed.  Every number stays what the whole-grid
- *    sweep computes, to the bit (doc/process-router.md, the wet window).
+ *    and computes nothing twice; where a bound decides (friction's erf),
+ *    the exact value is not computed.  Every number stays what the
+ *    whole-grid sweep computes, to the bit (doc/process-router.md, the
+ *    wet window).
+ *  - Divisions are few and do not wait for each other (the divider is
+ *    what a step's time is made of): 1 / (w dx) per cell, drag and phi
+ *    in one division each, HLLC's star depth as the HLL average; the
+ *    same numbers to rounding (doc/process-router.md).
  */
 #include "dfle/flow1d.h"
 
@@ -43,17 +48,23 @@ struct dfle_flow1d {
     /* 1 after h or q was handed out for writing: the next step derives u,
      * c, smax and the volume afresh over the whole grid. */
     int stale;
+    /* The wet cells at rest (q = 0) lie in [rest_lo, rest_hi) (empty if
+     * rest_lo >= rest_hi): the only cells friction can hold, so the only
+     * ones hold_resting_cells looks at.  A flow's resting cells are a
+     * few at its tail and front, its window a hundred. */
+    size_t rest_lo, rest_hi;
     double smax;   /* max |u| + c over wet cells [m/s]: the CFL speed     */
+    double phi_k;  /* I0 sqrt(rho / rho_s) / (2 D_eff) [s/m] (phi_wet)   */
     double volume; /* sum of w h dx over the grid, in cell order [m^3]    */
     /* One block; cell arrays have n values, face arrays n + 1 (face k lies
      * between cells k - 1 and k; face 0 is the upstream wall, face n the
-     * outlet).  Per cell, fixed: w, w dx, g_x, g_z, g_z / 2, rho g_z,
-     * w dx g_x and the width step wf[k+1] - wf[k], each computed as the
-     * expressions of Eqs. (8)-(10) would, so results are the same to the
-     * bit.  Per cell, the state and what a step derives from it once: the
-     * velocity u = q/h and wave speed c = sqrt(g_z h) of wet cells (0 in
-     * dry ones), used by both faces, the CFL step and friction. */
-    double *w, *wdx, *gx, *gz, *hg, *rgz, *wgx, *dwf; /* cells, geometry */
+     * outlet).  Per cell, fixed: w, w dx, its reciprocal (a step
+     * multiplies by it: a division costs several multiplications), g_x,
+     * g_z, g_z / 2, w dx g_x and the width step wf[k+1] - wf[k].  Per
+     * cell, the state and what a step derives from it once: the velocity
+     * u = q/h and wave speed c = sqrt(g_z h) of wet cells (0 in dry
+     * ones), used by both faces, the CFL step and friction. */
+    double *w, *wdx, *rwdx, *gx, *gz, *hg, *wgx, *dwf; /* cells, geometry */
     double *h, *q, *u, *c, *limit, *held;             /* cells, state    */
     double *wf, *Fh, *Fq, *face_vol;                  /* faces           */
 };
@@ -144,9 +155,10 @@ int dfle_flow1d_new(size_t n, double dx, const double *w, const double *S,
     f->hi = n;
     f->stale = 1;
     f->smax = f->volume = 0.0;
+    f->phi_k = p->I0 * sqrt(p->rho / p->rho_s) / (2.0 * p->D_eff);
     cell[0] = &f->w; /* first: the block starts at w */
     cell[1] = &f->wdx, cell[2] = &f->gx, cell[3] = &f->gz, cell[4] = &f->hg;
-    cell[5] = &f->rgz, cell[6] = &f->wgx, cell[7] = &f->dwf, cell[8] = &f->h;
+    cell[5] = &f->rwdx, cell[6] = &f->wgx, cell[7] = &f->dwf, cell[8] = &f->h;
     cell[9] = &f->q, cell[10] = &f->u, cell[11] = &f->c, cell[12] = &f->limit;
     cell[13] = &f->held;
     face[0] = &f->wf, face[1] = &f->Fh, face[2] = &f->Fq, face[3] = &f->face_vol;
@@ -165,7 +177,7 @@ int dfle_flow1d_new(size_t n, double dx, const double *w, const double *S,
         f->gx[k] = p->g * sin(theta);
         f->gz[k] = p->g * cos(theta);
         f->hg[k] = 0.5 * f->gz[k];
-        f->rgz[k] = p->rho * f->gz[k];
+        f->rwdx[k] = 1.0 / f->wdx[k];
         f->wgx[k] = f->wdx[k] * f->gx[k];
         f->dwf[k] = f->wf[k + 1] - f->wf[k];
     }
@@ -217,8 +229,14 @@ double dfle_flow1d_pore_length(const dfle_flow1d *f, double t)
  * cannot alias them, and the compiler keeps them in registers. */
 static inline double lambda_of(const dfle_flow1d_params *p, double h, double L)
 {
-    /* 1 - erfc(2h/sqrt(4Dt)) = erf(h/sqrt(Dt)) */
-    return L == 0.0 ? p->lambda0 : p->lambda0 * erf(h / L);
+    /* 1 - erfc(2h/sqrt(4Dt)) = erf(h/sqrt(Dt)).  From h / L = 6 on (to
+     * within rounding: from 5.93), erf is 1 to the bit (1 - erf(6) =
+     * 2e-17, under half an ulp of 1, and libm returns 1 there): the
+     * call is skipped, as it is for most cells of a flow older than a
+     * few seconds. */
+    if (L == 0.0 || h >= 6.0 * L)
+        return p->lambda0;
+    return p->lambda0 * erf(h / L);
 }
 
 double dfle_flow1d_lambda_at(const dfle_flow1d *f, double h, double L)
@@ -231,18 +249,21 @@ double dfle_flow1d_lambda(const dfle_flow1d *f, double h, double t)
     return dfle_flow1d_lambda_at(f, h, dfle_flow1d_pore_length(f, t));
 }
 
-/* Eq. (10) at depth h > h_dry in a cell with rho g_z = rgz. */
-static inline double phi_wet(const dfle_flow1d_params *p, double rgz, double h, double v)
+/* Eq. (10) at depth h > h_dry where the wave speed is c = sqrt(g_z h):
+ * with P = rho g_z h, sqrt(P / rho_s) = c sqrt(rho / rho_s), so
+ * I = |v| / (phi_k h c) I0 and I / (I0 + I) = |v| / (|v| + phi_k h c),
+ * one division where Eq. (10) as written takes four and a root (c is
+ * at hand in a step).  No 1/0 at rest: phi = mu_s there exactly. */
+static inline double phi_wet(const dfle_flow1d_params *p, double phi_k, double c, double h,
+                             double v)
 {
-    double P = rgz * h; /* basal normal stress rho g_z h [Pa] */
-    double I = (2.0 * fabs(v) / h) * p->D_eff / sqrt(P / p->rho_s);
-    /* Written as (mu_2 - mu_s) I / (I0 + I): no 1/0 at rest. */
-    return p->mu_s + (p->mu_2 - p->mu_s) * I / (p->I0 + I);
+    const double a = fabs(v);
+    return p->mu_s + (p->mu_2 - p->mu_s) * a / (a + phi_k * h * c);
 }
 
 double dfle_flow1d_phi(const dfle_flow1d *f, size_t k, double h, double v)
 {
-    return h > f->p.h_dry ? phi_wet(&f->p, f->rgz[k], h, v) : f->p.mu_s;
+    return h > f->p.h_dry ? phi_wet(&f->p, f->phi_k, sqrt(f->gz[k] * h), h, v) : f->p.mu_s;
 }
 
 double dfle_flow1d_phi_max(const dfle_flow1d *f)
@@ -288,7 +309,7 @@ static inline void hllc(double hL, double qL, double uL, double cL, double hgL, 
                         double *Fq)
 {
     int dryL = !(hL > h_dry), dryR = !(hR > h_dry);
-    double SL, SR, Ss, FhL, FqL, FhR, FqR;
+    double SL, SR, Ss, hs, A, B, FhL, FqL, FhR, FqR;
 
     if (dryL && dryR) {
         *Fh = *Fq = 0.0;
@@ -322,13 +343,19 @@ static inline void hllc(double hL, double qL, double uL, double cL, double hgL, 
         *Fh = FhR, *Fq = FqR;
         return;
     }
-    Ss = (SL * hR * (uR - SR) - SR * hL * (uL - SL)) / (hR * (uR - SR) - hL * (uL - SL));
+    /* The contact speed and the star depth, which for shallow water is
+     * the HLL average h* = (hL (uL - SL) - hR (uR - SR)) / (SR - SL) on
+     * either side of the contact (Toro's hL (SL - uL) / (SL - S*), and
+     * its mirror, rewritten with S*): two divisions side by side, not
+     * one after the other, and h* >= 0 by construction. */
+    A = hR * (uR - SR);
+    B = hL * (uL - SL);
+    Ss = (SL * A - SR * B) / (A - B);
+    hs = (B - A) / (SR - SL);
     if (Ss >= 0) {
-        double hs = hL * (SL - uL) / (SL - Ss);
         *Fh = FhL + SL * (hs - hL);
         *Fq = FqL + SL * (hs * Ss - qL);
     } else {
-        double hs = hR * (SR - uR) / (SR - Ss);
         *Fh = FhR + SR * (hs - hR);
         *Fq = FqR + SR * (hs * Ss - qR);
     }
@@ -417,12 +444,22 @@ static inline int coulomb_resists(const dfle_flow1d_params *p, double dt, double
  * nothing of friction and would still spill its edges into dry
  * neighbours, so no face may draw volume out of a held cell: there the
  * face is a wall.  Fluxes stay single-valued, volume stays conserved.
- * L: the pore-pressure diffusion length of this step. */
-static void hold_resting_cells(dfle_flow1d *f, double dt, double L, size_t lo, size_t hi)
+ * L: the pore-pressure diffusion length of this step.  Returns whether
+ * any cell is held; held[] is set only then, and only in [rest_lo,
+ * rest_hi) (every other cell of the window is not held). */
+static int hold_resting_cells(dfle_flow1d *f, double dt, double L, size_t lo, size_t hi)
 {
     const size_t n = f->n;
     const dfle_flow1d_params p = f->p;
     int any = 0;
+    /* Elsewhere no cell is held: the window is inside the grid and the
+     * resting cells inside the window (the rest holds no volume). */
+    if (f->rest_lo > lo)
+        lo = f->rest_lo;
+    if (f->rest_hi < hi)
+        hi = f->rest_hi;
+    if (lo >= hi)
+        return 0;
     {
         const double *restrict h = f->h, *restrict q = f->q, *restrict wf = f->wf,
                      *restrict Fq = f->Fq;
@@ -433,21 +470,22 @@ static void hold_resting_cells(dfle_flow1d *f, double dt, double L, size_t lo, s
             if (!(h[k] > p.h_dry) || q[k] != 0.0)
                 continue;
             push = fabs(momentum_after_fluxes(f, k, dt, h[k], q[k],
-                                              wf[k + 1] * Fq[k + 1] - wf[k] * Fq[k])) /
-                   f->wdx[k];
+                                              wf[k + 1] * Fq[k + 1] - wf[k] * Fq[k])) *
+                   f->rwdx[k];
             held[k] = coulomb_resists(&p, dt, f->gz[k], h[k], p.mu_s, L, push);
             any |= held[k] != 0.0;
         }
     }
     if (!any)
-        return;
-    /* Faces lo and hi (inside the grid) lie between dry cells: no flux. */
+        return 0;
+    /* Faces lo..hi touch every held cell. */
     for (size_t k = lo; k <= hi; k++) {
         if (f->Fh[k] > 0 && k > 0 && f->held[k - 1])
             wall_flux(f, k - 1, 1, &f->Fh[k], &f->Fq[k]);
         else if (f->Fh[k] < 0 && k < n && f->held[k])
             wall_flux(f, k, 0, &f->Fh[k], &f->Fq[k]);
     }
+    return 1;
 }
 
 /* Scale each cell's outgoing fluxes so that a step never takes more
@@ -488,68 +526,86 @@ static inline void finish_face(dfle_flow1d *f, size_t k, double dt, double *vol,
 /* The new state of cells [lo, hi): volume and momentum from the face
  * fluxes (each face finished just before the cell below it needs it) and
  * sources, drag, friction; then u, c, the CFL speed and the volume of the
- * new state (summed in cell order, as dfle_flow1d_volume does). */
-static int update(dfle_flow1d *f, double dt, double L, size_t lo, size_t hi, dfle_error *err)
+ * new state (summed in cell order, as dfle_flow1d_volume does), and the
+ * span of the cells at rest.  any_held: whether hold_resting_cells held
+ * any cell (else held[] was not set). */
+static int update(dfle_flow1d *f, double dt, double L, size_t lo, size_t hi, int any_held,
+                  dfle_error *err)
 {
     const dfle_flow1d_params p = f->p;
-    const double dx = f->dx, drag = dt * 2.0 * p.eta * p.v_f;
-    const double *restrict w = f->w, *restrict wdx = f->wdx, *restrict gz = f->gz,
-                 *restrict rgz = f->rgz, *restrict held = f->held;
+    const double dx = f->dx, phi_k = f->phi_k;
+    /* Per step: the drag 2 eta v_f dt [kg/(m s)]; dt (1 - lambda0), the
+     * first factor of every Coulomb bound at lambda0 (coulomb multiplies
+     * left to right, so the bound is the same to the bit); and 6 L, the
+     * depth from which erf(h / L) is 1 to the bit (lambda_of), 0 while
+     * lambda is lambda0 everywhere. */
+    const double drag = dt * 2.0 * p.eta * p.v_f, dt_free = dt * (1.0 - p.lambda0),
+                 six_L = 6.0 * L;
+    const double *restrict w = f->w, *restrict wdx = f->wdx, *restrict rwdx = f->rwdx,
+                 *restrict gz = f->gz, *restrict held = f->held;
     double *restrict hs = f->h, *restrict qa = f->q, *restrict u = f->u, *restrict c = f->c;
     double smax = 0.0, volume = 0.0, fv0, fv1, mf0, mf1;
+    size_t rest_lo = hi, rest_hi = lo;
+    /* The held cells lie in [hold_lo, hold_lo + hold_n) (hold_resting_cells). */
+    const size_t hold_lo = f->rest_lo, hold_n = any_held ? f->rest_hi - f->rest_lo : 0;
 
     finish_face(f, lo, dt, &fv0, &mf0);
     for (size_t k = lo; k < hi; k++, fv0 = fv1, mf0 = mf1) {
         const double h0 = hs[k], q0 = qa[k];
-        double vol, h, qs, fc, qn, s, phi;
+        double vol, h, rh, rhh, drag_factor, qs, fc, qn, phi, b0, ck, uk;
 
         finish_face(f, k + 1, dt, &fv1, &mf1);
         vol = wdx[k] * h0 - (fv1 - fv0);
-        h = vol > 0 ? vol / wdx[k] : 0.0; /* only round-off can make vol < 0 */
+        h = vol > 0 ? vol * rwdx[k] : 0.0; /* only round-off can make vol < 0 */
         hs[k] = h;
         volume += w[k] * h * dx;
         if (!(h > p.h_dry)) {
             qa[k] = u[k] = c[k] = 0.0;
             continue;
         }
-        c[k] = sqrt(gz[k] * h);
-        if (held[k] != 0.0) {
-            qa[k] = u[k] = 0.0;
-            s = c[k];
-        } else {
-            qs = momentum_after_fluxes(f, k, dt, h0, q0, mf1 - mf0) / wdx[k];
-            /* Viscous pore-fluid drag 2 eta v_f v / (rho h), implicitly. */
-            qs /= 1.0 + drag / (p.rho * h * h);
-            /* Coulomb friction (1 - lambda) g_z h phi(I): stop, never
-             * reverse.  phi comes from the speed at the start of the step
-             * (u, explicit, as the paper's sources): from the speed after
-             * a whole step of free acceleration it would jump towards
-             * mu_2 and stall every flow that starts from rest.  The
-             * impulse is at least its value at phi = mu_s and lambda =
-             * lambda0 (the same operations; rounding is monotone), so a
-             * cell that stops even then needs neither phi nor the erf,
-             * and one that stops at lambda0 needs no erf. */
+        /* What depends on h alone first, so that its divisions and root
+         * overlap the momentum balance: 1/h, the implicit viscous drag
+         * 2 eta v_f v / (rho h) as the factor rho h^2 / (rho h^2 + dt 2
+         * eta v_f) on q, the wave speed and phi (Eq. 10, at the speed u
+         * of the start of the step, explicit as the paper's sources:
+         * from the speed after a whole step of free acceleration it
+         * would jump towards mu_2 and stall every flow that starts from
+         * rest). */
+        rh = 1.0 / h;
+        rhh = p.rho * h * h;
+        drag_factor = rhh / (rhh + drag);
+        ck = sqrt(gz[k] * h);
+        phi = phi_wet(&p, phi_k, ck, h, u[k]);
+        qs = momentum_after_fluxes(f, k, dt, h0, q0, mf1 - mf0) * rwdx[k] * drag_factor;
+        /* Coulomb friction (1 - lambda) g_z h phi(I): stop, never
+         * reverse.  At lambda = lambda0 (the impulse's lower bound, by
+         * the same operations: rounding is monotone) a cell that stops
+         * needs no erf, and below 6 L hardly any cell does. */
+        b0 = dt_free * gz[k] * h; /* coulomb(dt, 1 - lambda0, gz, h, .) / mu */
+        fc = b0 * phi;
+        if (!(h >= six_L) && !(fabs(qs) <= fc))
+            fc = coulomb(dt, 1.0 - lambda_of(&p, h, L), gz[k], h, phi);
+        qn = fabs(qs) <= fc ? 0.0 : qs - copysign(fc, qs);
+        /* A held cell stays at rest (hold_resting_cells). */
+        if (k - hold_lo < hold_n && held[k] != 0.0) /* k < hold_lo wraps around */
             qn = 0.0;
-            if (!(fabs(qs) <= coulomb(dt, 1.0 - p.lambda0, gz[k], h, p.mu_s))) {
-                phi = phi_wet(&p, rgz[k], h, u[k]);
-                if (!(fabs(qs) <= coulomb(dt, 1.0 - p.lambda0, gz[k], h, phi))) {
-                    fc = coulomb(dt, 1.0 - lambda_of(&p, h, L), gz[k], h, phi);
-                    qn = fabs(qs) <= fc ? 0.0 : qs - copysign(fc, qs);
-                }
-            }
-            if (!isfinite(qn))
-                return dfle_error_set(err, DFLE_ENUMERIC,
-                                      "flow1d: discharge not finite in cell %zu (h = %g m)", k + 1,
-                                      h);
-            qa[k] = qn;
-            u[k] = qn == 0.0 ? 0.0 : qn / h;
-            s = fabs(u[k]) + c[k];
+        if (!isfinite(qn))
+            return dfle_error_set(err, DFLE_ENUMERIC,
+                                  "flow1d: discharge not finite in cell %zu (h = %g m)", k + 1, h);
+        if (qn == 0.0) {
+            rest_lo = rest_lo < k ? rest_lo : k;
+            rest_hi = k + 1;
         }
-        if (s > smax)
-            smax = s;
+        uk = qn * rh; /* 0 when qn is */
+        qa[k] = qn;
+        u[k] = uk;
+        c[k] = ck;
+        smax = fabs(uk) + ck > smax ? fabs(uk) + ck : smax;
     }
     f->smax = smax;
     f->volume = volume;
+    f->rest_lo = rest_lo;
+    f->rest_hi = rest_hi;
     return DFLE_OK;
 }
 
@@ -590,8 +646,15 @@ static void narrow_window(dfle_flow1d *f)
 /* After the caller wrote h or q: velocities and wave speeds afresh. */
 static void refresh(dfle_flow1d *f)
 {
-    for (size_t k = 0; k < f->n; k++)
+    f->rest_lo = f->n;
+    f->rest_hi = 0;
+    for (size_t k = 0; k < f->n; k++) {
         cell_speeds(f, k, &f->u[k], &f->c[k]);
+        if (f->h[k] > f->p.h_dry && f->q[k] == 0.0) {
+            f->rest_lo = f->rest_lo < k ? f->rest_lo : k;
+            f->rest_hi = k + 1;
+        }
+    }
     f->lo = 0;
     f->hi = f->n;
     f->stale = 0;
@@ -601,7 +664,7 @@ int dfle_flow1d_step(dfle_flow1d *f, double dt, double t_entry, double *outflow,
                      dfle_error *err)
 {
     double L;
-    int st;
+    int st, any_held;
 
     if (!(dt > 0 && isfinite(dt)))
         return dfle_error_set(err, DFLE_EINVAL, "flow1d: time step must be > 0 s (got %g)", dt);
@@ -611,9 +674,9 @@ int dfle_flow1d_step(dfle_flow1d *f, double dt, double t_entry, double *outflow,
         narrow_window(f);
     L = dfle_flow1d_pore_length(f, t_entry);
     compute_fluxes(f, f->lo, f->hi);
-    hold_resting_cells(f, dt, L, f->lo, f->hi);
+    any_held = hold_resting_cells(f, dt, L, f->lo, f->hi);
     limit_outflow(f, dt, f->lo, f->hi);
-    if ((st = update(f, dt, L, f->lo, f->hi, err)) != DFLE_OK) {
+    if ((st = update(f, dt, L, f->lo, f->hi, any_held, err)) != DFLE_OK) {
         f->stale = 1; /* the state is half updated */
         f->lo = 0;
         f->hi = f->n;

@@ -99,7 +99,7 @@ int dfle_router_node_flow(dfle_router *rt, const dfle_network *net, size_t i,
 }
 
 int dfle_router_node_flow_dlnS(dfle_router *rt, const dfle_network *net, size_t i, double S,
-                               dfle_flow *node, dfle_flow_dlnS *d, int *goes_on,
+                               double lnS, dfle_flow *node, dfle_flow_dlnS *d, int *goes_on,
                                dfle_error *err)
 {
     *goes_on = 0;
@@ -107,7 +107,7 @@ int dfle_router_node_flow_dlnS(dfle_router *rt, const dfle_network *net, size_t 
         return dfle_error_set(err, DFLE_ESTATE,
                               "router.%s cannot say how the flow at one node answers its slope",
                               rt->ops->name);
-    return rt->ops->node_flow_dlnS(rt->state, net, i, S, node, d, goes_on, err);
+    return rt->ops->node_flow_dlnS(rt->state, net, i, S, lnS, node, d, goes_on, err);
 }
 
 int dfle_router_has_node_flow_dlnS(const dfle_router *rt)

@@ -25,6 +25,7 @@ typedef struct empirical {
     size_t n;
     double *M, *Q, *t_p;
     double *h3_coef; /* 3 mu Q / (rho_b g w): h^3 = h3_coef / S  [m^3] */
+    double *ln_h3_3; /* ln(h3_coef) / 3: h = exp(ln_h3_3 - ln S / 3)      */
 } empirical;
 
 void dfle_empirical_opts_default(dfle_empirical_opts *o)
@@ -41,8 +42,8 @@ void dfle_empirical_opts_default(dfle_empirical_opts *o)
 
 static void empirical_drop_cache(empirical *e)
 {
-    free(e->M); /* one block: M, Q, t_p, h3_coef */
-    e->M = e->Q = e->t_p = e->h3_coef = NULL;
+    free(e->M); /* one block: M, Q, t_p, h3_coef, ln_h3_3 */
+    e->M = e->Q = e->t_p = e->h3_coef = e->ln_h3_3 = NULL;
     e->cached_for = 0;
     e->n = 0;
 }
@@ -56,13 +57,14 @@ static int empirical_fill_cache(empirical *e, const dfle_network *net,
     double *block;
 
     empirical_drop_cache(e);
-    block = malloc(4 * n * sizeof *block);
+    block = malloc(5 * n * sizeof *block);
     if (block == NULL)
         return dfle_error_set(err, DFLE_ENOMEM, "router.empirical: out of memory");
     e->M = block;
     e->Q = block + n;
     e->t_p = block + 2 * n;
     e->h3_coef = block + 3 * n;
+    e->ln_h3_3 = block + 4 * n;
     /* Only nodes at or below a source ever carry a flow: on a landscape
      * the channel cells, a tenth of the grid, so the other nine tenths
      * cost no pow() at each re-routing.  Marked in M (0: none), walking
@@ -80,13 +82,14 @@ static int empirical_fill_cache(empirical *e, const dfle_network *net,
     }
     for (size_t i = 0; i < n; i++) {
         if (e->M[i] == 0) { /* never reached: nothing to cache */
-            e->M[i] = e->Q[i] = e->t_p[i] = e->h3_coef[i] = NAN;
+            e->M[i] = e->Q[i] = e->t_p[i] = e->h3_coef[i] = e->ln_h3_3[i] = NAN;
             continue;
         }
         e->M[i] = o->M0 * pow(1e-6 * A[i], o->gamma);
         e->Q[i] = o->c1 * pow(e->M[i], o->c2);
         e->t_p[i] = e->M[i] / e->Q[i];
         e->h3_coef[i] = 3.0 * o->mu * e->Q[i] / (o->rho_b * o->g * w[i]);
+        e->ln_h3_3[i] = log(e->h3_coef[i]) / 3.0;
         /* Every parameter may be valid on its own and the flow still not
          * exist (c2 = 2.5e6 makes M^c2 overflow): say which term and why,
          * rather than route infinities the model reports as "E_df". */
@@ -121,13 +124,13 @@ static void zero_node(dfle_flow *flow, size_t j)
         flow->Theta[j] = flow->reach[j] = 0.0;
 }
 
-/* The flow at node i for slope s > 0, written to node j of `flow`; returns
- * tau [Pa].  Theta may come out negative (tau < tau_y): callers decide. */
-static double empirical_at(const empirical *e, const double *w, size_t i, double s,
-                           dfle_flow *flow, size_t j)
+/* The flow at node i for slope s > 0 with depth h, written to node j of
+ * `flow`; returns tau [Pa].  Theta may come out negative (tau < tau_y):
+ * callers decide. */
+static double empirical_at_depth(const empirical *e, const double *w, size_t i, double s,
+                                 double h, dfle_flow *flow, size_t j)
 {
     const double rho_g = e->opts.rho_b * e->opts.g;
-    double h = cbrt(e->h3_coef[i] / s);
     double Rh = w[i] * h / (w[i] + 2.0 * h);
     double tau = rho_g * Rh * s / sqrt(1.0 + s * s); /* sin(atan s) */
     flow->M[j] = e->M[i];
@@ -138,6 +141,13 @@ static double empirical_at(const empirical *e, const double *w, size_t i, double
     flow->tau[j] = tau;
     flow->Theta[j] = 1.0 - e->opts.tau_y / tau;
     return tau;
+}
+
+/* The same for slope s alone: h^3 = h3_coef / s. */
+static double empirical_at(const empirical *e, const double *w, size_t i, double s,
+                           dfle_flow *flow, size_t j)
+{
+    return empirical_at_depth(e, w, i, s, cbrt(e->h3_coef[i] / s), flow, j);
 }
 
 static int ensure_cache(empirical *e, const dfle_network *net, dfle_error *err)
@@ -240,8 +250,8 @@ static void empirical_dlnS(const empirical *e, const double *w, size_t i, double
     d->Theta = e->opts.tau_y / flow->tau[j] * d->tau;
 }
 
-/* node_flow, and node_flow_dlnS when d is set. */
-static int empirical_node(empirical *e, const dfle_network *net, size_t i, double S,
+/* node_flow, and node_flow_dlnS when d is set (with lnS = ln S). */
+static int empirical_node(empirical *e, const dfle_network *net, size_t i, double S, double lnS,
                           dfle_flow *node, dfle_flow_dlnS *d, int *goes_on, dfle_error *err)
 {
     const double *w = dfle_network_w(net);
@@ -257,7 +267,10 @@ static int empirical_node(empirical *e, const dfle_network *net, size_t i, doubl
             *d = (dfle_flow_dlnS){0};
         return DFLE_OK;
     }
-    if (empirical_at(e, w, i, S, node, 0) < e->opts.tau_y) {
+    /* The depth by one exp of the cached ln h3_coef where ln S is known
+     * (Newton's node solves): a cbrt costs three times as much. */
+    if ((d != NULL ? empirical_at_depth(e, w, i, S, exp(e->ln_h3_3[i] - lnS / 3.0), node, 0)
+                   : empirical_at(e, w, i, S, node, 0)) < e->opts.tau_y) {
         node->Theta[0] = 0.0; /* arriving, it stops here: no erosion */
         node->reach[0] = 0.0;
     } else {
@@ -275,14 +288,14 @@ static int empirical_node(empirical *e, const dfle_network *net, size_t i, doubl
 static int empirical_node_flow(void *state, const dfle_network *net, size_t i, double S,
                                dfle_flow *node, int *goes_on, dfle_error *err)
 {
-    return empirical_node(state, net, i, S, node, NULL, goes_on, err);
+    return empirical_node(state, net, i, S, NAN, node, NULL, goes_on, err);
 }
 
 static int empirical_node_flow_dlnS(void *state, const dfle_network *net, size_t i, double S,
-                                    dfle_flow *node, dfle_flow_dlnS *d, int *goes_on,
+                                    double lnS, dfle_flow *node, dfle_flow_dlnS *d, int *goes_on,
                                     dfle_error *err)
 {
-    return empirical_node(state, net, i, S, node, d, goes_on, err);
+    return empirical_node(state, net, i, S, lnS, node, d, goes_on, err);
 }
 
 static size_t empirical_params(const void *state, dfle_param *out, size_t cap)

@@ -148,6 +148,14 @@ static int process_route(void *state, const dfle_network *net, const double *S, 
         pr->snap_t[j] = NAN;
     record_snapshots(pr, &next_snap, 0.0, h + G, n);
 
+    /* The loop's constants and record arrays as locals: the records'
+     * stores cannot then be taken to change them, so they stay in
+     * registers. */
+    const double q_erode = o->q_erode, rho = o->flow.rho, grav = o->flow.g;
+    double *const rec_h = flow->h, *const rec_M = flow->M, *const rec_tau = flow->tau,
+                 *const rec_integral = flow->integral, *const rec_t_p = flow->t_p,
+                 *const rec_v = flow->v, *const rec_Q = flow->Q, *const arrival = pr->arrival,
+                 *const cos_theta = pr->cos_theta;
     for (;;) {
         double dt = dfle_flow1d_stable_dt(f), outflow, left, qmax = 0.0, L;
         size_t k0, k1;
@@ -184,34 +192,34 @@ static int process_route(void *state, const dfle_network *net, const double *S, 
             const double hk = h[k], qk = fabs(q[k]);
             if (qk > qmax)
                 qmax = qk;
-            if (hk > flow->h[i])
-                flow->h[i] = hk;
-            flow->M[i] += face_vol[k + 1];
-            if (qk > o->q_erode) { /* Phi = 1 */
+            if (hk > rec_h[i])
+                rec_h[i] = hk;
+            rec_M[i] += face_vol[k + 1];
+            if (qk > q_erode) { /* Phi = 1 */
                 const double v = qk / hk;
                 const double lam = dfle_flow1d_lambda_at(f, hk, L);
                 double tau, g;
-                if (isnan(pr->arrival[i])) { /* first erosion here */
-                    pr->arrival[i] = t;
-                    pr->cos_theta[i] = cos(atan(S[i]));
+                if (isnan(arrival[i])) { /* first erosion here */
+                    arrival[i] = t;
+                    cos_theta[i] = cos(atan(S[i]));
                 }
                 /* The peak Coulomb stress (1 - lambda) rho g_z h phi: phi
-                 * (four divisions and a root) only when its bound could
-                 * beat the peak so far. */
-                tau = (1.0 - lam) * o->flow.rho * o->flow.g * pr->cos_theta[i] * hk * phi_max;
-                if (tau > flow->tau[i])
-                    tau = (1.0 - lam) * o->flow.rho * o->flow.g * pr->cos_theta[i] * hk *
+                 * (a division and a root) only when its bound could beat
+                 * the peak so far. */
+                tau = (1.0 - lam) * rho * grav * cos_theta[i] * hk * phi_max;
+                if (tau > rec_tau[i])
+                    tau = (1.0 - lam) * rho * grav * cos_theta[i] * hk *
                           dfle_flow1d_phi(f, k, hk, v);
                 if ((st = flow->integrand(flow->integrand_state, hk, v, lam, &g, err)) != DFLE_OK)
                     goto done;
-                flow->integral[i] += g * dt;
-                flow->t_p[i] += dt;
-                if (v > flow->v[i])
-                    flow->v[i] = v;
-                if (qk * w[i] > flow->Q[i])
-                    flow->Q[i] = qk * w[i];
-                if (tau > flow->tau[i])
-                    flow->tau[i] = tau;
+                rec_integral[i] += g * dt;
+                rec_t_p[i] += dt;
+                if (v > rec_v[i])
+                    rec_v[i] = v;
+                if (qk * w[i] > rec_Q[i])
+                    rec_Q[i] = qk * w[i];
+                if (tau > rec_tau[i])
+                    rec_tau[i] = tau;
             }
         }
         for (size_t k = k0; k < k1 && k < G; k++)

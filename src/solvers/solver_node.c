@@ -242,7 +242,7 @@ static int solve_newton(dfle_model *m, size_t i, double U_eff, double c, double 
         double E, dE, G, phi = NAN, dphi = NAN, step = NAN, next, x_next;
         double mismatch = NAN; /* mu (above), when there is a last evaluation */
         int on, st, newton = 0, checked = 0;
-        if ((st = dfle_model_node_erosion_dlnS(m, i, S, flows, &E, &dE, &on, err)) != DFLE_OK)
+        if ((st = dfle_model_node_erosion_dlnS(m, i, S, x, flows, &E, &dE, &on, err)) != DFLE_OK)
             return st;
         if (goes_on != NULL)
             *goes_on = on; /* the verdict at the last slope tried */

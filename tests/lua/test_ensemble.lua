@@ -164,6 +164,33 @@ print(("threads=%d plain=%d workers=%d lo=%a"):format(info.S_df.threads, plain.t
     done()
 end
 
+tests["dfle.pawn inside a sample runs on one thread (the workers have the cores)"] = function()
+    local dir, done = scratch()
+    local data = { x = { 1, 2, 3, 4, 5, 6 }, y = { 1, 2, 3, 5, 4, 6 } }
+    local function pawn_threads(extra)
+        local opts = { data = data, inputs = { "x" }, output = "y", S = 2, bootstrap = 4 }
+        for k, v in pairs(extra or {}) do opts[k] = v end
+        local _, info = dfle.pawn(opts)
+        return info.threads
+    end
+    local outside = pawn_threads()
+    local ens = dfle.ensemble{
+        params = { k_df = {5e-5, 1e-3, log = true}, U = {1e-4, 1e-3} },
+        n = 3, seed = 2, out = dir .. "/p.csv", workers = 1, build = small_build,
+        outputs = { "S_df", "inner", "asked" },
+        measure = function() return { inner = pawn_threads(), asked = pawn_threads{ threads = 2 } } end,
+    }
+    T.eq(ens.count, 3)
+    for i = 1, 3 do
+        T.eq(ens.data.status[i], "ok")
+        T.eq(ens.data.inner[i], 1)  -- the default, inside a sample
+        T.eq(ens.data.asked[i], 2)  -- a number given is kept
+    end
+    T.ok(outside >= 1)
+    T.eq(pawn_threads(), outside) -- and outside again, the default is back
+    done()
+end
+
 tests["failure rows: error in build, no convergence, NaN; not fatal"] = function()
     local dir, done = scratch()
     local ens = dfle.ensemble{

@@ -412,6 +412,10 @@ void dfle_lua_open_analysis(lua_State *L);
 void dfle_lua_open_plot(lua_State *L);
 void dfle_lua_open_sampling(lua_State *L);
 void dfle_lua_open_args(lua_State *L); /* dfle.args, dfle.mkdir (lua_args.c) */
+/* Whether msg is the error dfle.args raised last for a mistake on the
+ * command line (an unknown option...): a host reports it without a
+ * traceback, as a command-line error. */
+int dfle_lua_is_usage_error(lua_State *L, const char *msg);
 void dfle_lua_open_write_csv(lua_State *L); /* dfle.write_csv (lua_write_csv.c) */
 void dfle_lua_open_dem(lua_State *L);
 void dfle_lua_open_landscape(lua_State *L);

@@ -60,8 +60,7 @@ static int l_mkdir(lua_State *L)
 }
 
 static const char args_chunk[] =
-    "local spec = ...\n"
-    "local mkdir = select(2, ...)\n"
+    "local spec, mkdir, mark_usage = ...\n"
     "if type(spec) ~= 'table' then error('dfle.args: expected a table {usage =, flags =, options =, output =}', 3) end\n"
     "for k in pairs(spec) do\n"
     "  if k ~= 'usage' and k ~= 'about' and k ~= 'flags' and k ~= 'options' and k ~= 'output' and k ~= 'arg' then\n"
@@ -122,6 +121,14 @@ static const char args_chunk[] =
     "  io.stdout:write(table.concat(out, '\\n'), '\\n')\n"
     "  os.exit(0)\n"
     "end\n"
+    "-- a mistake on the command line: an error at the script's dfle.args\n"
+    "-- line, marked so that dfle reports it as it does its own options\n"
+    "-- (status 2, no traceback: the script is not at fault)\n"
+    "local function usage_error(msg)\n"
+    "  local at = debug.getinfo(4, 'Sl')\n"
+    "  local where = at and at.currentline > 0 and (at.short_src .. ':' .. at.currentline .. ': ') or ''\n"
+    "  error(mark_usage(where .. msg), 0)\n"
+    "end\n"
     "local argv = spec.arg or _G.arg or {}\n"
     "local r = {}\n"
     "for n in pairs(flags) do r[n] = false end\n"
@@ -140,32 +147,32 @@ static const char args_chunk[] =
     "  name = name or a:match('^%-%-([%w_%-]+)$')\n"
     "  if name then\n"
     "    if flags[name] then\n"
-    "      if value then error(('%s: --%s takes no value'):format(spec.usage or 'arguments', name), 3) end\n"
+    "      if value then usage_error(('%s: --%s takes no value'):format(spec.usage or 'arguments', name)) end\n"
     "      r[name] = true\n"
     "    elseif options[name] then\n"
     "      if not value then\n"
     "        i = i + 1\n"
     "        value = argv[i]\n"
-    "        if value == nil then error(('--%s needs a value (%s)'):format(name, options[name][1]), 3) end\n"
+    "        if value == nil then usage_error(('--%s needs a value (%s)'):format(name, options[name][1])) end\n"
     "      end\n"
     "      r[name] = value\n"
     "    else\n"
-    "      error(('unknown option %q (options: %s)'):format(a, known()), 3)\n"
+    "      usage_error(('unknown option %q (options: %s)'):format(a, known()))\n"
     "    end\n"
     "  elseif a:sub(1, 1) == '-' and a ~= '-' then\n"
-    "    error(('unknown option %q (options: %s)'):format(a, known()), 3)\n"
+    "    usage_error(('unknown option %q (options: %s)'):format(a, known()))\n"
     "  else\n"
     "    positional[#positional + 1] = a\n"
     "  end\n"
     "  i = i + 1\n"
     "end\n"
     "if spec.output then\n"
-    "  if #positional > 1 then error(('one output directory at most (got %q and %q)'):format(positional[1], positional[2]), 3) end\n"
+    "  if #positional > 1 then usage_error(('one output directory at most (got %q and %q)'):format(positional[1], positional[2])) end\n"
     "  r.output = positional[1] or '.'\n"
     "  local ok, e = pcall(mkdir, r.output)\n"
-    "  if not ok then error((tostring(e):gsub('^dfle%.args:%d+: ', '')), 3) end\n"
+    "  if not ok then usage_error((tostring(e):gsub('^dfle%.args:%d+: ', ''))) end\n"
     "elseif #positional > 0 then\n"
-    "  error(('unexpected argument %q (options: %s)'):format(positional[1], known()), 3)\n"
+    "  usage_error(('unexpected argument %q (options: %s)'):format(positional[1], known()))\n"
     "end\n"
     "-- needs: a directory option that must hold a file; without it, say\n"
     "-- what is needed and how to point at it, and stop (status 2)\n"
@@ -187,14 +194,41 @@ static const char args_chunk[] =
     "end\n"
     "return r\n";
 
-/* dfle.args(spec): the chunk, called with the spec and dfle.mkdir. */
+/* The last command-line mistake dfle.args raised, in the registry. */
+static const char usage_key = 'u';
+
+/* mark_usage(msg) -> msg, remembered as a command-line mistake. */
+static int l_mark_usage(lua_State *L)
+{
+    luaL_checkstring(L, 1);
+    lua_settop(L, 1);
+    lua_pushvalue(L, 1);
+    lua_rawsetp(L, LUA_REGISTRYINDEX, &usage_key);
+    return 1;
+}
+
+int dfle_lua_is_usage_error(lua_State *L, const char *msg)
+{
+    int same;
+    if (msg == NULL)
+        return 0;
+    lua_rawgetp(L, LUA_REGISTRYINDEX, &usage_key);
+    /* the very message: one the script caught long ago is not this */
+    same = lua_type(L, -1) == LUA_TSTRING && strcmp(lua_tostring(L, -1), msg) == 0;
+    lua_pop(L, 1);
+    return same;
+}
+
+/* dfle.args(spec): the chunk, called with the spec, dfle.mkdir and
+ * mark_usage. */
 static int l_args(lua_State *L)
 {
     lua_settop(L, 1);
     lua_pushvalue(L, lua_upvalueindex(1));
     lua_insert(L, 1);
     lua_pushcfunction(L, l_mkdir);
-    lua_call(L, 2, 1);
+    lua_pushcfunction(L, l_mark_usage);
+    lua_call(L, 3, 1);
     return 1;
 }
 

@@ -73,6 +73,18 @@ static dfle_trace_spec op_spec(const lua_law *ll, int op)
     return spec;
 }
 
+/* Note what op's program now holds values for (lua_law.fresh); val: its
+ * values, NULL when it has none. */
+static void mark_fresh(lua_law *ll, int op, const dfle_law_ctx *ctx, const double *F_in,
+                       const double *val)
+{
+    ll->fresh[op] = val != NULL;
+    ll->fresh_in[op][0] = op == OP_FACTOR ? (const void *)ctx->flow : (const void *)ctx->S;
+    ll->fresh_in[op][1] = op == OP_FACTOR ? NULL : F_in;
+    ll->fresh_n[op] = ctx->n;
+    ll->fresh_val[op] = val;
+}
+
 /* Run `op` through its compiled form, compiling it first if need be.
  * Returns TRY_LUA when the Lua sweep must do it instead: the function
  * cannot be compiled, a value is not finite (so that Lua reports it the
@@ -97,6 +109,7 @@ int ll_compiled_sweep(lua_law *ll, int op, const dfle_law_ctx *ctx, const double
         lua_settop(T, SLOT_COUNT);
         if (!dfle_trace_guards_hold(T, SLOT_GUARDS_FACTOR + op, ll->prog[op])) {
             dfle_trace_free(ll->prog[op]); /* something it read has changed */
+            ll->fresh[op] = 0;
             ll->prog[op] = NULL;
         }
         ll->seen[op] = *ll->epoch;
@@ -129,7 +142,9 @@ int ll_compiled_sweep(lua_law *ll, int op, const dfle_law_ctx *ctx, const double
     used = dfle_trace_inputs(p);
     for (int f = 0; f < N_IN; f++)
         src[f] = used & (1u << f) ? ll_field_source(ll, f) : NULL;
-    if ((val = dfle_trace_eval_n(p, n, src)) == NULL)
+    val = dfle_trace_eval_n(p, n, src);
+    mark_fresh(ll, op, ctx, F_in, val);
+    if (val == NULL)
         return TRY_LUA;
     for (size_t i = 0; i < n; i++) {
         double e = val[i];
@@ -154,6 +169,7 @@ int ll_compiled_sweep(lua_law *ll, int op, const dfle_law_ctx *ctx, const double
         if (st != DFLE_OK) {
             /* No check happened: trace (and check) again next time. */
             dfle_trace_free(p);
+            ll->fresh[op] = 0;
             ll->prog[op] = NULL;
             ll->cstate[op] = 0;
             return st;
@@ -165,6 +181,7 @@ int ll_compiled_sweep(lua_law *ll, int op, const dfle_law_ctx *ctx, const double
                          "its compiled form gave %.17g where Lua gives %.17g (node %zu)", dst[i],
                          out[i], i + 1);
                 dfle_trace_free(p);
+                ll->fresh[op] = 0;
                 ll->prog[op] = NULL;
                 ll->cstate[op] = -1;
                 break;
@@ -334,6 +351,24 @@ static double *deriv_buffer(lua_law *ll, size_t n)
     return ll->dbuf;
 }
 
+/* Whether op's program still holds its values for the call in progress
+ * (ll->ctx, ll->F_in): rate_dlnS comes right after rate with what rate
+ * received (law.h), and the factor it was given must be the one the
+ * factor program last gave, to the bit (the same flow: a factor equal
+ * by chance would need equal t_p, h and Theta).  Then the derivative
+ * needs no second evaluation: a third of a Lua law's node solve. */
+static int still_fresh(const lua_law *ll, int op)
+{
+    const dfle_law_ctx *ctx = ll->ctx;
+    if (!ll->fresh[op] || ll->fresh_n[op] != ctx->n)
+        return 0;
+    if (op != OP_FACTOR)
+        return ll->fresh_in[op][0] == (const void *)ctx->S && ll->fresh_in[op][1] == ll->F_in;
+    if (ll->fresh_in[op][0] != (const void *)ctx->flow)
+        return 0;
+    return memcmp(ll->fresh_val[op], ll->F_in, ctx->n * sizeof *ll->F_in) == 0;
+}
+
 /* The values of the program of op for the call in progress (ll->ctx,
  * ll->F_in), then its derivative for the input derivatives din. */
 static const double *program_deriv(lua_law *ll, int op, size_t n, const double *const *din)
@@ -342,10 +377,15 @@ static const double *program_deriv(lua_law *ll, int op, size_t n, const double *
     const unsigned used = dfle_trace_inputs(p);
     const double *src[N_IN];
     ll->op = op;
-    for (int f = 0; f < N_IN; f++)
-        src[f] = used & (1u << f) ? ll_field_source(ll, f) : NULL;
-    if (dfle_trace_eval_n(p, n, src) == NULL)
-        return NULL;
+    if (!still_fresh(ll, op)) {
+        const double *val;
+        for (int f = 0; f < N_IN; f++)
+            src[f] = used & (1u << f) ? ll_field_source(ll, f) : NULL;
+        val = dfle_trace_eval_n(p, n, src);
+        mark_fresh(ll, op, ll->ctx, ll->F_in, val);
+        if (val == NULL)
+            return NULL;
+    }
     return dfle_trace_deriv_n(p, n, din);
 }
 

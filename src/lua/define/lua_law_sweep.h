@@ -97,6 +97,14 @@ typedef struct lua_law {
     size_t scratch_cap;
     double *dbuf; /* derivative columns of the inputs (ll_compiled_rate_dlnS) */
     size_t dcap;
+    /* What each program's values (held in it until its next evaluation)
+     * were computed for: the slope and factor arrays (rate) or the flow
+     * (factor), n and the values' address; fresh = 0: nothing known.
+     * rate_dlnS differentiates those values when they are the call's. */
+    int fresh[N_OPS];
+    const void *fresh_in[N_OPS][2];
+    size_t fresh_n[N_OPS];
+    const double *fresh_val[N_OPS];
     /* The op in progress, read by the sweep. */
     int busy, op;
     const dfle_law_ctx *ctx;

@@ -19,11 +19,14 @@
  * run in every worker with their upvalues, and the script up to the
  * ensemble call must do the same thing every time it runs (doc/ensembles.md).
  *
- * This file holds the Lua entry points; the ensemble's table, one sample
- * and the rows (the same text whichever state ran the sample) are in
- * lua_ensemble_sample.c, the worker threads in lua_ensemble_pool.c, the
- * host and registry keys they share in lua_ensemble_host.c, and the file
- * rules (streaming, resume, sorting, gather) in src/ensemble.c.
+ * This file holds the Lua entry points and the box of C resources they
+ * hold while Lua runs; the ensemble's table is checked in
+ * lua_ensemble_spec.c, one sample and its row (the same text whichever
+ * state ran the sample) are in lua_ensemble_sample.c, the finished file
+ * is read back in lua_ensemble_result.c, the worker threads are in
+ * lua_ensemble_pool.c, the host and registry keys they share in
+ * lua_ensemble_host.c, and the file rules (streaming, resume, sorting,
+ * gather) in src/io/ensemble.c.
  */
 #include <math.h>
 #include <pthread.h>
@@ -34,6 +37,32 @@
 
 #include "dfle/sensitivity.h"
 #include "lua/ensemble/lua_ensemble_internal.h"
+
+/* ------------------------------------------------------------------ */
+/* C resources held while Lua code runs: freed by __gc if it raises.   */
+
+int dfle_lua_ens_box_gc(lua_State *L)
+{
+    run_box *b = luaL_checkudata(L, 1, RUN_BOX);
+    dfle_ens_file_close(b->file, 0, NULL);
+    dfle_ens_queue_free(b->queue);
+    dfle_ens_table_free(b->table);
+    b->file = NULL;
+    b->queue = NULL;
+    b->table = NULL;
+    return 0;
+}
+
+run_box *dfle_lua_ens_new_box(lua_State *L)
+{
+    run_box *b = lua_newuserdatauv(L, sizeof *b, 0);
+    memset(b, 0, sizeof *b);
+    luaL_setmetatable(L, RUN_BOX);
+    return b;
+}
+
+/* ------------------------------------------------------------------ */
+/* The JSON record of a finished run.                                  */
 
 /* The counts of the result table at res into rec's current section, and
  * its rows per status as section "status". */
@@ -279,13 +308,16 @@ static int l_gather(lua_State *L)
     return 1;
 }
 
-/* The bootstrap threads of a dfle.pawn call that gives none: the
- * command's -j, else (for an ensemble) the workers it ran with (at idx,
- * or 0); 0: dfle.pawn's own default, every core. */
+/* The bootstrap threads of a dfle.pawn call that gives none: 1 inside
+ * an ensemble's sample or an inversion (their workers have the cores
+ * already), else the command's -j, else (for an ensemble) the workers it
+ * ran with (at idx, or 0); 0: dfle.pawn's own default, every core. */
 static lua_Integer default_threads(lua_State *L, int ens)
 {
     const dfle_lua_ensemble_host *host = dfle_lua_ens_host(L);
     lua_Integer n = 0;
+    if (dfle_lua_par_inside(L))
+        return 1;
     if (host != NULL && host->workers > 0)
         return host->workers;
     if (ens != 0 && lua_getfield(L, ens, "workers") == LUA_TNUMBER)

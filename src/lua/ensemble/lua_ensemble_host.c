@@ -33,17 +33,33 @@ void dfle_lua_par_depth(lua_State *L, int delta)
     lua_rawsetp(L, LUA_REGISTRYINDEX, &depth_key);
 }
 
+/* The worker mode of state L (NULL: not a worker); *depth the parallel
+ * calls in progress. */
+static worker_mode *par_state(lua_State *L, lua_Integer *depth)
+{
+    worker_mode *wm;
+    lua_rawgetp(L, LUA_REGISTRYINDEX, &dfle_lua_ens_worker_key);
+    wm = lua_touserdata(L, -1);
+    lua_rawgetp(L, LUA_REGISTRYINDEX, &depth_key);
+    *depth = lua_tointeger(L, -1);
+    lua_pop(L, 2);
+    return wm;
+}
+
+int dfle_lua_par_inside(lua_State *L)
+{
+    lua_Integer depth;
+    const worker_mode *wm = par_state(L, &depth);
+    return (wm != NULL && wm->serving) || depth > 0;
+}
+
 int dfle_lua_par_enter(lua_State *L, int kind, int arg, lua_Integer *call)
 {
     worker_mode *wm;
     lua_Integer depth;
 
     arg = lua_absindex(L, arg);
-    lua_rawgetp(L, LUA_REGISTRYINDEX, &dfle_lua_ens_worker_key);
-    wm = lua_touserdata(L, -1);
-    lua_rawgetp(L, LUA_REGISTRYINDEX, &depth_key);
-    depth = lua_tointeger(L, -1);
-    lua_pop(L, 2);
+    wm = par_state(L, &depth);
     *call = 0;
     if ((wm != NULL && wm->serving) || depth > 0)
         return DFLE_LUA_PAR_NESTED;

@@ -1,9 +1,13 @@
 /*
  * lua_ensemble_internal.h - what the files of the dfle.ensemble binding
- * share (not installed): lua_ensemble.c (the Lua entry points),
- * lua_ensemble_sample.c (the ensemble's table, one sample, rows and
- * results), lua_ensemble_pool.c (worker threads and their states) and,
- * below those, lua_ensemble_host.c (a state's host, registry keys, clock).
+ * share (not installed): lua_ensemble.c (the Lua entry points and the
+ * box of C resources they hold), lua_ensemble_spec.c (the ensemble's
+ * table checked, the file's meta, comment and header lines),
+ * lua_ensemble_sample.c (one sample run into a CSV row),
+ * lua_ensemble_result.c (a finished file read back into the result
+ * table), lua_ensemble_netcdf.c (ens:write_netcdf),
+ * lua_ensemble_pool.c (worker threads and their states) and, below
+ * those, lua_ensemble_host.c (a state's host, registry keys, clock).
  *
  * The replay machinery (a worker state that runs the script up to the
  * k-th parallel call and is then handed that call's table) serves every
@@ -99,19 +103,36 @@ int dfle_lua_par_enter(lua_State *L, int kind, int arg, lua_Integer *call);
 /* Parallel calls in progress in this state (a sample being run, an
  * inversion evaluating): calls made meanwhile are nested. */
 void dfle_lua_par_depth(lua_State *L, int delta);
+/* 1 while this state runs inside a parallel call (a sample of an
+ * ensemble, an inversion's model): the cores are taken already. */
+int dfle_lua_par_inside(lua_State *L);
 /* The name of a kind in messages: "dfle.ensemble", "dfle.invert". */
 const char *dfle_lua_par_name(int kind);
 const dfle_lua_ensemble_host *dfle_lua_ens_host(lua_State *L);
 double dfle_lua_ens_now(void);
+
+/* lua_ensemble.c: the box (RUN_BOX) of C resources held while Lua runs. */
 int dfle_lua_ens_box_gc(lua_State *L);
 run_box *dfle_lua_ens_new_box(lua_State *L);
+
+/* lua_ensemble_spec.c: the ensemble's table and its file's lines. */
 void dfle_lua_ens_push_shard_path(lua_State *L, const char *out, size_t i, size_t n);
 void dfle_lua_ens_read_spec(lua_State *L, int arg, const char *fn, spec *s,
                             const dfle_lua_ensemble_host *host);
+
+/* lua_ensemble_sample.c: one sample into a row, and the text of a field
+ * (a number with 17 digits; any value, quoted as a CSV field when
+ * `quote`). */
+void dfle_lua_ens_push_number_text(lua_State *L, double v);
+void dfle_lua_ens_push_value_text(lua_State *L, int idx, int quote);
 int dfle_lua_ens_sample_row(lua_State *L, int ctx, size_t i);
+
+/* lua_ensemble_result.c: a finished file as the result table. */
 void dfle_lua_ens_push_result(lua_State *L, const char *fn, const char *path, size_t shard_i,
                               size_t shard_n, lua_Integer ran);
-/* Set __index of the result metatable (at the top): ens:write_netcdf. */
+
+/* lua_ensemble_netcdf.c: set __index of the result metatable (at the
+ * top): ens:write_netcdf. */
 void dfle_lua_ens_result_methods(lua_State *L);
 
 /* lua_ensemble_pool.c: a worker state from the host (one thread at a

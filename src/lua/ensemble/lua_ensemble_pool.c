@@ -243,6 +243,26 @@ int dfle_lua_par_workers(const dfle_lua_ensemble_host *host, int table_workers, 
     return dfle_lua_cores();
 }
 
+/* Start nw worker threads into tid; how many started (0: pl->error). */
+static int start_workers(pool *pl, pthread_t *tid, int nw)
+{
+    int started = 0;
+    pthread_mutex_lock(&pl->lock);
+    pl->active = nw;
+    pthread_mutex_unlock(&pl->lock);
+    for (; started < nw; started++)
+        if (pthread_create(&tid[started], NULL, worker_thread, pl) != 0)
+            break;
+    pthread_mutex_lock(&pl->lock);
+    pl->active -= nw - started;
+    if (started == 0 && !pl->error) {
+        pl->error = 1;
+        snprintf(pl->msg, sizeof pl->msg, "cannot start worker threads");
+    }
+    pthread_mutex_unlock(&pl->lock);
+    return started;
+}
+
 /* Run the queue on `nw` threads, and with the other processes that
  * share it (pl->remote) until they too have finished; the first error
  * is left in pl->error and pl->msg. */
@@ -267,53 +287,57 @@ void dfle_lua_ens_run_threads(lua_State *L, pool *pl, int nw, size_t total)
     }
     pthread_mutex_init(&pl->lock, NULL);
     pthread_cond_init(&pl->cond, NULL);
-    pl->active = nw;
-    for (; started < nw; started++)
-        if (pthread_create(&tid[started], NULL, worker_thread, pl) != 0)
-            break;
-    pthread_mutex_lock(&pl->lock);
-    pl->active -= nw - started;
-    if (started < nw && started == 0) {
-        pl->error = 1;
-        snprintf(pl->msg, sizeof pl->msg, "cannot start worker threads");
-    }
-    while (pl->active > 0 || remote) {
-        struct timespec ts;
-        size_t done = pl->done, failed = pl->failed;
-        int stop = pl->error;
-        /* Wake often once only the other processes are left: their end
-         * is seen by polling, not signalled. */
-        long wait_ns = pl->active > 0 ? 100000000L : 5000000L;
-        pthread_mutex_unlock(&pl->lock);
-        /* Interrupted: no new samples; those running here finish and
-         * count, the other processes' are not waited for. */
-        if (dfle_lua_interrupted(L)) {
-            dfle_ens_queue_stop(pl->queue);
-            stop = 1;
-        }
-        if (remote) {
-            char msg[DFLE_ERROR_MSG_MAX];
-            int r = h->remote_poll(h->ud, stop, &pl->rdone, &pl->rfailed, msg, sizeof msg);
-            if (r < 0)
-                pool_fail(pl, msg);
-            remote = r > 0;
-        }
-        if (h->progress != NULL)
-            h->progress(h->ud, done + pl->rdone, total, failed + pl->rfailed,
-                        dfle_lua_ens_now() - t0);
+    started = start_workers(pl, tid, nw);
+    for (;;) {
+        size_t left;
         pthread_mutex_lock(&pl->lock);
-        clock_gettime(CLOCK_REALTIME, &ts);
-        ts.tv_nsec += wait_ns;
-        if (ts.tv_nsec >= 1000000000L) {
-            ts.tv_sec++;
-            ts.tv_nsec -= 1000000000L;
+        while (pl->active > 0 || remote) {
+            struct timespec ts;
+            size_t done = pl->done, failed = pl->failed;
+            int stop = pl->error;
+            /* Wake often once only the other processes are left: their end
+             * is seen by polling, not signalled. */
+            long wait_ns = pl->active > 0 ? 100000000L : 5000000L;
+            pthread_mutex_unlock(&pl->lock);
+            /* Interrupted: no new samples; those running here finish and
+             * count, the other processes' are not waited for. */
+            if (dfle_lua_interrupted(L)) {
+                dfle_ens_queue_stop(pl->queue);
+                stop = 1;
+            }
+            if (remote) {
+                char msg[DFLE_ERROR_MSG_MAX];
+                int r = h->remote_poll(h->ud, stop, &pl->rdone, &pl->rfailed, msg, sizeof msg);
+                if (r < 0)
+                    pool_fail(pl, msg);
+                remote = r > 0;
+            }
+            if (h->progress != NULL)
+                h->progress(h->ud, done + pl->rdone, total, failed + pl->rfailed,
+                            dfle_lua_ens_now() - t0);
+            pthread_mutex_lock(&pl->lock);
+            clock_gettime(CLOCK_REALTIME, &ts);
+            ts.tv_nsec += wait_ns;
+            if (ts.tv_nsec >= 1000000000L) {
+                ts.tv_sec++;
+                ts.tv_nsec -= 1000000000L;
+            }
+            if (pl->active > 0 || remote)
+                pthread_cond_timedwait(&pl->cond, &pl->lock, &ts);
         }
-        if (pl->active > 0 || remote)
-            pthread_cond_timedwait(&pl->cond, &pl->lock, &ts);
+        pthread_mutex_unlock(&pl->lock);
+        for (int k = 0; k < started; k++)
+            pthread_join(tid[k], NULL);
+        /* The last other process was lost after these threads had run
+         * out of samples, and its samples came back to the queue: run
+         * them here.  A round needs samples given back, which only a
+         * lost process gives, so there are as many rounds as processes
+         * at most. */
+        left = pl->error || dfle_lua_interrupted(L) ? 0 : dfle_ens_queue_pending(pl->queue);
+        if (left == 0)
+            break;
+        started = start_workers(pl, tid, (size_t)nw < left ? nw : (int)left);
     }
-    pthread_mutex_unlock(&pl->lock);
-    for (int k = 0; k < started; k++)
-        pthread_join(tid[k], NULL);
     if (h->progress_end != NULL)
         h->progress_end(h->ud);
     pthread_cond_destroy(&pl->cond);

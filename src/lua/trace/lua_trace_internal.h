@@ -1,8 +1,12 @@
 /*
- * lua_trace_internal.h - what the tracer's files share: lua_trace.c
- * (recording a function's arithmetic), lua_trace_eval.c (evaluating the
- * record, checking its guards) and lua_trace_bytecode.c (the bytecode
- * scan for what a record cannot see).  Internal to the binding.
+ * lua_trace_internal.h - what the tracer's files share: lua_trace.c (one
+ * trace of a function, made into a program), lua_trace_node.c (recording
+ * the arithmetic and math calls on nodes), lua_trace_outside.c (guards
+ * and stand-ins for what the function reads from outside),
+ * lua_trace_eval.c (evaluating the record, checking its guards),
+ * lua_trace_bytecode.c (the bytecode scan for what a record cannot see)
+ * and lua_trace_cache.c (the per-state cache of programs).  Internal to
+ * the binding.
  */
 #ifndef DFLE_LUA_TRACE_INTERNAL_H
 #define DFLE_LUA_TRACE_INTERNAL_H
@@ -76,5 +80,68 @@ dfle_trace_prog *dfle_trace_clone(const dfle_trace_prog *prog);
  * not read (another Lua version). */
 enum { FOUND_EQ = 1, FOUND_SETUPVAL = 2, FOUND_BAD = 4 };
 unsigned dfle_trace_scan(lua_State *L, int fidx);
+
+/* ---- during a trace: lua_trace.c, lua_trace_node.c, lua_trace_outside.c */
+
+#define MAX_NODES 1024 /* operations a compiled function may record    */
+
+/* The trace in progress: a userdata with user values 1 = guards table,
+ * 2 = swaps table, 3 = cache (vetted functions, proxies), 4 = the original
+ * of each stand-in (an upvalue cell shared by two functions already holds
+ * one when the second is vetted), 5 = the node of each param read as an
+ * input (key -> node index). */
+typedef struct tracer {
+    int active;
+    int n;
+    int n_guards, n_swaps, depth;
+    int symbolic; /* float params are inputs (T_PARAM), not constants */
+    int n_params; /* params read as inputs                           */
+    const dfle_trace_spec *spec;
+    int field_node[DFLE_TRACE_MAX_INPUTS];
+    char why[160];
+    tnode node[MAX_NODES];
+} tracer;
+
+enum { UV_GUARDS = 1, UV_SWAPS, UV_CACHE, UV_ORIG, UV_PARAMS, N_UV = UV_PARAMS };
+
+typedef struct { tracer *t; int idx; } node_ud;
+
+/* The registry name of the nodes' metatable. */
+#define NODE_MT "dfle.trace.node"
+
+/* What a proxy stands for (lua_trace_outside.c). */
+enum { PROXY_ENV, PROXY_MATH, PROXY_PARAMS };
+
+static inline tracer *tracer_at(lua_State *L, int idx) { return lua_touserdata(L, idx); }
+
+/* lua_trace_node.c: nodes and the math functions a trace records. */
+
+/* Refuse to compile: remember the first reason and unwind the trace. */
+int dfle_trace_refuse(lua_State *L, tracer *t, const char *fmt, ...);
+/* Record a node; its index (refuses past MAX_NODES). */
+int dfle_trace_add_node(lua_State *L, tracer *t, int op, int a, int b, double k, int maybe_int);
+/* Push a node object for node `idx` of the tracer at tidx. */
+void dfle_trace_push_node(lua_State *L, int tidx, int idx);
+/* Create NODE_MT, the metatable of nodes, if it is not there yet. */
+void dfle_trace_node_metatable(lua_State *L);
+/* Push the map of the genuine math functions (C address -> T_ op). */
+void dfle_trace_math_map(lua_State *L);
+/* The T_ op of the C function at idx, or 0. */
+int dfle_trace_math_op_of(lua_State *L, int idx);
+/* A math function during a trace: upvalue 1 = the T_ op, 2 = the real
+ * function. */
+int dfle_trace_math_wrapper(lua_State *L);
+
+/* lua_trace_outside.c: what the function reads besides its arguments. */
+
+/* Check that the Lua function at fidx can be traced, and point its
+ * upvalues at stand-ins for the trace. */
+void dfle_trace_vet_function(lua_State *L, tracer *t, int tidx, int fidx, const char *what);
+/* Push a new proxy of the table at `real`, of PROXY_ kind `kind`. */
+void dfle_trace_push_proxy(lua_State *L, int tidx, int real, int kind);
+/* Refuse metatables shared by non-table values, and swap strings'
+ * __index for one that refuses; reopen puts it back (no allocation). */
+void dfle_trace_close_shared_metatables(lua_State *L, tracer *t, int tidx);
+void dfle_trace_reopen_shared_metatables(lua_State *L, int tidx);
 
 #endif
