@@ -199,6 +199,18 @@ static void test_tilted_plane(void **state)
     dfle_drainage_free(dr);
 }
 
+/* The stack of plane z (20 cells) with options o is want, and valid. */
+static void expect_stack(const dfle_drainage_opts *o, const double *z, const uint32_t *want)
+{
+    dfle_drainage *dr = make(o);
+    size_t n;
+    route(dr, z);
+    assert_memory_equal(dfle_drainage_stack(dr, &n), want, 20 * sizeof *want);
+    assert_int_equal(n, 20);
+    check_invariants(dr, z);
+    dfle_drainage_free(dr);
+}
+
 /* The stack of that plane, each way.  Kahn's: the cells without
  * donors (row 3) first, then each row as its donors are done; read
  * backwards, row 0 from the east end first.  Depth-first: each column's
@@ -215,30 +227,16 @@ static void test_stack_orders(void **state)
     static const uint32_t chains[20] = {4, 9, 14, 19, 3, 8, 13, 18, 2, 7,
                                         12, 17, 1, 6, 11, 16, 0, 5, 10, 15};
     dfle_drainage_opts o = grid(5, 4, 10, 10, DFLE_DRAINAGE_KEEP);
-    dfle_drainage *dr;
     double z[20];
-    size_t n;
     (void)state;
 
     for (size_t i = 0; i < 20; i++)
         z[i] = (double)(i / 5);
-    dr = make(&o); /* the default */
-    route(dr, z);
-    assert_memory_equal(dfle_drainage_stack(dr, &n), kahn, sizeof kahn);
-    assert_int_equal(n, 20);
-    dfle_drainage_free(dr);
+    expect_stack(&o, z, kahn); /* the default */
     o.order = DFLE_DRAINAGE_DEPTH_FIRST;
-    dr = make(&o);
-    route(dr, z);
-    assert_memory_equal(dfle_drainage_stack(dr, &n), depth_first, sizeof depth_first);
-    check_invariants(dr, z);
-    dfle_drainage_free(dr);
+    expect_stack(&o, z, depth_first);
     o.order = DFLE_DRAINAGE_CHAINS;
-    dr = make(&o);
-    route(dr, z);
-    assert_memory_equal(dfle_drainage_stack(dr, &n), chains, sizeof chains);
-    check_invariants(dr, z);
-    dfle_drainage_free(dr);
+    expect_stack(&o, z, chains);
 }
 
 /* The same plane with the north edge closed.  Row 0 cannot leave
