@@ -199,35 +199,44 @@ static void test_tilted_plane(void **state)
     dfle_drainage_free(dr);
 }
 
-/* The stack of that plane, both ways.  Kahn's: the cells without
+/* The stack of plane z (20 cells) with options o is want, and valid. */
+static void expect_stack(const dfle_drainage_opts *o, const double *z, const uint32_t *want)
+{
+    dfle_drainage *dr = make(o);
+    size_t n;
+    route(dr, z);
+    assert_memory_equal(dfle_drainage_stack(dr, &n), want, 20 * sizeof *want);
+    assert_int_equal(n, 20);
+    check_invariants(dr, z);
+    dfle_drainage_free(dr);
+}
+
+/* The stack of that plane, each way.  Kahn's: the cells without
  * donors (row 3) first, then each row as its donors are done; read
  * backwards, row 0 from the east end first.  Depth-first: each column's
- * top cell (a root, in index order), then down its column. */
+ * top cell (a root, in index order), then down its column.  Chains:
+ * each cell of row 3 in index order, then the cells below it, each
+ * completed by it (one donor each); read backwards, the east column
+ * first, from its root. */
 static void test_stack_orders(void **state)
 {
     static const uint32_t depth_first[20] = {0, 5, 10, 15, 1, 6, 11, 16, 2, 7,
                                              12, 17, 3, 8, 13, 18, 4, 9, 14, 19};
     static const uint32_t kahn[20] = {4, 3, 2, 1, 0, 9, 8, 7, 6, 5,
                                       14, 13, 12, 11, 10, 19, 18, 17, 16, 15};
+    static const uint32_t chains[20] = {4, 9, 14, 19, 3, 8, 13, 18, 2, 7,
+                                        12, 17, 1, 6, 11, 16, 0, 5, 10, 15};
     dfle_drainage_opts o = grid(5, 4, 10, 10, DFLE_DRAINAGE_KEEP);
-    dfle_drainage *dr;
     double z[20];
-    size_t n;
     (void)state;
 
     for (size_t i = 0; i < 20; i++)
         z[i] = (double)(i / 5);
-    dr = make(&o); /* the default */
-    route(dr, z);
-    assert_memory_equal(dfle_drainage_stack(dr, &n), kahn, sizeof kahn);
-    assert_int_equal(n, 20);
-    dfle_drainage_free(dr);
+    expect_stack(&o, z, kahn); /* the default */
     o.order = DFLE_DRAINAGE_DEPTH_FIRST;
-    dr = make(&o);
-    route(dr, z);
-    assert_memory_equal(dfle_drainage_stack(dr, &n), depth_first, sizeof depth_first);
-    check_invariants(dr, z);
-    dfle_drainage_free(dr);
+    expect_stack(&o, z, depth_first);
+    o.order = DFLE_DRAINAGE_CHAINS;
+    expect_stack(&o, z, chains);
 }
 
 /* The same plane with the north edge closed.  Row 0 cannot leave
@@ -686,7 +695,7 @@ static void test_invariants_random(void **state)
                 for (int edges = 0; edges < 6; edges++) {
                     size_t nx = sizes[s][0], ny = sizes[s][1];
                     dfle_drainage_opts o = grid(nx, ny, 3, 2, (enum dfle_drainage_depressions)dep);
-                    o.order = edges % 2 ? DFLE_DRAINAGE_KAHN : DFLE_DRAINAGE_DEPTH_FIRST;
+                    o.order = (enum dfle_drainage_order)(edges % 3); /* each order */
                     double *z = malloc(nx * ny * sizeof *z);
                     dfle_drainage *dr;
                     assert_non_null(z);
@@ -736,7 +745,7 @@ static void test_reroute_matches_fresh(void **state)
             size_t ns_u, ns_f, mem;
             dfle_drainage_counts ku, kf;
 
-            o.order = dep % 2 ? DFLE_DRAINAGE_KAHN : DFLE_DRAINAGE_DEPTH_FIRST;
+            o.order = (enum dfle_drainage_order)(dep % 3); /* each order */
             random_grid(z1, nx, ny, kind);
             random_grid(z2, nx, ny, (kind + 1) % 4);
             used = make(&o);
@@ -974,9 +983,9 @@ static void test_errors(void **state)
     assert_int_equal(dfle_drainage_new(&o, &dr, &err), DFLE_EINVAL);
     assert_msg_contains(err.msg, "depressions");
     o = grid(3, 3, 1, 1, DFLE_DRAINAGE_KEEP);
-    o.order = (enum dfle_drainage_order)2;
+    o.order = (enum dfle_drainage_order)3;
     assert_int_equal(dfle_drainage_new(&o, &dr, &err), DFLE_EINVAL);
-    assert_msg_contains(err.msg, "order = 2");
+    assert_msg_contains(err.msg, "order = 3");
     assert_null(dr);
 
     o = grid(3, 3, 1, 1, DFLE_DRAINAGE_KEEP);

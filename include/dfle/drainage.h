@@ -111,7 +111,13 @@ enum dfle_drainage_order {
      * index order (Braun and Willett 2013): each tree's cells are
      * contiguous, for work done basin by basin.  Slower to build on
      * large grids (each step waits on the last). */
-    DFLE_DRAINAGE_DEPTH_FIRST = 1
+    DFLE_DRAINAGE_DEPTH_FIRST = 1,
+    /* Cells without donors in index order, each followed down its
+     * receivers by every cell it is the last donor of, read backwards.
+     * Each step is the cell just done or its neighbour, so on grids
+     * larger than the cache it is the fastest to build and to sweep in
+     * (the landscape model's order). */
+    DFLE_DRAINAGE_CHAINS = 2
 };
 
 typedef struct dfle_drainage_opts {

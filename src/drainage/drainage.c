@@ -59,9 +59,10 @@ static int check_opts(const dfle_drainage_opts *o, dfle_error *err)
         o->depressions != DFLE_DRAINAGE_CARVE)
         return dfle_error_set(err, DFLE_EINVAL, "drainage: depressions = %d is not a method "
                               "(KEEP, FILL, CARVE)", (int)o->depressions);
-    if (o->order != DFLE_DRAINAGE_KAHN && o->order != DFLE_DRAINAGE_DEPTH_FIRST)
+    if (o->order != DFLE_DRAINAGE_KAHN && o->order != DFLE_DRAINAGE_DEPTH_FIRST &&
+        o->order != DFLE_DRAINAGE_CHAINS)
         return dfle_error_set(err, DFLE_EINVAL, "drainage: order = %d is not a stack order "
-                              "(KAHN, DEPTH_FIRST)", (int)o->order);
+                              "(KAHN, DEPTH_FIRST, CHAINS)", (int)o->order);
     return DFLE_OK;
 }
 
@@ -76,10 +77,9 @@ void dfle_drainage_trim(dfle_drainage *dr)
     free(dr->zfill);
     free(dr->heap);
     free(dr->height);
-    free(dr->bg.start); /* all the per-basin arrays */
+    free(dr->bg.block); /* all the per-basin arrays */
     free(dr->bg.link);
-    free(dr->bg.sorted);
-    free(dr->bg.count);
+    free(dr->bg.spare);
     dr->mark = NULL;
     for (int k = 0; k < 3; k++)
         dr->work[k] = NULL;
@@ -309,10 +309,6 @@ int dfle_drainage_route(dfle_drainage *dr, const double *z, dfle_error *err)
     if ((st = drainage_stack(dr, n_data, err)) != DFLE_OK)
         return st;
     dr->counts.data = n_data;
-    for (size_t i = 0; i < dr->n; i++) {
-        dr->counts.outlets += dr->dir[i] == DIR_OUT;
-        dr->counts.sinks += dr->dir[i] == DIR_SINK;
-    }
     dr->routed = 1;
     return DFLE_OK;
 }
@@ -384,6 +380,6 @@ size_t dfle_drainage_memory(const dfle_drainage *dr)
     bytes += dr->zfill != NULL ? n * sizeof *dr->zfill : 0;
     bytes += dr->heap_cap * sizeof *dr->heap + dr->height_cap * sizeof *dr->height;
     bytes += b > 0 ? DRAINAGE_BASIN_WORDS(b) * sizeof(uint32_t) : 0;
-    bytes += 2 * dr->bg.link_cap * sizeof *dr->bg.link + dr->bg.count_cap * sizeof(uint32_t);
+    bytes += 2 * dr->bg.link_cap * sizeof *dr->bg.link;
     return bytes;
 }

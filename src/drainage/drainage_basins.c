@@ -13,8 +13,8 @@
  * of its cells that may leave the grid (an OPEN edge or NoData border),
  * at that cell's elevation: there the basin spills off the grid, the
  * cell becoming an outlet, as priority-flood would have it.  The
- * minimum spanning tree of the basins (Kruskal: links by cost,
- * union-find) holds each basin's way out over the lowest passes, which
+ * minimum spanning tree of the basins (Boruvka's rounds, below)
+ * holds each basin's way out over the lowest passes, which
  * is where a flood would spill; oriented from the outside, it gives
  * each basin the link it drains through.  The pit
  * is then joined to that pass by reversing the receivers along the flow
@@ -25,10 +25,12 @@
  * Costs: a pass over the pit basins' cells and their neighbours to find
  * the links (a basin's links are kept unique by remembering, per
  * neighbouring basin, the link it last made, as Cordonnier et al. do; a
- * basin's cells are gathered by a walk up its donors), a radix sort of
- * the links (a link per pair of touching basins), and a walk of each
- * carved path: all linear.  Ties in cost go to the link found first,
- * and links are found in a fixed order, so the result is reproducible.
+ * basin's cells are gathered by a walk up its donors), Boruvka's rounds
+ * over the links (a link per pair of touching basins; each round a pass
+ * over the links left, the components at least halved: no sort, which
+ * took twice as long as the rounds do), and a walk of each carved path.
+ * Ties in cost go to the link found first, and links are found in a
+ * fixed order, so the result is reproducible.
  *
  * A region from which no basin reaches the outside (walled in by CLOSED
  * edges or NoData) keeps one sink, at its lowest pit; its other basins
@@ -55,37 +57,35 @@ static int reserve_basins(drainage_basins *bg, size_t need)
     cap = need + need / 2;
     if ((block = malloc(DRAINAGE_BASIN_WORDS(cap) * sizeof *block)) == NULL)
         return -1;
-    free(bg->start);
-    bg->start = block;
+    free(bg->block);
+    bg->block = block;
+    bg->best_key = (uint64_t *)bg->block; /* first: 8-byte words */
+    bg->start = block + 2 * cap;
     bg->owner = bg->start + cap + 1;
     bg->pos = bg->owner + cap;
     bg->up = bg->pos + cap;
     bg->tree_off = bg->up + cap;
-    bg->tree = bg->tree_off + cap + 1;
-    bg->queue = bg->tree + 2 * cap;
+    bg->queue = bg->tree_off + cap + 1;
     bg->in = bg->queue + cap;
     bg->out = bg->in + cap;
     bg->cap = cap;
     return 0;
 }
 
-static int add_link(drainage_basins *bg, double w, uint32_t a, uint32_t b, uint32_t i,
-                    uint32_t j)
+/* Room for more links (out of the way of the search's hot loop). */
+static int grow_links(drainage_basins *bg)
 {
-    if (bg->n_link >= ROOT) /* pos[] holds link indices as uint32 */
+    size_t cap = bg->link_cap ? 2 * bg->link_cap : 1024;
+    drainage_link *l, *t;
+    if (cap > ROOT) /* pos[] holds link indices as uint32 */
+        cap = ROOT;
+    if (cap <= bg->link_cap || (l = realloc(bg->link, cap * sizeof *l)) == NULL)
         return -1;
-    if (bg->n_link == bg->link_cap) {
-        size_t cap = bg->link_cap ? 2 * bg->link_cap : 1024;
-        drainage_link *l = realloc(bg->link, cap * sizeof *l), *t;
-        if (l == NULL)
-            return -1;
-        bg->link = l;
-        if ((t = realloc(bg->sorted, cap * sizeof *t)) == NULL)
-            return -1;
-        bg->sorted = t;
-        bg->link_cap = cap;
-    }
-    bg->link[bg->n_link++] = (drainage_link){w, a, b, i, j};
+    bg->link = l;
+    if ((t = realloc(bg->spare, cap * sizeof *t)) == NULL)
+        return -1;
+    bg->spare = t;
+    bg->link_cap = cap;
     return 0;
 }
 
@@ -121,13 +121,17 @@ static size_t label_basins(dfle_drainage *dr, uint32_t *basin, uint32_t *members
 
 /* Basin a may reach basin b (0: outside) over i -> j at cost w; keep
  * the cheapest such pass per pair (the first of equal ones). */
-static int offer(drainage_basins *bg, uint32_t a, uint32_t b, double w, uint32_t i, uint32_t j)
+static inline int offer(drainage_basins *bg, uint32_t a, uint32_t b, double w, uint32_t i,
+                        uint32_t j)
 {
     drainage_link *l;
     if (bg->owner[b] != a) {
+        if (bg->n_link == bg->link_cap && grow_links(bg) != 0)
+            return -1;
         bg->owner[b] = a;
         bg->pos[b] = (uint32_t)bg->n_link;
-        return add_link(bg, w, a, b, i, j);
+        bg->link[bg->n_link++] = (drainage_link){w, a, b, i, j};
+        return 0;
     }
     l = &bg->link[bg->pos[b]];
     if (w < l->w) {
@@ -153,8 +157,9 @@ static int find_links(dfle_drainage *dr, const double *z, const uint32_t *basin,
         bg->owner[b] = NONE;
     for (uint32_t a = 1; a <= n_basins; a++) {
         for (uint32_t m = bg->start[a]; m < bg->start[a + 1]; m++) {
-            uint32_t i = members[m], r = drainage_row(dr, i), c = i - r * nx, across[8];
+            uint32_t i = members[m], r = drainage_row(dr, i), c = i - r * nx, across[8], to[8];
             int interior = drainage_interior(dr, r, c), at_border = 0, n_across = 0;
+            const double zi = z[i];
             /* A big basin's members, in breadth-first order, leap about
              * the grid: fetch the three rows around a coming one. */
             if (m + DRAINAGE_AHEAD < end) {
@@ -176,24 +181,27 @@ static int find_links(dfle_drainage *dr, const double *z, const uint32_t *basin,
                     uint32_t nb = (uint32_t)((long long)i + dr->step[k]), b = basin[nb];
                     at_border |= b == NONE;
                     across[n_across] = nb;
-                    n_across += (b != a) & (b != NONE) & ((b == 0) | (b > a));
+                    to[n_across] = b;
+                    n_across += (b - 1u >= a) & (b != NONE); /* b == 0 or b > a */
                 }
             } else {
                 for (int k = 0; k < 8; k++) {
                     long long nb = drainage_nb(dr, r, c, k);
                     uint32_t b = nb < 0 ? NONE : basin[nb];
                     at_border |= b == NONE;
-                    if (b != a && b != NONE && (b == 0 || b > a))
-                        across[n_across++] = (uint32_t)nb;
+                    if (b != a && b != NONE && (b == 0 || b > a)) {
+                        across[n_across] = (uint32_t)nb;
+                        to[n_across++] = b;
+                    }
                 }
             }
             for (int q = 0; q < n_across; q++) {
                 uint32_t j = across[q];
-                if (offer(bg, a, basin[j], z[i] > z[j] ? z[i] : z[j], i, j) != 0)
+                if (offer(bg, a, to[q], zi > z[j] ? zi : z[j], i, j) != 0)
                     return -1;
             }
             if (at_border && drainage_exit(dr, z, i) != DFLE_DRAINAGE_CLOSED &&
-                offer(bg, a, 0, z[i], i, NONE) != 0)
+                offer(bg, a, 0, zi, i, NONE) != 0)
                 return -1;
         }
     }
@@ -201,58 +209,13 @@ static int find_links(dfle_drainage *dr, const double *z, const uint32_t *basin,
 }
 
 /* The bits of w as an unsigned key in the same order (sign flipped
- * for positives, all bits for negatives). */
-static uint64_t sort_key(double w)
+ * for positives, all bits for negatives): a total order of the costs
+ * in which -0 comes before +0. */
+static uint64_t cost_key(double w)
 {
     uint64_t b;
     memcpy(&b, &w, sizeof b);
     return b >> 63 ? ~b : b | 0x8000000000000000ull;
-}
-
-/* Links by cost: a stable LSD radix sort (passes where every key has
- * the same digit are skipped), so ties keep the order the links were
- * found in and the result is reproducible.  Linear, where a comparison
- * sort would make the links the one O(n log n) step.  Many links take
- * 11-bit digits (6 passes, a 48 kB histogram kept with the object: 16-bit
- * digits, 4 passes, scatter each pass over 65536 places and were no
- * faster at 1e5 links, slower at 1e6); few take bytes (8 passes, 8 kB). */
-static int sort_links(drainage_basins *bg)
-{
-    size_t n = bg->n_link;
-    int bits = n > ((size_t)1 << 16) ? 11 : 8, passes = (64 + bits - 1) / bits;
-    size_t radix = (size_t)1 << bits, mask = radix - 1;
-    if (n < 2)
-        return 0;
-    if (bg->count_cap < (size_t)passes * radix) {
-        uint32_t *c = realloc(bg->count, (size_t)passes * radix * sizeof *c);
-        if (c == NULL)
-            return -1;
-        bg->count = c;
-        bg->count_cap = (size_t)passes * radix;
-    }
-    memset(bg->count, 0, (size_t)passes * radix * sizeof *bg->count);
-    for (size_t l = 0; l < n; l++) {
-        uint64_t key = sort_key(bg->link[l].w);
-        for (int d = 0; d < passes; d++)
-            bg->count[(size_t)d * radix + ((key >> (bits * d)) & mask)]++;
-    }
-    for (int d = 0; d < passes; d++) {
-        uint32_t sum = 0, *at = bg->count + (size_t)d * radix;
-        drainage_link *t;
-        if (at[(sort_key(bg->link[0].w) >> (bits * d)) & mask] == n)
-            continue;
-        for (size_t v = 0; v < radix; v++) {
-            uint32_t c = at[v];
-            at[v] = sum;
-            sum += c;
-        }
-        for (size_t l = 0; l < n; l++)
-            bg->sorted[at[(sort_key(bg->link[l].w) >> (bits * d)) & mask]++] = bg->link[l];
-        t = bg->link;
-        bg->link = bg->sorted;
-        bg->sorted = t;
-    }
-    return 0;
 }
 
 static uint32_t find(uint32_t *up, uint32_t x)
@@ -264,29 +227,95 @@ static uint32_t find(uint32_t *up, uint32_t x)
     return x;
 }
 
-/* Kruskal: keep the links that join two components, cheapest first
- * (links sorted); they end up at the front of the link array.  Returns
- * how many. */
-static size_t spanning_tree(drainage_basins *bg, uint32_t n_basins)
+/* The minimum spanning forest of the basin graph by Boruvka's rounds:
+ * each component takes its cheapest link to another, until none has
+ * one.  Links are ordered by cost and then by the order they were
+ * found, a total order, so the forest is unique and is the one Kruskal
+ * would build from a stable sort of the links; but no sort is needed.
+ * Each round is one pass over the links that still join two components
+ * (the others are dropped, in place and in order), and at least halves
+ * the components.  Components are numbered afresh after each round and
+ * the links renamed to those numbers, so a round's union-find is small
+ * and stays in cache (finding roots among all the basins' numbers, a
+ * cache miss a link, took three times as long).  The forest's links go
+ * to the front of the link array, named by basin again.  Returns how
+ * many. */
+static size_t spanning_tree(drainage_basins *bg, const uint32_t *basin, uint32_t n_basins)
 {
-    size_t n_tree = 0;
-    for (uint32_t b = 0; b <= n_basins; b++)
-        bg->up[b] = b;
-    for (size_t l = 0; l < bg->n_link && n_tree < n_basins; l++) {
-        uint32_t ra = find(bg->up, bg->link[l].a), rb = find(bg->up, bg->link[l].b);
-        if (ra == rb)
-            continue;
-        bg->up[ra] = rb;
-        bg->link[n_tree++] = bg->link[l];
+    /* Per component; none of these holds anything between calls. */
+    uint32_t *best = bg->pos, *up = bg->up, *name = bg->queue;
+    uint64_t *best_key = bg->best_key;
+    drainage_link *tree = bg->spare, *t;
+    size_t n_tree = 0, n_live = bg->n_link, n_comp = (size_t)n_basins + 1;
+    int first = 1;
+    for (size_t c = 0; c < n_comp; c++)
+        name[c] = (uint32_t)c; /* round one: components are basins */
+    while (n_live > 0) {
+        size_t kept = 0, next = 0;
+        for (size_t c = 0; c < n_comp; c++) {
+            up[c] = (uint32_t)c;
+            best[c] = NONE;
+        }
+        for (size_t l = 0; l < n_live; l++) {
+            drainage_link lk = bg->link[l];
+            uint64_t key;
+            lk.a = name[lk.a];
+            lk.b = name[lk.b];
+            if (lk.a == lk.b)
+                continue;
+            key = cost_key(lk.w);
+            /* Equal costs: the link found first, already there. */
+            if (best[lk.a] == NONE || key < best_key[lk.a]) {
+                best[lk.a] = (uint32_t)kept;
+                best_key[lk.a] = key;
+            }
+            if (best[lk.b] == NONE || key < best_key[lk.b]) {
+                best[lk.b] = (uint32_t)kept;
+                best_key[lk.b] = key;
+            }
+            bg->link[kept++] = lk;
+        }
+        n_live = kept;
+        /* The links chosen make no cycle (the order is total), but a
+         * link chosen from both sides is taken once. */
+        for (size_t c = 0; c < n_comp; c++) {
+            const drainage_link *lk;
+            uint32_t ra, rb;
+            if (best[c] == NONE)
+                continue;
+            lk = &bg->link[best[c]];
+            if ((ra = find(up, lk->a)) == (rb = find(up, lk->b)))
+                continue;
+            up[ra] = rb;
+            tree[n_tree] = *lk;
+            if (!first) { /* named by component: by basin again */
+                tree[n_tree].a = basin[lk->i];
+                tree[n_tree].b = lk->j == NONE ? 0 : basin[lk->j];
+            }
+            n_tree++;
+        }
+        /* Number the new components: roots first, then each the root's. */
+        for (size_t c = 0; c < n_comp; c++)
+            if (find(up, (uint32_t)c) == c)
+                best[c] = (uint32_t)next++;
+        for (size_t c = 0; c < n_comp; c++)
+            name[c] = best[find(up, (uint32_t)c)];
+        if (next == n_comp) /* no link joined two: the rest are apart */
+            break;
+        n_comp = next;
+        first = 0;
     }
+    t = bg->link;
+    bg->link = bg->spare;
+    bg->spare = t;
     return n_tree;
 }
 
 /* Breadth-first from `root` over the tree links: each basin reached
  * drains over the link it was reached by, from its cell in[] to out[].
- * (Recording the cells, not the link, keeps the carving below from
- * chasing links scattered by the sort.) */
-static void orient_from(drainage_basins *bg, uint32_t root)
+ * A basin's links are listed with it (adj), each with the two cells,
+ * so the walk reads one place per basin rather than chasing links. */
+static void orient_from(drainage_basins *bg, const drainage_adj *adj, uint32_t root)
 {
     size_t head = 0, tail = 0;
     bg->in[root] = ROOT;
@@ -294,18 +323,16 @@ static void orient_from(drainage_basins *bg, uint32_t root)
     while (head < tail) {
         uint32_t a = bg->queue[head++];
         if (head + 2 * DRAINAGE_AHEAD < tail) { /* basins in no spatial order */
-            uint32_t q = bg->queue[head + DRAINAGE_AHEAD];
             DRAINAGE_PREFETCH(&bg->tree_off[bg->queue[head + 2 * DRAINAGE_AHEAD]]);
-            DRAINAGE_PREFETCH(&bg->link[bg->tree[bg->tree_off[q]]]);
+            DRAINAGE_PREFETCH(&adj[bg->tree_off[bg->queue[head + DRAINAGE_AHEAD]]]);
         }
         for (uint32_t t = bg->tree_off[a]; t < bg->tree_off[a + 1]; t++) {
-            const drainage_link *l = &bg->link[bg->tree[t]];
-            uint32_t b = l->a == a ? l->b : l->a;
-            if (bg->in[b] != NONE)
+            const drainage_adj e = adj[t];
+            if (bg->in[e.to] != NONE)
                 continue;
-            bg->in[b] = l->a == b ? l->i : l->j;
-            bg->out[b] = l->a == b ? l->j : l->i;
-            bg->queue[tail++] = b;
+            bg->in[e.to] = e.in;
+            bg->out[e.to] = e.out;
+            bg->queue[tail++] = e.to;
         }
     }
 }
@@ -316,6 +343,8 @@ static void orient(dfle_drainage *dr, const double *z, uint32_t n_basins, size_t
 {
     drainage_basins *bg = &dr->bg;
     uint32_t *lowest = bg->owner; /* per component; owner[] is done */
+    /* 2 n_tree entries of 12 bytes in the n_link >= n_tree links' room */
+    drainage_adj *adj = (drainage_adj *)(void *)bg->spare;
     memset(bg->tree_off, 0, ((size_t)n_basins + 2) * sizeof *bg->tree_off);
     for (size_t t = 0; t < n_tree; t++) {
         bg->tree_off[bg->link[t].a + 1]++;
@@ -324,19 +353,28 @@ static void orient(dfle_drainage *dr, const double *z, uint32_t n_basins, size_t
     for (uint32_t b = 0; b <= n_basins; b++)
         bg->tree_off[b + 1] += bg->tree_off[b];
     for (size_t t = 0; t < n_tree; t++) { /* tree_off[x] as cursor, as for donors */
-        bg->tree[bg->tree_off[bg->link[t].a]++] = (uint32_t)t;
-        bg->tree[bg->tree_off[bg->link[t].b]++] = (uint32_t)t;
+        const drainage_link *l = &bg->link[t];
+        adj[bg->tree_off[l->a]++] = (drainage_adj){l->b, l->j, l->i};
+        adj[bg->tree_off[l->b]++] = (drainage_adj){l->a, l->i, l->j};
     }
     memmove(bg->tree_off + 1, bg->tree_off, ((size_t)n_basins + 1) * sizeof *bg->tree_off);
     bg->tree_off[0] = 0;
 
     for (uint32_t b = 0; b <= n_basins; b++)
         bg->in[b] = NONE;
-    orient_from(bg, 0);
+    orient_from(bg, adj, 0);
     if (n_tree == n_basins)
         return;
-    for (uint32_t b = 0; b <= n_basins; b++)
+    /* Components of the forest (spanning_tree numbered them afresh each
+     * round, so up[] is theirs no more). */
+    for (uint32_t b = 0; b <= n_basins; b++) {
         lowest[b] = NONE;
+        bg->up[b] = b;
+    }
+    for (size_t t = 0; t < n_tree; t++) {
+        uint32_t ra = find(bg->up, bg->link[t].a), rb = find(bg->up, bg->link[t].b);
+        bg->up[ra] = rb;
+    }
     for (uint32_t b = 1; b <= n_basins; b++) {
         uint32_t c = find(bg->up, b), pit = dr->stack[bg->start[b]];
         if (bg->in[b] != NONE)
@@ -346,18 +384,16 @@ static void orient(dfle_drainage *dr, const double *z, uint32_t n_basins, size_t
     }
     for (uint32_t b = 1; b <= n_basins; b++)
         if (lowest[b] != NONE)
-            orient_from(bg, lowest[b]);
+            orient_from(bg, adj, lowest[b]);
 }
 
 /* Reverse the receivers from basin b's pass cell down to its pit and
  * send the pass cell over the pass (or off the grid).  Returns the
  * cells changed. */
-static size_t carve_path(dfle_drainage *dr, const uint32_t *basin, uint32_t b)
+static size_t carve_path(dfle_drainage *dr, uint32_t b)
 {
     uint32_t cur = dr->bg.in[b], prev = dr->bg.out[b];
     size_t changed = 0;
-    assert(basin[cur] == b && (prev == NONE || basin[prev] != b));
-    (void)basin;
     for (;;) {
         uint32_t next = dr->rcv[cur];
         if (prev == NONE) {
@@ -387,13 +423,18 @@ int drainage_carve(dfle_drainage *dr, const double *z, dfle_error *err)
         goto nomem;
     n_basins = (uint32_t)label_basins(dr, basin, dr->stack);
     assert(n_basins == dr->counts.pits);
-    if (find_links(dr, z, basin, dr->stack, n_basins) != 0 || sort_links(bg) != 0)
+    if (find_links(dr, z, basin, dr->stack, n_basins) != 0)
         goto nomem;
-    n_tree = spanning_tree(bg, n_basins);
+    n_tree = spanning_tree(bg, basin, n_basins);
     orient(dr, z, n_basins, n_tree);
-    for (uint32_t b = 1; b <= n_basins; b++)
+    for (uint32_t b = 1; b <= n_basins; b++) {
+        if (b + DRAINAGE_AHEAD <= n_basins && bg->in[b + DRAINAGE_AHEAD] != ROOT) {
+            DRAINAGE_PREFETCH(&dr->rcv[bg->in[b + DRAINAGE_AHEAD]]); /* pass cells: anywhere */
+            DRAINAGE_PREFETCH(&dr->dir[bg->in[b + DRAINAGE_AHEAD]]);
+        }
         if (bg->in[b] != ROOT)
-            dr->counts.carved += carve_path(dr, basin, b);
+            dr->counts.carved += carve_path(dr, b);
+    }
     dr->counts.basins = n_basins;
     return DFLE_OK;
 nomem:

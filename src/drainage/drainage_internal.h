@@ -38,24 +38,29 @@ typedef struct drainage_link {
     uint32_t i, j;   /* the pass: cell i in a, j in b (or off the grid)  */
 } drainage_link;
 
+/* A tree link seen from one of its basins: the basin at the other end
+ * would drain over it from its cell `in` to `out` in this one. */
+typedef struct drainage_adj {
+    uint32_t to, in, out;
+} drainage_adj;
+
 typedef struct drainage_basins {
     size_t cap;          /* basins the arrays below can hold; they are
-                            one block of DRAINAGE_BASIN_WORDS(cap), from
-                            `start`                                      */
+                            one block of DRAINAGE_BASIN_WORDS(cap)      */
+    void *block;
     uint32_t *start;     /* cap + 1: basin b's cells are members[start[b] ..
                             start[b + 1]) (members borrow the stack)     */
     uint32_t *owner;     /* cap: basin that last made a link to b        */
     uint32_t *pos;       /* cap: that link's index                       */
     uint32_t *up;        /* cap: union-find parent                       */
     uint32_t *tree_off;  /* cap + 1: tree links by basin (compressed rows) */
-    uint32_t *tree;      /* 2 cap                                        */
+    uint64_t *best_key;  /* cap: a component's cheapest link's cost     */
     uint32_t *queue;     /* cap                                          */
     uint32_t *in, *out;  /* cap each: the pass a basin drains over, from
                             its cell `in` to `out` in the next basin    */
-    drainage_link *link, *sorted; /* link_cap each; sorted: radix scratch */
+    drainage_link *link, *spare; /* link_cap each; spare: scratch (the
+                                     spanning tree, its links by basin) */
     size_t n_link, link_cap;
-    uint32_t *count;     /* radix histograms, count_cap                  */
-    size_t count_cap;
 } drainage_basins;
 
 #define DRAINAGE_BASIN_WORDS(cap) (10 * (cap) + 2)
@@ -164,8 +169,8 @@ size_t drainage_d8(dfle_drainage *dr, const double *z, size_t *n_data, int *infi
 int drainage_flats(dfle_drainage *dr, const double *z, size_t n_sinks, dfle_error *err);
 
 /* drainage_tree.c: donors from rcv; the stack in the order of the
- * options (DFLE_ENUMERIC on a cycle, which would be a bug) and drainage
- * area (NaN on NoData). */
+ * options (DFLE_ENUMERIC on a cycle, which would be a bug), drainage
+ * area (NaN on NoData) and counts.outlets and counts.sinks. */
 void drainage_donors(dfle_drainage *dr);
 int drainage_stack(dfle_drainage *dr, size_t n_data, dfle_error *err);
 

@@ -248,6 +248,7 @@ int dfle_landscape_new(const dfle_landscape_opts *o, dfle_landscape **out, dfle_
         dro.edge[s] = o->edge[s];
     dro.nodata = o->nodata;
     dro.depressions = DFLE_DRAINAGE_CARVE;
+    dro.order = DFLE_DRAINAGE_CHAINS; /* built and swept with the cache, each step */
     if ((ls = calloc(1, sizeof *ls)) == NULL)
         return dfle_error_set(err, DFLE_ENOMEM, "landscape: out of memory");
     ls->o = *o;

@@ -140,39 +140,80 @@ void ls_pow_init(ls_pow *t, double p)
  * F d0^n, is then at most d0 and the root within a factor 2 of d0).
  * The powers are ls_pow's tables: a few ulps, where the root needs the
  * residual to about 1e-15. */
+/* Where Halley's iteration on d + F d^n = d0 starts: d, with Fd = F d^n. */
+static inline void halley_start(double d0, double F, const ls_pow *pn, const ls_pow *pinv,
+                                double *d, double *Fd)
+{
+    *d = ls_pow_eval(pinv, d0 / F);
+    *Fd = d0;
+    if (!(*d < d0)) {
+        *d = d0;
+        *Fd = F * ls_pow_eval(pn, d0);
+    }
+}
+
+/* One step of it from d (Fd = F d^n) within [lo, hi]; 1, with the root
+ * in *root, once the step is small enough. */
+static inline int halley_step(double d0, double F, const ls_pow *pn, double *d, double *Fd,
+                              double *lo, double *hi, double *root)
+{
+    const double n = pn->p, nn1 = n * (n - 1.0);
+    /* Halley's step 2 f f' / (2 f'^2 - f f'') with f' = g / d, g = d + n F d^n,
+     * and f'' = n (n - 1) F d^n / d^2, multiplied through by d^2: one
+     * division. */
+    const double f = *d + *Fd - d0, g = *d + n * *Fd;
+    const double step = 2.0 * f * g * *d / (2.0 * g * g - f * nn1 * *Fd);
+    double next = *d - step;
+    /* Cubic convergence: the relative error after a step of
+     * relative size s is about n^2 s^3, so s <= 1e-5 leaves ~5e-15,
+     * the powers' own accuracy, and below the round-off of z = z_r + d
+     * wherever z >= 50 d (tested before the bracket, which round-off
+     * at the root can leave on either side). */
+    if (fabs(step) <= 1e-5 * *d) {
+        *root = next;
+        return 1;
+    }
+    if (f > 0)
+        *hi = *d;
+    else
+        *lo = *d;
+    if (!(next > *lo && next < *hi))
+        next = 0.5 * (*lo + *hi);
+    *d = next;
+    *Fd = F * ls_pow_eval(pn, next);
+    return 0;
+}
+
 static double fluvial_delta(double d0, double F, const ls_pow *pn, const ls_pow *pinv)
 {
-    const double n = pn->p;
-    const double nn1 = n * (n - 1.0);
-    double lo = 0.0, hi = d0, d = ls_pow_eval(pinv, d0 / F), Fd = d0;
-    if (!(d < d0)) {
-        d = d0;
-        Fd = F * ls_pow_eval(pn, d0);
-    }
-    for (int it = 0; it < 100; it++) {
-        /* Halley's step 2 f f' / (2 f'^2 - f f'') with f' = g / d, g = d + n F d^n,
-         * and f'' = n (n - 1) F d^n / d^2, multiplied through by d^2: one
-         * division. */
-        const double f = d + Fd - d0, g = d + n * Fd;
-        const double step = 2.0 * f * g * d / (2.0 * g * g - f * nn1 * Fd);
-        double next = d - step;
-        /* Cubic convergence: the relative error after a step of
-         * relative size s is about n^2 s^3, so s <= 1e-5 leaves ~5e-15,
-         * the powers' own accuracy, and below the round-off of z = z_r + d
-         * wherever z >= 50 d (tested before the bracket, which round-off
-         * at the root can leave on either side). */
-        if (fabs(step) <= 1e-5 * d)
-            return next;
-        if (f > 0)
-            hi = d;
-        else
-            lo = d;
-        if (!(next > lo && next < hi))
-            next = 0.5 * (lo + hi);
-        d = next;
-        Fd = F * ls_pow_eval(pn, d);
-    }
+    double lo = 0.0, hi = d0, d, Fd, root;
+    halley_start(d0, F, pn, pinv, &d, &Fd);
+    for (int it = 0; it < 100; it++)
+        if (halley_step(d0, F, pn, &d, &Fd, &lo, &hi, &root))
+            return root;
     return d;
+}
+
+/* Two equations at once, each solved exactly as alone: independent, they
+ * interleave, and the processor overlaps their chains of dependent
+ * operations. */
+static void fluvial_delta2(const double *d0, const double *F, const ls_pow *pn,
+                           const ls_pow *pinv, double *root)
+{
+    double lo0 = 0.0, hi0 = d0[0], d_0, Fd0, lo1 = 0.0, hi1 = d0[1], d_1, Fd1;
+    int done0 = 0, done1 = 0;
+    halley_start(d0[0], F[0], pn, pinv, &d_0, &Fd0);
+    halley_start(d0[1], F[1], pn, pinv, &d_1, &Fd1);
+    for (int it = 0; it < 100 && !(done0 && done1); it++) {
+        if (!done0)
+            done0 = halley_step(d0[0], F[0], pn, &d_0, &Fd0, &lo0, &hi0, &root[0]);
+        if (!done1)
+            done1 = halley_step(d0[1], F[1], pn, &d_1, &Fd1, &lo1, &hi1, &root[1]);
+    }
+    if (!done0)
+        root[0] = d_0;
+    if (!done1)
+        root[1] = d_1;
 }
 
 static void status_network(const dfle_landscape *ls, dfle_landscape_status *st)
@@ -230,6 +271,94 @@ static int check_surface(dfle_landscape *ls, double dt, const double vol[5], dou
     return step_undone(ls, ls->z_undo, DFLE_EINVAL);
 }
 
+/* What the backward-Euler sweep carries from cell to cell. */
+typedef struct ls_sweep {
+    dfle_landscape *ls;
+    const uint32_t *rcv, *stack;
+    const unsigned char *dir;
+    const double *A;
+    size_t n_stack;
+    double dt, A0, K, mexp, Sc, Ln[8];
+    int hill, sqrt_m, n_one, cap_ch;
+    double VU, Vf, Vh, dV; /* volumes so far [m] */
+} ls_sweep;
+
+/* A cell between its set-up and the end of its step. */
+typedef struct ls_cell {
+    size_t c, r;
+    double z0, U, L, zn; /* zn: the new elevation as it stands */
+    double d0, F;        /* the stream power equation d + F d^n = d0 */
+    int channel, solve;  /* solve: that equation is to be solved   */
+} ls_cell;
+
+/* The sweep visits the grid in no spatial order: fetch the cells of
+ * coming iterations ahead, in two stages (the receiver's elevation
+ * needs the receiver), or it waits on memory.  A macro: GCC takes a
+ * function that only prefetches for one without effects, and drops it. */
+#define SWEEP_FETCH(k)                                                                    \
+    do {                                                                                  \
+        if ((k) + 2 * LS_AHEAD < n_stack) {                                               \
+            const size_t c2_ = stack[(k) + 2 * LS_AHEAD], c1_ = stack[(k) + LS_AHEAD];    \
+            LS_PREFETCH(&rcv[c2_]);                                                       \
+            LS_PREFETCH(&z[c2_]);                                                         \
+            LS_PREFETCH(&A[c2_]);                                                         \
+            LS_PREFETCH(&dir[c2_]);                                                       \
+            LS_PREFETCH(&z[rcv[c1_]]);                                                    \
+        }                                                                                 \
+    } while (0)
+
+/* Cell c (receiver r != c) uplifted. */
+static inline void cell_begin(const ls_sweep *w, const double *z, size_t c, size_t r, ls_cell *x)
+{
+    x->c = c;
+    x->r = r;
+    x->z0 = z[c];
+    x->U = ls_value(&w->ls->U, c);
+    x->L = w->ls->len[w->dir[c]];
+    x->zn = x->z0 + x->U * w->dt;
+    x->channel = w->A[c] >= w->A0;
+    x->d0 = x->F = 0.0;
+    x->solve = 0;
+}
+
+/* A channel cell's stream power equation; with n = 1 it is solved at
+ * once. */
+static inline void cell_stream_power(ls_sweep *w, const double *z, ls_cell *x)
+{
+    const double Am = w->sqrt_m ? sqrt(w->A[x->c]) : pow(w->A[x->c], w->mexp);
+    x->d0 = x->zn - z[x->r];
+    x->F = w->K * ls_value(&w->ls->K_scale, x->c) * Am * w->dt / w->Ln[w->dir[x->c]];
+    x->solve = x->d0 > 0 && x->F > 0;
+    if (x->solve && w->n_one) {
+        const double d = x->d0 / (1.0 + x->F);
+        x->zn = z[x->r] + d;
+        w->Vf += x->d0 - d;
+        x->solve = 0;
+    }
+}
+
+/* The root d of the cell's equation found. */
+static inline void cell_eroded(ls_sweep *w, const double *z, ls_cell *x, double d)
+{
+    x->zn = z[x->r] + d;
+    w->Vf += x->d0 - d;
+}
+
+/* The threshold caps, and the cell's new elevation in place. */
+static inline void cell_end(ls_sweep *w, double *z, const ls_cell *x)
+{
+    double zn = x->zn;
+    const double cap = z[x->r] + w->Sc * x->L;
+    if (x->channel ? w->cap_ch && zn > cap : w->hill == DFLE_HILLSLOPE_THRESHOLD && zn > cap) {
+        w->Vh += zn - cap; /* S_c caps channels too with cap_channels */
+        zn = cap;
+    }
+    z[x->c] = zn;
+    w->ls->dzdt[x->c] = (float)((zn - x->z0) / w->dt);
+    w->VU += x->U * w->dt;
+    w->dV += zn - x->z0;
+}
+
 /* Cells a debris flow reaches, on the flow just evaluated. */
 static size_t count_reached(const dfle_landscape *ls)
 {
@@ -248,18 +377,19 @@ int ls_implicit_step(dfle_landscape *ls, double dt, double tol, double quantile,
     const double *A, *Sm = NULL;
     const double A0 = ls->o.A0, K = ls->K, mexp = ls->m_exp, nexp = ls->n_exp;
     const double Sc = ls->o.S_c, ca = ls->cell_area;
-    const int hill = ls->o.hillslope, sqrt_m = mexp == 0.5, n_one = nexp == 1.0;
-    const int cap_ch = hill == DFLE_HILLSLOPE_THRESHOLD && ls->o.cap_channels;
+    const int hill = ls->o.hillslope, n_one = nexp == 1.0;
+    /* Without debris flows every cell is plain stream power or hillslope */
+    const int pairs = ls->model == NULL && !n_one;
     double *z = ls->z;
     double VU = 0, Vf = 0, Vdf = 0, Vh = 0, dV = 0;
     size_t n_stack, reached = 0;
     int st_ = DFLE_OK;
     double t0 = cpu_seconds(), t1;
-
-    double Ln[8]; /* L^n by direction */
+    ls_sweep w;
     double *z_before;
-    for (int d = 0; d < 8; d++)
-        Ln[d] = n_one ? ls->len[d] : pow(ls->len[d], nexp);
+
+    for (int d = 0; d < 8; d++) /* L^n by direction */
+        w.Ln[d] = n_one ? ls->len[d] : pow(ls->len[d], nexp);
     if ((st_ = ls_route(ls, err)) != DFLE_OK)
         return st_;
     if ((st_ = keep_surface(ls, err)) != DFLE_OK)
@@ -275,70 +405,90 @@ int ls_implicit_step(dfle_landscape *ls, double dt, double tol, double quantile,
     dir = dfle_drainage_dir(ls->dr);
     A = dfle_drainage_area(ls->dr);
     stack = dfle_drainage_stack(ls->dr, &n_stack);
-    for (size_t k = 0; k < n_stack; k++) {
+    w.ls = ls;
+    w.rcv = rcv;
+    w.stack = stack;
+    w.dir = dir;
+    w.A = A;
+    w.n_stack = n_stack;
+    w.dt = dt;
+    w.A0 = A0;
+    w.K = K;
+    w.mexp = mexp;
+    w.Sc = Sc;
+    w.hill = hill;
+    w.sqrt_m = mexp == 0.5;
+    w.n_one = n_one;
+    w.cap_ch = hill == DFLE_HILLSLOPE_THRESHOLD && ls->o.cap_channels;
+    w.VU = w.Vf = w.Vh = w.dV = 0.0;
+    for (size_t k = 0; k < n_stack;) {
         const size_t c = stack[k], r = rcv[c];
-        const double z0 = z[c];
-        double U, L, uz, zn;
-        /* The stack visits the grid in no spatial order: fetch the cells
-         * of coming iterations ahead, in two stages (the receiver's
-         * elevation needs the receiver), or the sweep waits on memory. */
-        if (k + 2 * LS_AHEAD < n_stack) {
-            const size_t c2 = stack[k + 2 * LS_AHEAD], c1 = stack[k + LS_AHEAD];
-            LS_PREFETCH(&rcv[c2]);
-            LS_PREFETCH(&z[c2]);
-            LS_PREFETCH(&A[c2]);
-            LS_PREFETCH(&dir[c2]);
-            LS_PREFETCH(&z[rcv[c1]]);
-        }
+        ls_cell x;
+        SWEEP_FETCH(k);
         if (r == c) {
             ls->dzdt[c] = 0.0f;
+            k++;
             continue;
         }
-        U = ls_value(&ls->U, c);
-        L = ls->len[dir[c]];
-        uz = z0 + U * dt;
-        zn = uz;
-        if (A[c] >= A0) {
+        /* Two cells in a row, the second not draining to the first: no
+         * debris flows, so their equations are solved together. */
+        if (pairs && k + 1 < n_stack) {
+            const size_t c2 = stack[k + 1], r2 = rcv[c2];
+            if (r2 != c2 && r2 != c) {
+                ls_cell y;
+                SWEEP_FETCH(k + 1);
+                cell_begin(&w, z, c, r, &x);
+                cell_begin(&w, z, c2, r2, &y);
+                if (x.channel && K > 0)
+                    cell_stream_power(&w, z, &x);
+                if (y.channel && K > 0)
+                    cell_stream_power(&w, z, &y);
+                if (x.solve && y.solve) {
+                    const double d0[2] = {x.d0, y.d0}, F[2] = {x.F, y.F};
+                    double d[2];
+                    fluvial_delta2(d0, F, &ls->pow_n, &ls->pow_inv_n, d);
+                    cell_eroded(&w, z, &x, d[0]);
+                    cell_eroded(&w, z, &y, d[1]);
+                } else if (x.solve) {
+                    cell_eroded(&w, z, &x, fluvial_delta(x.d0, x.F, &ls->pow_n, &ls->pow_inv_n));
+                } else if (y.solve) {
+                    cell_eroded(&w, z, &y, fluvial_delta(y.d0, y.F, &ls->pow_n, &ls->pow_inv_n));
+                }
+                cell_end(&w, z, &x);
+                cell_end(&w, z, &y);
+                k += 2;
+                continue;
+            }
+        }
+        cell_begin(&w, z, c, r, &x);
+        if (x.channel) {
             const double flows = ls->model != NULL ? ls_reach(ls, c) : 0.0;
             if (flows > 0) {
                 const size_t node = ls->node_of[c];
+                const double uz = x.zn;
                 double S, Ef;
-                st_ = dfle_solver_node_slope(ls->model, node, U + (z0 - z[r]) / dt, L / dt, flows,
-                                             Sm[node], &S, NULL, err);
+                st_ = dfle_solver_node_slope(ls->model, node, x.U + (x.z0 - z[r]) / dt, x.L / dt,
+                                             flows, Sm[node], &S, NULL, err);
                 if (st_ != DFLE_OK)
                     return step_undone(ls, z_before, st_);
-                zn = z[r] + S * L;
+                x.zn = z[r] + S * x.L;
                 Ef = ls_fluvial_rate(ls, c, A[c], S) * dt;
-                Vf += Ef;
-                Vdf += uz - zn - Ef;
+                w.Vf += Ef;
+                Vdf += uz - x.zn - Ef;
                 reached++;
             } else if (K > 0) {
-                const double d0 = uz - z[r];
-                const double Am = sqrt_m ? sqrt(A[c]) : pow(A[c], mexp);
-                const double F = K * ls_value(&ls->K_scale, c) * Am * dt / Ln[dir[c]];
-                if (d0 > 0 && F > 0) {
-                    const double d = n_one ? d0 / (1.0 + F)
-                                           : fluvial_delta(d0, F, &ls->pow_n, &ls->pow_inv_n);
-                    zn = z[r] + d;
-                    Vf += d0 - d;
-                }
-            }
-            if (cap_ch && zn > z[r] + Sc * L) { /* S_c caps channels too */
-                Vh += zn - (z[r] + Sc * L);
-                zn = z[r] + Sc * L;
-            }
-        } else if (hill == DFLE_HILLSLOPE_THRESHOLD) {
-            const double cap = z[r] + Sc * L;
-            if (zn > cap) {
-                Vh += zn - cap;
-                zn = cap;
+                cell_stream_power(&w, z, &x);
+                if (x.solve)
+                    cell_eroded(&w, z, &x, fluvial_delta(x.d0, x.F, &ls->pow_n, &ls->pow_inv_n));
             }
         }
-        z[c] = zn;
-        ls->dzdt[c] = (float)((zn - z0) / dt);
-        VU += U * dt;
-        dV += zn - z0;
+        cell_end(&w, z, &x);
+        k++;
     }
+    VU = w.VU;
+    Vf = w.Vf;
+    Vh = w.Vh;
+    dV = w.dV;
     ls->routed = 0;
     ls->model_z_current = 0;
     ls->have_rates = 1;
