@@ -183,9 +183,17 @@ tests["a param the function compares is baked in, and read again for each law"] 
                                 factor = factor, rate = r, compile = compile }
     end
     local a, b = law(0.75), law(0.25)
-    local za, zb = steady_z(a), steady_z(b)
+    local za, zb
+    local da = counted(function() za = steady_z(a) end)
+    local db = counted(function() zb = steady_z(b) end)
     T.eq(a:compiled().rate, true, "compiled with mode as a constant")
     T.eq(b:compiled().rate, true)
+    -- the first law learns that rate needs its params as constants (one
+    -- trace refused, one kept); the next law of the same code traces
+    -- once, with constants, straight away
+    T.eq(da.retraced, 1, "rate refused once with params as inputs")
+    T.eq(db.retraced, 0, "the same code: no second attempt")
+    T.eq(db.traced, 1, "rate traced once for the new mode (factor found)")
     close_to_lua(za, steady_z(law(0.75, false)), "mode = 0.75")
     close_to_lua(zb, steady_z(law(0.25, false)), "mode = 0.25")
     T.ok(differs(za, zb))

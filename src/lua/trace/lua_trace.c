@@ -226,7 +226,7 @@ dfle_trace_prog *dfle_trace_compile(lua_State *L, int fidx, int pidx, const dfle
                                     char *why, size_t why_len)
 {
     dfle_trace_prog *p;
-    int n_params = 0;
+    int n_params = 0, symbolic;
 
     if (!dfle_trace_release_checked(dfle_trace_release(), why, why_len)) {
         lua_pushnil(L); /* this Lua's opcodes and arithmetic are unknown */
@@ -240,13 +240,22 @@ dfle_trace_prog *dfle_trace_compile(lua_State *L, int fidx, int pidx, const dfle
         lua_pushnil(L);
         return NULL;
     }
-    p = trace_once(L, fidx, pidx, spec, spec->params_inputs, &n_params, why, why_len);
+    /* Code refused with params as inputs before goes straight to
+     * constants: one trace per law, not two. */
+    symbolic = spec->params_inputs && !dfle_trace_cache_constants_only(L, fidx, spec, 0);
+    p = trace_once(L, fidx, pidx, spec, symbolic, &n_params, why, why_len);
     if (p == NULL && n_params > 0) {
         /* Refused with params as inputs, perhaps for what it does with
          * one (compares it, loops to it): params as constants, as they
          * were before programs were shared. */
         lua_pop(L, 1);
         p = trace_once(L, fidx, pidx, spec, 0, &n_params, why, why_len);
+        if (p != NULL) {
+            dfle_trace_stats *st = dfle_trace_stats_of(L);
+            (void)dfle_trace_cache_constants_only(L, fidx, spec, 1);
+            if (st != NULL)
+                st->retraced++;
+        }
     }
     if (p != NULL) {
         dfle_trace_stats *st = dfle_trace_stats_of(L);

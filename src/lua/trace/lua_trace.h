@@ -111,11 +111,21 @@ dfle_trace_prog *dfle_trace_cache_find(lua_State *L, int fidx, int pidx,
 void dfle_trace_cache_put(lua_State *L, int fidx, int pidx, const dfle_trace_spec *spec,
                           const dfle_trace_prog *prog, int gidx);
 
+/* Whether the code of the function at fidx (its chunk, with spec) was
+ * refused with float params as inputs and traced with them as constants
+ * (it compares one, loops to one...); with `mark`, remember that it was.
+ * A later law of the same code then traces once, with constants, not
+ * twice.  Never raises (a mark that cannot be kept is not kept). */
+int dfle_trace_cache_constants_only(lua_State *L, int fidx, const dfle_trace_spec *spec,
+                                    int mark);
+
 /* What the cache of L's state did: programs traced (dfle_trace_compile),
  * found (dfle_trace_cache_find), kept (dfle_trace_cache_put) and checked
- * against Lua (counted by the caller), and the templates it holds. */
+ * against Lua (counted by the caller), the templates it holds, and the
+ * traces refused with params as inputs and done again with constants. */
 typedef struct dfle_trace_stats {
     unsigned long traced, found, kept, checked, held;
+    unsigned long retraced; /* traced again with params as constants */
 } dfle_trace_stats;
 /* The counters of L's state (created on first use; NULL if out of
  * memory).  Never raises. */

@@ -104,7 +104,7 @@ void dfle_trace_cache_open(lua_State *L)
     lua_pushcfunction(L, template_gc);
     lua_setfield(L, -2, "__gc");
     lua_rawsetp(L, LUA_REGISTRYINDEX, &template_mt_key);
-    memset(lua_newuserdatauv(L, sizeof(cache_state), 2), 0, sizeof(cache_state));
+    memset(lua_newuserdatauv(L, sizeof(cache_state), 3), 0, sizeof(cache_state));
     new_map(L, lua_gettop(L));
     lua_newtable(L); /* the memo of chunks, weak keys */
     lua_createtable(L, 0, 1);
@@ -112,6 +112,8 @@ void dfle_trace_cache_open(lua_State *L)
     lua_setfield(L, -2, "__mode");
     lua_setmetatable(L, -2);
     lua_setiuservalue(L, -2, 2);
+    lua_newtable(L); /* code traced with params as constants only */
+    lua_setiuservalue(L, -2, 3);
     lua_rawsetp(L, LUA_REGISTRYINDEX, &cache_key);
 }
 
@@ -216,6 +218,48 @@ static int find_main(lua_State *L)
         lua_pop(L, 2);
     }
     return 0;
+}
+
+/* constants_only: args 1 function, 2 spec (light userdata), 3 mark.
+ * Returns whether the code is marked. */
+static int constants_only_main(lua_State *L)
+{
+    const dfle_trace_spec *spec = lua_touserdata(L, 2);
+    const int mark = lua_toboolean(L, 3);
+    push_key(L, 1, spec); /* 4 chunk, 5 spec */
+    if (lua_isnil(L, 4)) {
+        lua_pushboolean(L, 0);
+        return 1;
+    }
+    lua_concat(L, 2); /* 4: the key */
+    lua_rawgetp(L, LUA_REGISTRYINDEX, &cache_key);
+    lua_getiuservalue(L, -1, 3); /* 6 */
+    if (mark) {
+        lua_pushvalue(L, 4);
+        lua_pushboolean(L, 1);
+        lua_rawset(L, 6);
+    }
+    lua_pushvalue(L, 4);
+    lua_rawget(L, 6);
+    return 1;
+}
+
+int dfle_trace_cache_constants_only(lua_State *L, int fidx, const dfle_trace_spec *spec,
+                                    int mark)
+{
+    const int top = lua_gettop(L);
+    int marked = 0;
+    if (state_of(L) == NULL || !lua_checkstack(L, 24))
+        return 0;
+    fidx = lua_absindex(L, fidx);
+    lua_pushcfunction(L, constants_only_main);
+    lua_pushvalue(L, fidx);
+    lua_pushlightuserdata(L, (void *)spec);
+    lua_pushboolean(L, mark);
+    if (lua_pcall(L, 3, 1, 0) == LUA_OK)
+        marked = lua_toboolean(L, -1);
+    lua_settop(L, top);
+    return marked;
 }
 
 /* Set the copy's param nodes from the law's params (pidx), as its guard

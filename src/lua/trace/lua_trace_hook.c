@@ -60,16 +60,16 @@ static int l_replay(lua_State *L)
     return 2;
 }
 
-/* stats() -> { traced, found, kept, checked, held }: what the cache of
- * programs of this state has done so far. */
+/* stats() -> { traced, found, kept, checked, held, retraced }: what the
+ * cache of programs of this state has done so far. */
 static int l_stats(lua_State *L)
 {
     const dfle_trace_stats *st = dfle_trace_stats_of(L);
     const unsigned long v[] = {st ? st->traced : 0, st ? st->found : 0, st ? st->kept : 0,
-                               st ? st->checked : 0, st ? st->held : 0};
-    static const char *const k[] = {"traced", "found", "kept", "checked", "held"};
-    lua_createtable(L, 0, 5);
-    for (int i = 0; i < 5; i++) {
+                               st ? st->checked : 0, st ? st->held : 0, st ? st->retraced : 0};
+    static const char *const k[] = {"traced", "found", "kept", "checked", "held", "retraced"};
+    lua_createtable(L, 0, 6);
+    for (int i = 0; i < 6; i++) {
         lua_pushinteger(L, (lua_Integer)v[i]);
         lua_setfield(L, -2, k[i]);
     }
