@@ -34,6 +34,26 @@ static int usable_pair(double area, double slope)
     return area > 0.0 && isfinite(area) && isfinite(slope);
 }
 
+static int compare_doubles(const void *pa, const void *pb);
+
+/* Ascending.  A bin holds a handful of slopes (four on a 403-node
+ * profile in 100 bins): insertion sort there, qsort's call per
+ * comparison only for big ones. */
+static void sort_doubles(double *s, size_t m)
+{
+    if (m > 32) {
+        qsort(s, m, sizeof *s, compare_doubles);
+        return;
+    }
+    for (size_t i = 1; i < m; i++) {
+        double v = s[i];
+        size_t j = i;
+        for (; j > 0 && s[j - 1] > v; j--)
+            s[j] = s[j - 1];
+        s[j] = v;
+    }
+}
+
 static int compare_doubles(const void *pa, const void *pb)
 {
     double a = *(const double *)pa, b = *(const double *)pb;
@@ -72,9 +92,9 @@ static double grid_edge(const log_grid *g, size_t k)
 /* Bin k holds A_lo[k] <= A < A_hi[k]; the last bin is closed at the top
  * so the largest area belongs to it.  The index from the logarithm can be
  * one off at an edge, so it is corrected against the edges we report. */
-static size_t grid_index(const log_grid *g, double area)
+static size_t grid_index(const log_grid *g, double area, double ln_area)
 {
-    double h = (log(area) - g->ln_lo) / g->width;
+    double h = (ln_area - g->ln_lo) / g->width;
     size_t k = h <= 0.0 ? 0
              : h >= (double)g->nbins ? g->nbins - 1 : (size_t)h;
     if (k > 0 && area < grid_edge(g, k))
@@ -156,31 +176,40 @@ int dfle_bins_compute(size_t n, const double *A, const double *S,
      * The size test keeps 2 nbins + 1 from wrapping round. */
     size_t *first = nbins < SIZE_MAX / (2 * sizeof(size_t))
                   ? calloc(2 * nbins + 1, sizeof *first) : NULL;
-    double *lnA_by_bin = malloc(2 * usable * sizeof *lnA_by_bin);
-    if (first != NULL && lnA_by_bin != NULL) {
-        for (size_t i = 0; i < n; i++)
-            if (usable_pair(A[i], S[i]))
-                first[grid_index(&g, A[i]) + 1]++;
+    /* ln A and the bin of each usable pair, found once (a logarithm and
+     * up to two edges each): the placing pass reads them back. */
+    double *lnA_by_bin = malloc(3 * usable * sizeof *lnA_by_bin);
+    size_t *bin_of = malloc(usable * sizeof *bin_of);
+    if (first != NULL && lnA_by_bin != NULL && bin_of != NULL) {
+        double *lnA_of = lnA_by_bin + 2 * usable;
+        for (size_t i = 0, u = 0; i < n; i++)
+            if (usable_pair(A[i], S[i])) {
+                lnA_of[u] = log(A[i]);
+                bin_of[u] = grid_index(&g, A[i], lnA_of[u]);
+                first[bin_of[u++] + 1]++;
+            }
         for (size_t k = 0; k < nbins; k++) {
             kept += first[k + 1] > 0;
             first[k + 1] += first[k];
         }
     }
-    if (first == NULL || lnA_by_bin == NULL || bins_alloc(out, kept) != DFLE_OK) {
+    if (first == NULL || lnA_by_bin == NULL || bin_of == NULL || bins_alloc(out, kept) != DFLE_OK) {
         free(first);
         free(lnA_by_bin);
+        free(bin_of);
         return dfle_error_set(err, DFLE_ENOMEM, "slope-area bins: out of memory "
                               "binning %zu pairs into %zu bins", n, nbins);
     }
     size_t *fill = first + nbins + 1;
     double *S_by_bin = lnA_by_bin + usable;
-    for (size_t i = 0; i < n; i++) {
+    for (size_t i = 0, u = 0; i < n; i++) {
         if (usable_pair(A[i], S[i])) {
-            size_t k = grid_index(&g, A[i]), slot = first[k] + fill[k]++;
-            lnA_by_bin[slot] = log(A[i]);
+            size_t k = bin_of[u], slot = first[k] + fill[k]++;
+            lnA_by_bin[slot] = lnA_by_bin[2 * usable + u++];
             S_by_bin[slot] = S[i];
         }
     }
+    free(bin_of);
 
     for (size_t k = 0, j = 0; k < nbins; k++) {
         size_t m = first[k + 1] - first[k];
@@ -196,7 +225,7 @@ int dfle_bins_compute(size_t n, const double *A, const double *S,
                 positive++;
             }
         }
-        qsort(s, m, sizeof *s, compare_doubles);
+        sort_doubles(s, m);
         out->A[j] = exp(sum_lnA / (double)m);
         out->A_lo[j] = grid_edge(&g, k);
         out->A_hi[j] = grid_edge(&g, k + 1);
