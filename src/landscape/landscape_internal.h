@@ -170,6 +170,8 @@ void ls_ratios(const dfle_landscape *ls, double tol, double quantile, dfle_lands
  * cells with channel and base cells held; dt = INFINITY solves the
  * steady state D lap(z) = -U with those cells fixed. */
 int ls_diffuse(dfle_landscape *ls, double dt, dfle_error *err);
+/* D lap(z) at data cell c [m/yr], the stencil ls_diffuse solves with. */
+double ls_laplacian(const dfle_landscape *ls, size_t c);
 /* One backward-Euler sweep as dfle_landscape_step, with the quantile. */
 int ls_implicit_step(dfle_landscape *ls, double dt, double tol, double quantile,
                      dfle_landscape_status *st, dfle_error *err);

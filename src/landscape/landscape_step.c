@@ -1,7 +1,8 @@
 /*
  * landscape_step.c - how the landscape's surface moves: one backward-
- * Euler step in stack order, one explicit step, and hillslope diffusion
- * (the direct steady state is in landscape_direct.c).
+ * Euler step in stack order and one explicit step (hillslope diffusion
+ * is in landscape_diffuse.c, the direct steady state in
+ * landscape_direct.c).
  *
  * Backward Euler (Braun and Willett 2013).  The stack lists every data
  * cell after its receiver, so when cell i is reached its receiver r
@@ -545,9 +546,6 @@ int dfle_landscape_step(dfle_landscape *ls, double dt, double tol, dfle_landscap
 /* Evaluated rates and explicit steps                               */
 /* ---------------------------------------------------------------- */
 
-/* D lap(z) at cell c (the 9-point stencil of ls_diffuse), data cells only. */
-static double laplacian(const dfle_landscape *ls, size_t c);
-
 int ls_evaluate_rates(dfle_landscape *ls, double tol, double quantile,
                       dfle_landscape_status *st, dfle_error *err)
 {
@@ -585,7 +583,7 @@ int ls_evaluate_rates(dfle_landscape *ls, double tol, double quantile,
         } else if (ls->o.hillslope == DFLE_HILLSLOPE_THRESHOLD)
             r = S >= ls->o.S_c * (1.0 - 1e-9) ? 0.0 : U; /* held at S_c, or rising */
         else if (ls->o.hillslope == DFLE_HILLSLOPE_DIFFUSION)
-            r = U + laplacian(ls, c);
+            r = U + ls_laplacian(ls, c);
         else
             r = U;
         ls->dzdt[c] = (float)r;
@@ -686,141 +684,4 @@ int ls_explicit_step(dfle_landscape *ls, double dt_cap, double cfl, double tol,
         st->V_hillslope = Vh * ls->cell_area;
     }
     return DFLE_OK;
-}
-
-/* ---------------------------------------------------------------- */
-/* Hillslope diffusion                                              */
-/* ---------------------------------------------------------------- */
-
-/* The 9-point Laplacian (isotropic for dx = dy): weight 2/3 over the
- * sides' squared distances and 1/3 over the diagonals', so every D8
- * receiver is a neighbour of the stencil and no block of hillslope cells
- * is cut off from the channel cells that hold it.  Fluxes to NoData or
- * off the grid are zero. */
-static double stencil_weight(const dfle_landscape *ls, int k)
-{
-    return (k % 2 == 0 ? 2.0 / 3.0 : 1.0 / 3.0) / (ls->len[k] * ls->len[k]);
-}
-
-static double laplacian(const dfle_landscape *ls, size_t c)
-{
-    double s = 0.0;
-    for (int k = 0; k < 8; k++) {
-        long long j = dfle_drainage_neighbour(ls->dr, c, k);
-        if (j >= 0 && !isnan(ls->z[j]))
-            s += stencil_weight(ls, k) * (ls->z[j] - ls->z[c]);
-    }
-    return ls->o.D * s;
-}
-
-/* Conjugate gradients with a Jacobi preconditioner on the hillslope
- * cells (the unknowns); channel and base cells are held. */
-int ls_diffuse(dfle_landscape *ls, double dt, dfle_error *err)
-{
-    const size_t n = ls->n;
-    const uint32_t *rcv;
-    const double *A;
-    const double D = ls->o.D, inv_dt = isinf(dt) ? 0.0 : 1.0 / dt;
-    double *blk, *x, *r, *p, *q, *dg, rz = 0, b2 = 0;
-    unsigned char *unk;
-    size_t n_unk = 0;
-    int st;
-
-    if ((st = ls_route(ls, err)) != DFLE_OK)
-        return st;
-    rcv = dfle_drainage_receivers(ls->dr);
-    A = dfle_drainage_area(ls->dr);
-    blk = malloc(5 * n * sizeof *blk);
-    unk = malloc(n);
-    if (blk == NULL || unk == NULL) {
-        free(blk);
-        free(unk);
-        return dfle_error_set(err, DFLE_ENOMEM, "landscape: out of memory for diffusion");
-    }
-    x = blk, r = blk + n, p = blk + 2 * n, q = blk + 3 * n, dg = blk + 4 * n;
-    for (size_t c = 0; c < n; c++) {
-        unk[c] = !isnan(ls->z[c]) && rcv[c] != c && !(A[c] >= ls->o.A0);
-        n_unk += unk[c];
-    }
-    /* b = z / dt (U for the steady state) + D sum w z_fixed; x0 = z. */
-    for (size_t c = 0; c < n; c++) {
-        double b, d = inv_dt;
-        if (!unk[c])
-            continue;
-        b = isinf(dt) ? ls_value(&ls->U, c) : ls->z[c] * inv_dt;
-        for (int k = 0; k < 8; k++) {
-            long long j = dfle_drainage_neighbour(ls->dr, c, k);
-            if (j < 0 || isnan(ls->z[j]))
-                continue;
-            d += D * stencil_weight(ls, k);
-            if (!unk[j])
-                b += D * stencil_weight(ls, k) * ls->z[j];
-        }
-        dg[c] = d;
-        x[c] = ls->z[c];
-        r[c] = b; /* minus A x below */
-        b2 += b * b;
-    }
-#define APPLY(v, out)                                                             \
-    for (size_t c = 0; c < n; c++) {                                              \
-        double s_;                                                                \
-        if (!unk[c])                                                              \
-            continue;                                                             \
-        s_ = dg[c] * (v)[c];                                                      \
-        for (int k = 0; k < 8; k++) {                                             \
-            long long j = dfle_drainage_neighbour(ls->dr, c, k);                  \
-            if (j >= 0 && unk[j])                                                 \
-                s_ -= D * stencil_weight(ls, k) * (v)[j];                         \
-        }                                                                         \
-        (out)[c] = s_;                                                            \
-    }
-    APPLY(x, q)
-    for (size_t c = 0; c < n; c++)
-        if (unk[c]) {
-            r[c] -= q[c];
-            p[c] = r[c] / dg[c];
-            rz += r[c] * p[c];
-        }
-    st = DFLE_OK;
-    for (size_t it = 0; n_unk > 0; it++) {
-        double pq = 0, alpha, rz_new = 0, rr = 0;
-        if (it > 20000 + 10 * n_unk) {
-            st = dfle_error_set(err, DFLE_ENUMERIC, "landscape: hillslope diffusion did not "
-                                "converge in %zu iterations", it);
-            break;
-        }
-        APPLY(p, q)
-        for (size_t c = 0; c < n; c++)
-            if (unk[c])
-                pq += p[c] * q[c];
-        if (!(pq > 0))
-            break;
-        alpha = rz / pq;
-        for (size_t c = 0; c < n; c++)
-            if (unk[c]) {
-                x[c] += alpha * p[c];
-                r[c] -= alpha * q[c];
-                rr += r[c] * r[c];
-                rz_new += r[c] * r[c] / dg[c];
-            }
-        if (rr <= 1e-26 * b2)
-            break;
-        for (size_t c = 0; c < n; c++)
-            if (unk[c])
-                p[c] = r[c] / dg[c] + rz_new / rz * p[c];
-        rz = rz_new;
-    }
-#undef APPLY
-    if (st == DFLE_OK)
-        for (size_t c = 0; c < n; c++)
-            if (unk[c]) {
-                if (!isinf(dt))
-                    ls->dzdt[c] += (float)((x[c] - ls->z[c]) / dt);
-                ls->z[c] = x[c];
-            }
-    ls->routed = 0;
-    ls->model_z_current = 0;
-    free(blk);
-    free(unk);
-    return st;
 }
