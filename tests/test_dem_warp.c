@@ -121,6 +121,7 @@ static void test_extent_and_nodata(void **state)
                 }
         assert_close(dfle_dem_z(c)[1], sum / 8, 1e-12, 0);
     }
+    dfle_dem_free(c);
     assert_int_equal(dfle_dem_resample(d, -1, 0, NULL, &c, &err), DFLE_EINVAL);
     assert_msg_contains(err.msg, "dx and dy");
     assert_int_equal(dfle_dem_resample(d, 30, 0, "spline", &c, &err), DFLE_EINVAL);
