@@ -50,6 +50,7 @@ typedef struct lua_ls_series {
     size_t nf;
     double *buf;          /* nf * n values (a userdata on the stack) */
     dfle_record *rec;     /* provenance (a userdata on the stack)    */
+    dfle_nc **box;        /* nc, held for __gc (a userdata on the stack) */
     const char *path;
 } lua_ls_series;
 

@@ -73,6 +73,31 @@ static int record_nc(void *ud, dfle_landscape *ls, size_t k, double t)
     return 0;
 }
 
+/* The open file is held by a userdata on the stack too: a raise between
+ * the file's creation and the end of the run (the landscape busy, an
+ * interrupt) collects it, and its __gc removes the temporary file. */
+#define SERIES_BOX "dfle.landscape_series"
+
+static int box_gc(lua_State *L)
+{
+    dfle_nc **box = luaL_checkudata(L, 1, SERIES_BOX);
+    dfle_nc_abort(*box);
+    *box = NULL;
+    return 0;
+}
+
+static dfle_nc **push_box(lua_State *L)
+{
+    dfle_nc **box = lua_newuserdatauv(L, sizeof *box, 0);
+    *box = NULL;
+    if (luaL_newmetatable(L, SERIES_BOX)) {
+        lua_pushcfunction(L, box_gc);
+        lua_setfield(L, -2, "__gc");
+    }
+    lua_setmetatable(L, -2);
+    return box;
+}
+
 /* The run asked, into the record's section "run". */
 static void record_run_opts(dfle_record *rec, const char *fn, const dfle_landscape_run_opts *o)
 {
@@ -172,6 +197,7 @@ void dfle_lua_ls_series_open(lua_State *L, lua_ls *u, int opts, const char *fn,
                                      "record time");
     dfle_lua_record_landscape(L, s->rec, 1);
     record_run_opts(s->rec, fn, o);
+    s->box = push_box(L);
     geo_of(u, &g);
     no.title = "dfle landscape";
     no.provenance = NULL; /* at the close, with how the run ended */
@@ -179,6 +205,7 @@ void dfle_lua_ls_series_open(lua_State *L, lua_ls *u, int opts, const char *fn,
     if (dfle_nc_create(path, dfle_landscape_nx(u->ls), dfle_landscape_ny(u->ls), &g, s->nf, vars,
                        &no, &s->nc, &err) != DFLE_OK)
         dfle_lua_raise(L, &err);
+    *s->box = s->nc;
     s->path = path;
     o->on_record = record_nc;
     o->on_record_ud = s;
@@ -186,6 +213,8 @@ void dfle_lua_ls_series_open(lua_State *L, lua_ls *u, int opts, const char *fn,
 
 void dfle_lua_ls_series_abort(lua_ls_series *s)
 {
+    if (s->box != NULL)
+        *s->box = NULL;
     dfle_nc_abort(s->nc);
     s->nc = NULL;
 }
@@ -195,6 +224,8 @@ int dfle_lua_ls_series_close(lua_State *L, lua_ls_series *s, int st,
 {
     dfle_nc *nc = s->nc;
     s->nc = NULL;
+    if (s->box != NULL)
+        *s->box = NULL; /* ours from here: closed or aborted below */
     if (nc == NULL)
         return DFLE_OK;
     if (st != DFLE_OK) {
