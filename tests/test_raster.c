@@ -140,20 +140,32 @@ static void test_dem_products(void **state)
 }
 
 /* A synthetic landscape with crs = : the grid where x0, y0 say, in that
- * CRS, each field a band with its unit. */
+ * CRS, each field a band with its unit; and its NetCDF series as GDAL
+ * (and so QGIS) reads it: the same grid and CRS, a band a record. */
 static void test_landscape_crs(void **state)
 {
-    char tif[600], code[1000];
+    char tif[600], nc[600], sub[700], code[2000];
     double gt[6];
     GDALDatasetH ds;
     (void)state;
     in_dir(tif, sizeof tif, "ls.tif");
+    in_dir(nc, sizeof nc, "ls.nc");
     snprintf(code, sizeof code,
              "local ls = dfle.landscape{ nx = 6, ny = 5, dx = 30, x0 = 390000, y0 = 3800000,\n"
              "  crs = 'EPSG:32611', noise = { seed = 1 } }\n"
-             "ls:run{ years = 1e3, dt = 1e3 }\n"
-             "ls:write_geotiff('%s', { 'z', 'A', 'E_f', 'channel' })\n", tif);
+             "ls:run{ years = 1e3, dt = 1e3, record = { 0, 1e3 }, netcdf = '%s' }\n"
+             "ls:write_geotiff('%s', { 'z', 'A', 'E_f', 'channel' })\n", nc, tif);
     run_lua_snippet(code);
+    snprintf(sub, sizeof sub, "NETCDF:\"%s\":z", nc);
+    assert_non_null(ds = GDALOpen(sub, GA_ReadOnly));
+    assert_int_equal(epsg_of(ds), 32611);
+    assert_int_equal(GDALGetRasterXSize(ds), 6);
+    assert_int_equal(GDALGetRasterCount(ds), 2); /* the records */
+    assert_int_equal(GDALGetGeoTransform(ds, gt), CE_None);
+    assert_close(gt[0], 390000, 0, 1e-6), assert_close(gt[3], 3800000, 0, 1e-6);
+    assert_close(gt[1], 30, 0, 1e-9), assert_close(gt[5], -30, 0, 1e-9);
+    assert_string_equal(GDALGetRasterUnitType(GDALGetRasterBand(ds, 1)), "m");
+    GDALClose(ds);
     assert_non_null(ds = GDALOpen(tif, GA_ReadOnly));
     assert_int_equal(epsg_of(ds), 32611);
     assert_int_equal(GDALGetGeoTransform(ds, gt), CE_None);

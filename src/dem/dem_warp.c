@@ -173,17 +173,18 @@ int dfle_dem_crop(const dfle_dem *dem, const double box[4], dfle_dem **out, dfle
             return dfle_error_set(err, DFLE_EINVAL, "dem: crop: the box's edges must be numbers");
     if (!(box[0] < box[1] && box[2] < box[3]))
         return dfle_error_set(err, DFLE_EINVAL, "dem: crop: the box must have E_min < E_max and "
-                              "N_min < N_max (got E %g..%g, N %g..%g)", box[0], box[1], box[2],
-                              box[3]);
+                              "N_min < N_max (got E %.10g..%.10g, N %.10g..%.10g)", box[0], box[1],
+                              box[2], box[3]);
     /* The columns and rows of the cells that overlap the box. */
     c0 = floor((fmax(box[0], e[0]) - e[0]) / dx);
     c1 = ceil((fmin(box[1], e[1]) - e[0]) / dx);
     r0 = floor((e[3] - fmin(box[3], e[3])) / dy);
     r1 = ceil((e[3] - fmax(box[2], e[2])) / dy);
     if (!(c1 > c0 && r1 > r0))
-        return dfle_error_set(err, DFLE_EINVAL, "dem: crop: the box (E %g..%g, N %g..%g) does not "
-                              "overlap the grid (E %g..%g, N %g..%g)", box[0], box[1], box[2],
-                              box[3], e[0], e[1], e[2], e[3]);
+        return dfle_error_set(err, DFLE_EINVAL, "dem: crop: the box (E %.10g..%.10g, N "
+                              "%.10g..%.10g) does not overlap the grid (E %.10g..%.10g, N "
+                              "%.10g..%.10g)", box[0], box[1], box[2], box[3], e[0], e[1], e[2],
+                              e[3]);
     if ((st = dfle_gdal_load("dem.crop", err)) != DFLE_OK)
         return st;
     snprintf(a[0], sizeof a[0], "%.0f", c0);

@@ -69,10 +69,15 @@ static int out_globals(nc_out *o, const char *title, const dfle_record *rec, siz
                        const dfle_nc_attr *attrs, dfle_error *err)
 {
     int st = DFLE_OK;
+    int has_history = rec != NULL;
     NC_DO(nc_cf_put_globals(o->ncid, title, rec), "global attributes");
     for (size_t k = 0; k < nattrs; k++)
-        if (attrs[k].name != NULL && attrs[k].value != NULL)
+        if (attrs[k].name != NULL && attrs[k].value != NULL) {
             NC_DO(text_att(o->ncid, NC_GLOBAL, attrs[k].name, attrs[k].value), attrs[k].name);
+            has_history |= strcmp(attrs[k].name, "history") == 0;
+        }
+    if (!has_history) /* when, and what wrote it */
+        NC_DO(nc_cf_put_provenance(o->ncid, NULL), "history");
 fail:
     return st;
 }
