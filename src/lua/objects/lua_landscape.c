@@ -244,12 +244,12 @@ static int landscape_run(lua_State *L, int steady)
     dfle_lua_end_use(L, 1);
     if (ctx.prog != NULL && ctx.prog->finish != NULL)
         ctx.prog->finish(ctx.prog->ud);
-    if (st == DFLE_OK && dfle_lua_ls_series_close(L, &ctx.series, st, &res, &err) != DFLE_OK)
-        return dfle_lua_raise(L, &err);
-    if (st != DFLE_OK)
+    if (st != DFLE_OK) {
         dfle_lua_ls_series_abort(&ctx.series); /* nothing half-written */
-    if (st != DFLE_OK)
         return dfle_lua_ls_raise(L, u, &err);
+    }
+    if (dfle_lua_ls_series_close(L, &ctx.series, &res, &err) != DFLE_OK)
+        return dfle_lua_raise(L, &err);
     if (res.reason == DFLE_STOP_INTERRUPTED)
         dfle_lua_set_interrupt_note(L, "%s stopped at t = %f yr and kept its state (reason "
                                        "\"interrupted\")", fn, dfle_landscape_time(u->ls));

@@ -67,13 +67,13 @@ double *dfle_lua_ls_get_field(lua_State *L, int field, const char *what);
  * params of components written in Lua); a run's time series from its
  * options record =, netcdf =, fields =, float32 = at index opts (sets
  * o's record times and callback; leaves userdata on the stack); its
- * close (st the run's status: anything but DFLE_OK drops the file) or
- * abort; ls:write_geotiff and ls:set_z. */
+ * close after a run that went well (how it ended goes into the file),
+ * or its abort; ls:write_geotiff and ls:set_z. */
 void dfle_lua_record_landscape(lua_State *L, dfle_record *rec, int idx);
 void dfle_lua_ls_series_open(lua_State *L, lua_ls *u, int opts, const char *fn,
                              dfle_landscape_run_opts *o, lua_ls_series *s);
-int dfle_lua_ls_series_close(lua_State *L, lua_ls_series *s, int st,
-                             const dfle_landscape_result *res, dfle_error *err);
+int dfle_lua_ls_series_close(lua_State *L, lua_ls_series *s, const dfle_landscape_result *res,
+                             dfle_error *err);
 void dfle_lua_ls_series_abort(lua_ls_series *s);
 int dfle_lua_ls_write_geotiff(lua_State *L);
 int dfle_lua_ls_set_z(lua_State *L);

@@ -219,8 +219,8 @@ void dfle_lua_ls_series_abort(lua_ls_series *s)
     s->nc = NULL;
 }
 
-int dfle_lua_ls_series_close(lua_State *L, lua_ls_series *s, int st,
-                             const dfle_landscape_result *res, dfle_error *err)
+int dfle_lua_ls_series_close(lua_State *L, lua_ls_series *s, const dfle_landscape_result *res,
+                             dfle_error *err)
 {
     dfle_nc *nc = s->nc;
     s->nc = NULL;
@@ -228,10 +228,6 @@ int dfle_lua_ls_series_close(lua_State *L, lua_ls_series *s, int st,
         *s->box = NULL; /* ours from here: closed or aborted below */
     if (nc == NULL)
         return DFLE_OK;
-    if (st != DFLE_OK) {
-        dfle_nc_abort(nc); /* nothing half-written */
-        return st;
-    }
     dfle_record_section(s->rec, "run", NULL);
     dfle_record_bool(s->rec, "converged", res->converged);
     dfle_record_text(s->rec, "reason", dfle_stop_reason_name(res->reason));
