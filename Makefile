@@ -130,6 +130,9 @@ $(MODULE): $(LUA_OBJ) $(CORE_OBJ)
 
 # Tests that read files back with libnetcdf link it themselves.
 $(BUILD)/tests/test_netcdf $(BUILD)/tests/test_landscape: TEST_LIBS = $(NETCDF_LIBS)
+# Tests that read GeoTIFFs and GeoPackages back with GDAL and OGR link it.
+GDAL_LIBS ?= $(shell $(PKG_CONFIG) --libs gdal)
+$(BUILD)/tests/test_raster $(BUILD)/tests/test_vector: TEST_LIBS = $(GDAL_LIBS)
 
 $(BUILD)/tests/%: $(BUILD)/obj/tests/%.o $(LIB_LUA) $(LIB_CORE)
 	@mkdir -p $(dir $@)

@@ -1,9 +1,10 @@
 -- landscape_synthetic.lua - a synthetic landscape carved by debris flows
 -- and rivers from a random start (doc/landscape.md).
 --
--- A 6 x 4.5 km block of 30 m cells (quick: 3 x 2.25 km), base level on
--- the south edge, the other edges closed, uplift 0.5 mm/yr faster in the
--- north (a function of y), channel heads at 1 ha.  It runs a transient
+-- A 6 x 4.5 km block of 30 m cells (quick: 3 x 2.25 km), placed in UTM
+-- zone 11N (crs =, so QGIS puts its files where the San Gabriels are),
+-- base level on the south edge, the other edges closed, uplift 0.5 mm/yr
+-- faster in the north (a function of y), channel heads at 1 ha.  It runs a transient
 -- from 1 m of seeded noise (recorded to NetCDF), then the direct steady
 -- state, under both rules for joined debris flows ("any", the 1D rule,
 -- and "count", frequencies adding up), and compares their slope-area
@@ -21,17 +22,20 @@ local opts = dfle.args{
 local quick, outdir = opts.quick, opts.output
 local function out(name) return outdir .. "/" .. name end
 local nx, ny = quick and 100 or 200, quick and 75 or 150
+local x0, y0 = 390000, 3800000 -- north-west corner, UTM 11N [m]
 local series = {}
 for _, rule in ipairs{ "any", "count" } do
   local ls = dfle.landscape{
     nx = nx, ny = ny, dx = 30, A0 = 1e4, S_c = 0.8, combine = rule,
+    x0 = x0, y0 = y0, crs = "EPSG:32611",
     edges = { south = "base_level", north = "closed", east = "closed", west = "closed" },
-    U = function(x, y) return 5e-4 * (1 + y / (ny * 30)) end,
+    U = function(x, y) return 5e-4 * (1 + (y - (y0 - ny * 30)) / (ny * 30)) end,
     noise = { amplitude = 1, seed = 42 },
   }
   if rule == "any" then
     local tr = ls:run{ years = quick and 2e4 or 1e5, dt = 5e3, record = { 0, quick and 2e4 or 1e5 },
-                       netcdf = out("synthetic_series.nc"), fields = { "z", "E_df" } }
+                       netcdf = out("synthetic_series.nc"), fields = { "z", "E_df", "channel" },
+                       float32 = true }
     print(("transient (%s): %s; mass balance dV - (V_U - V_f - V_df - V_h) = %.3g m^3"):format(
       rule, tr.note, tr.dV - (tr.V_uplift - tr.V_fluvial - tr.V_df - tr.V_hillslope)))
   end

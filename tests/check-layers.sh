@@ -22,10 +22,10 @@ header_layer() {
     error.h | param.h | file.h | plausible.h | record.h) echo base ;; channel.h | network.h) echo domain ;;
     flow.h | flow1d.h | router*.h) echo routers ;; drainage.h) echo drainage ;;
     lua.h) echo lua ;; fluvial.h | law*.h) echo laws ;; model.h) echo model ;;
-    solver.h) echo solvers ;; dem.h) echo dem ;; landscape.h) echo landscape ;;
+    solver.h) echo solvers ;; dem.h | crs.h) echo dem ;; landscape.h) echo landscape ;;
     analysis.h | analytical.h | sampling.h | sensitivity.h) echo analysis ;;
     stream.h | prior.h | mcmc.h | mcmc_diag.h | lsq.h | likelihood.h) echo analysis ;;
-    csv.h | ensemble.h | plot.h | raster.h | netcdf.h) echo io ;; *) echo unknown ;;
+    csv.h | ensemble.h | plot.h | raster.h | netcdf.h | vector.h) echo io ;; *) echo unknown ;;
     esac
 }
 

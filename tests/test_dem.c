@@ -8,6 +8,7 @@
  * grid looks on the page: 6 = E, 3 = SE, 2 = S, 1 = SW, 4 = W, 7 = NW,
  * 8 = N, 9 = NE; 5 = drains off the grid; x = pit (no outflow).
  */
+#define _DEFAULT_SOURCE 1 /* mkstemps */
 #include <math.h>
 #include <stdlib.h>
 #include <string.h>
@@ -15,6 +16,7 @@
 #include <unistd.h>
 
 #include "dfle/dem.h"
+#include "dfle/raster.h"
 #include "dfle_test.h"
 
 static char data_path[1024];
@@ -731,6 +733,59 @@ static void test_plausible_elevations(void **state)
     assert_int_equal(dfle_dem_check_plausible(d, msg, sizeof msg), 0);
     dfle_dem_free(d);
 }
+/* A GeoTIFF whose GDAL_NODATA tag is no number: GDAL reads "abc" as 0,
+ * which made every 0 m cell NoData; dfle refuses it, naming the text,
+ * unless the caller says what NoData is. */
+static void test_nodata_tag(void **state)
+{
+    static const unsigned char entry[12] = {0x81, 0xA4, 0x02, 0x00, 0x04, 0x00,
+                                            0x00, 0x00, 'n', 'a', 'n', 0x00};
+    const double z[4] = {0, 1, 2, 3};
+    const dfle_raster_band b[1] = {{z, "z", "m"}};
+    const dfle_raster_geo geo = {0, 20, 10, 10, NULL};
+    char path[] = "/tmp/dfle_test_nodata_XXXXXX.tif";
+    dfle_dem_read_opts o = {0, 1, -9999, NULL};
+    dfle_dem *d;
+    dfle_error err;
+    char *bytes;
+    long n, at = -1;
+    FILE *f;
+    int fd = mkstemps(path, 4);
+    (void)state;
+    assert_true(fd >= 0);
+    close(fd);
+    assert_ok(dfle_raster_write_geotiff(path, 2, 2, &geo, 1, b, NULL, &err), &err);
+    assert_ok(dfle_dem_read(path, NULL, &d, &err), &err); /* "nan": a number */
+    assert_int_equal(dfle_dem_nodata_count(d), 0);
+    dfle_dem_free(d);
+    /* The tag's IFD entry (42113, ASCII, 4 bytes inline): "nan" -> "abc". */
+    assert_non_null(f = fopen(path, "r+b"));
+    fseek(f, 0, SEEK_END);
+    n = ftell(f);
+    rewind(f);
+    bytes = malloc((size_t)n);
+    assert_int_equal(fread(bytes, 1, (size_t)n, f), (size_t)n);
+    for (long i = 0; i + 12 <= n && at < 0; i++)
+        if (memcmp(bytes + i, entry, 12) == 0)
+            at = i;
+    assert_true(at >= 0);
+    fseek(f, at + 8, SEEK_SET);
+    fwrite("abc", 1, 3, f);
+    fclose(f);
+    free(bytes);
+    assert_int_equal(dfle_dem_read(path, NULL, &d, &err), DFLE_EINVAL);
+    assert_null(d);
+    assert_msg_contains(err.msg, "declares its NoData value as 'abc' (the GDAL_NODATA tag), "
+                                 "which is not a number");
+    assert_msg_contains(err.msg, "nodata = ");
+    /* Said by the caller: read, the 0 m cell an elevation. */
+    assert_ok(dfle_dem_read(path, &o, &d, &err), &err);
+    assert_int_equal(dfle_dem_nodata_count(d), 0);
+    assert_close(dfle_dem_z(d)[0], 0, 0, 0);
+    dfle_dem_free(d);
+    unlink(path);
+}
+
 int main(void)
 {
     const struct CMUnitTest tests[] = {
@@ -747,6 +802,7 @@ int main(void)
         cmocka_unit_test(test_long_path),
         cmocka_unit_test(test_damaged_files),
         cmocka_unit_test(test_plausible_elevations),
+        cmocka_unit_test(test_nodata_tag),
     };
     return cmocka_run_group_tests(tests, make_tmpdir, remove_tmpdir);
 }

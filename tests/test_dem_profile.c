@@ -16,6 +16,7 @@
 #include "dfle/analysis.h"
 #include "dfle/dem.h"
 #include "dfle_test.h"
+#include "utm_check.h"
 
 static char data_path[1024];
 
@@ -488,16 +489,27 @@ static void test_write_csv(void **state)
     f = fopen(path, "r");
     assert_non_null(f);
     assert_non_null(fgets(line, sizeof line, f));
-    assert_string_equal(line, "# units: E=m, N=m, x=m, d=m, z=m, A=m^2, S=-\n");
+    assert_string_equal(line, "# units: E=m, N=m, x=m, d=m, z=m, A=m^2, S=-, lon=degrees_east, "
+                              "lat=degrees_north\n");
     assert_non_null(fgets(line, sizeof line, f));
-    assert_string_equal(line, "E,N,x,d,z,A,S,receiver\n");
-    while (fgets(line, sizeof line, f) != NULL)
+    assert_string_equal(line, "E,N,x,d,z,A,S,receiver,lon,lat\n");
+    while (fgets(line, sizeof line, f) != NULL) {
+        /* lon and lat of the DEM's UTM 11N, against Snyder's formulas
+         * (10 significant digits: 1e-7 degrees, about a centimetre) */
+        double E, N, lon, lat, want_lon, want_lat;
+        assert_int_equal(sscanf(line, "%lf,%lf,%*f,%*f,%*f,%*f,%*f,%*f,%lf,%lf", &E, &N, &lon,
+                                &lat), 4);
+        utm_to_lonlat(11, E, N, &want_lon, &want_lat);
+        assert_close(lon, want_lon, 0, 2e-7);
+        assert_close(lat, want_lat, 0, 2e-7);
         lines++;
+    }
     fclose(f);
     remove(path);
     assert_int_equal(lines, (int)dfle_profile_size(p));
     {
-        /* With its provenance: the DEM, the point given and snapped. */
+        /* With its provenance: the CRS, the DEM, the point given and
+         * snapped. */
         dfle_record *rec;
         char first[512];
         assert_ok(dfle_record_new(&rec, &err), &err);
@@ -506,6 +518,10 @@ static void test_write_csv(void **state)
         dfle_record_free(rec);
         f = fopen(path, "r");
         assert_non_null(f);
+        assert_non_null(fgets(first, sizeof first, f));
+        assert_string_equal(first, "# crs: \"WGS 84 / UTM zone 11N (EPSG:32611)\"\n");
+        assert_non_null(fgets(first, sizeof first, f));
+        assert_string_equal(first, "# lon_lat: \"degrees on WGS 84 (the CRS's datum)\"\n");
         assert_non_null(fgets(first, sizeof first, f));
         fclose(f);
         remove(path);

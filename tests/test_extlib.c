@@ -62,7 +62,7 @@ static void path_in_dir(char *buf, size_t len, const char *name)
 static int write_table(const char *path, dfle_error *err)
 {
     const double v = 1.5, *values[1] = {&v};
-    const dfle_nc_var col = {"a", "m", "a column", NULL};
+    const dfle_nc_var col = {"a", "m", "a column", NULL, NULL};
     return dfle_nc_write_table(path, "sample", 1, 1, &col, values, 0, NULL, 0, NULL, err);
 }
 
@@ -188,7 +188,8 @@ static void dem_read_says_gdal_is_missing(void **state)
 
 static void geotiff_says_gdal_is_missing(void **state)
 {
-    const double z[4] = {1, 2, 3, 4}, *bands[1] = {z};
+    const double z[4] = {1, 2, 3, 4};
+    const dfle_raster_band bands[1] = {{z, "z", "m"}};
     const dfle_raster_geo geo = {0, 20, 10, 10, NULL};
     char tif[600];
     dfle_error err;
@@ -205,7 +206,7 @@ static void netcdf_says_netcdf_is_missing(void **state)
 {
     const double x[2] = {0, 5}, A[2] = {1e3, 2e3}, t[1] = {0}, z[2] = {2, 1};
     const double *values[1] = {z};
-    const dfle_nc_var var = {"z", "m", "elevation", NULL};
+    const dfle_nc_var var = {"z", "m", "elevation", NULL, NULL};
     const dfle_raster_geo geo = {0, 20, 10, 10, NULL};
     const char *want = "netcdf: netCDF could not be loaded: libdfle-test-missing-netcdf.so.0";
     char nc[600];
@@ -215,10 +216,10 @@ static void netcdf_says_netcdf_is_missing(void **state)
     path_in_dir(nc, sizeof nc, "out.nc");
     assert_int_equal(write_table(nc, &err), DFLE_EEXTERNAL);
     assert_msg_contains(err.msg, want);
-    assert_int_equal(dfle_nc_write_profiles(nc, 2, x, A, 1, t, 1, &var, values, 0, NULL, &err),
+    assert_int_equal(dfle_nc_write_profiles(nc, 2, x, A, 1, t, 1, &var, values, NULL, &err),
                      DFLE_EEXTERNAL);
     assert_msg_contains(err.msg, want);
-    assert_int_equal(dfle_nc_create(nc, 2, 2, &geo, 1, &var, "t", &series, &err),
+    assert_int_equal(dfle_nc_create(nc, 2, 2, &geo, 1, &var, NULL, &series, &err),
                      DFLE_EEXTERNAL);
     assert_null(series);
     assert_msg_contains(err.msg, want);

@@ -220,6 +220,61 @@ static void a_fifo_without_a_reader_is_an_error(void **state)
     assert_true(S_ISFIFO(st.st_mode));
 }
 
+/* For the writers whose library may remove what it was told to create
+ * (libnetcdf) or seeks in it (GDAL): a temporary file always, and a
+ * FIFO, a device or a link to one refused, left as it was; a regular
+ * file, a new name and a link to a file are written as ever. */
+static void regular_only_refuses_nodes(void **state)
+{
+    dir *d = *state;
+    char fifo[300], link[300], target[300], fresh[300];
+    const char *to;
+    dfle_file f;
+    dfle_error err;
+    struct stat st;
+    FILE *fp;
+    snprintf(fifo, sizeof fifo, "%s/pipe", d->path);
+    snprintf(link, sizeof link, "%s/link", d->path);
+    snprintf(target, sizeof target, "%s/target", d->path);
+    snprintf(fresh, sizeof fresh, "%s/fresh", d->path);
+    assert_int_equal(mkfifo(fifo, 0600), 0);
+    assert_int_equal(symlink(fifo, link), 0);
+    assert_int_equal(dfle_file_begin_regular(&f, fifo, "nc", &to, &err), DFLE_EIO);
+    assert_msg_contains(err.msg, "nc: cannot write");
+    assert_msg_contains(err.msg, "it is a FIFO");
+    assert_int_equal(dfle_file_begin_regular(&f, link, "nc", &to, &err), DFLE_EIO);
+    assert_msg_contains(err.msg, "it is a link to a FIFO");
+    assert_int_equal(dfle_file_begin_regular(&f, d->path, "nc", &to, &err), DFLE_EIO);
+    assert_msg_contains(err.msg, "it is a directory");
+    assert_int_equal(lstat(link, &st), 0);
+    assert_true(S_ISLNK(st.st_mode));
+    assert_int_equal(stat(fifo, &st), 0);
+    assert_true(S_ISFIFO(st.st_mode));
+    /* A new name: a temporary file, renamed at the commit. */
+    assert_ok(dfle_file_begin_regular(&f, fresh, "nc", &to, &err), &err);
+    assert_string_not_equal(to, fresh);
+    assert_non_null(fp = fopen(to, "w"));
+    fputs("x", fp);
+    fclose(fp);
+    assert_ok(dfle_file_commit(&f, &err), &err);
+    assert_int_equal(stat(fresh, &st), 0);
+    assert_true(S_ISREG(st.st_mode) && st.st_size == 1);
+    /* A link to a regular file: the file replaced, the link kept. */
+    assert_non_null(fp = fopen(target, "w"));
+    fclose(fp);
+    unlink(link);
+    assert_int_equal(symlink(target, link), 0);
+    assert_ok(dfle_file_begin_regular(&f, link, "nc", &to, &err), &err);
+    assert_non_null(fp = fopen(to, "w"));
+    fputs("yy", fp);
+    fclose(fp);
+    assert_ok(dfle_file_commit(&f, &err), &err);
+    assert_int_equal(lstat(link, &st), 0);
+    assert_true(S_ISLNK(st.st_mode));
+    assert_int_equal(stat(target, &st), 0);
+    assert_int_equal(st.st_size, 2);
+}
+
 /* A name of NAME_MAX bytes is written like any other: the temporary
  * name beside it is shortened (it was too long for the file system). */
 static void the_longest_names_are_written(void **state)
@@ -285,6 +340,7 @@ int main(void)
         cmocka_unit_test_setup_teardown(dead_writers_leftovers_are_cleaned, setup, teardown),
         cmocka_unit_test_setup_teardown(a_fifo_stays_a_fifo, setup, teardown),
         cmocka_unit_test_setup_teardown(a_fifo_without_a_reader_is_an_error, setup, teardown),
+        cmocka_unit_test_setup_teardown(regular_only_refuses_nodes, setup, teardown),
         cmocka_unit_test_setup_teardown(the_longest_names_are_written, setup, teardown),
         cmocka_unit_test_setup_teardown(a_link_stays_a_link, setup, teardown),
         cmocka_unit_test_setup_teardown(bad_targets_say_why, setup, teardown),

@@ -109,7 +109,7 @@ static void test_netcdf(void **state)
     char path[] = "/tmp/dfle-test-nc-XXXXXX";
     double v[6] = {1, 2, 3, 4, NAN, 6}, w[6], x[3], t;
     const double *vals[1] = {v};
-    dfle_nc_var var = {"z", "m", "elevation", "surface_altitude"};
+    dfle_nc_var var = {"z", "m", "elevation", "surface_altitude", NULL};
     char text[64];
     dfle_raster_geo g = {100, 2000, 10, 20, NULL};
     dfle_nc *nc;
@@ -118,7 +118,7 @@ static void test_netcdf(void **state)
     size_t len, start[3] = {1, 0, 0}, count[3] = {1, 2, 3};
     (void)state;
     assert_true(fd >= 0);
-    assert_ok(dfle_nc_create(path, 3, 2, &g, 1, &var, "test", &nc, &err), &err);
+    assert_ok(dfle_nc_create(path, 3, 2, &g, 1, &var, NULL, &nc, &err), &err);
     assert_ok(dfle_nc_append(nc, 0.0, vals, &err), &err);
     v[0] = 7;
     assert_ok(dfle_nc_append(nc, 500.0, vals, &err), &err);

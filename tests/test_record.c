@@ -265,6 +265,77 @@ static void units_line(void **state)
     assert_null(dfle_units_line(names, units, 1));
 }
 
+/* The walk a writer of a flat store takes, the names it gives, CF's
+ * history line, and units in UDUNITS' syntax. */
+typedef struct walk {
+    char seen[1024];
+} walk;
+
+static int visit(void *ud, const dfle_record_entry *e)
+{
+    walk *w = ud;
+    char name[128];
+    dfle_record_flat_name(e, name, sizeof name);
+    snprintf(w->seen + strlen(w->seen), sizeof w->seen - strlen(w->seen), "%s%s%s", name,
+             e->type == DFLE_RECORD_NUMBER && e->key != NULL ? "#" : "", ";");
+    return 0;
+}
+
+static void flat_walk(void **state)
+{
+    dfle_record *r;
+    dfle_error err;
+    walk w = {""};
+    char buf[256];
+    const char *argv[] = {"dfle", "my run.lua", "it's"};
+    (void)state;
+    assert_ok(dfle_record_new(&r, &err), &err);
+    assert_int_equal(dfle_record_history(r, buf, sizeof buf), 0);
+    dfle_record_text(r, "date", "2025-06-01T10:00:00Z");
+    dfle_record_list(r, "command", argv, 3);
+    dfle_record_section(r, "router", "empirical");
+    dfle_record_param_number(r, "M0", 3000, "m^(3-2 gamma)");
+    dfle_record_section(r, "off part", "off"); /* a section with nothing in it */
+    dfle_record_section(r, "router", NULL);
+    dfle_record_param_number(r, "1st", 1, NULL); /* continues "router" */
+    dfle_record_section(r, NULL, NULL);
+    dfle_record_text(r, "about", "a test");
+    assert_int_equal(dfle_record_each(r, visit, &w), 0);
+    assert_string_equal(w.seen, "date_created;dfle_command;comment;router_M0#;router_1st#;"
+                                "off_part;");
+    assert_int_equal(dfle_record_history(r, buf, sizeof buf), 1);
+    assert_string_equal(buf, "2025-06-01T10:00:00Z: dfle 'my run.lua' 'it'\\''s'");
+    {
+        dfle_record_entry e = {.section = NULL, .key = "1"};
+        dfle_record_flat_name(&e, buf, sizeof buf);
+        assert_string_equal(buf, "dfle_1");
+        e.section = "9 lives";
+        e.key = "x";
+        dfle_record_flat_name(&e, buf, sizeof buf);
+        assert_string_equal(buf, "x_9_lives_x");
+    }
+    dfle_record_free(r);
+}
+
+static void udunits_syntax(void **state)
+{
+    static const char *const ok[][2] = {
+        {"m^2", "m2"},       {"-", "1"},         {"", "1"},          {"m/yr", "m/yr"},
+        {"kg/m^3", "kg/m3"}, {"m^3/s", "m3/s"},  {"Pa s", "Pa s"},   {"m^-1", "m-1"},
+        {"1/yr", "1/yr"},    {"m^2/yr", "m2/yr"}, {"m s^-2", "m s-2"}, {"m2", "m2"}};
+    static const char *const no[] = {"m^2.5 s^2 kg^-1.5", "m^(1-2 m_s)/yr", "s m^-1/3",
+                                     "m^(3-2 gamma)", "10 m", "m^", NULL};
+    char buf[64];
+    (void)state;
+    for (size_t k = 0; k < sizeof ok / sizeof ok[0]; k++) {
+        assert_int_equal(dfle_units_udunits(ok[k][0], buf, sizeof buf), 1);
+        assert_string_equal(buf, ok[k][1]);
+    }
+    for (size_t k = 0; no[k] != NULL; k++)
+        assert_int_equal(dfle_units_udunits(no[k], buf, sizeof buf), 0);
+    assert_int_equal(dfle_units_udunits(NULL, buf, sizeof buf), 0);
+}
+
 int main(void)
 {
     const struct CMUnitTest tests[] = {
@@ -276,6 +347,8 @@ int main(void)
         cmocka_unit_test(table_reads_back),
         cmocka_unit_test(table_refuses_bad_names),
         cmocka_unit_test(units_line),
+        cmocka_unit_test(flat_walk),
+        cmocka_unit_test(udunits_syntax),
     };
     return cmocka_run_group_tests(tests, NULL, NULL);
 }

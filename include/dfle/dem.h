@@ -90,6 +90,11 @@ int dfle_dem_new(size_t nx, size_t ny, const double *z, const dfle_dem_geo *geo,
 
 void dfle_dem_free(dfle_dem *dem);
 
+/* Give the DEM a CRS (any text GDAL reads: "EPSG:32611", WKT, PROJ),
+ * replacing its own; DFLE_EINVAL when GDAL does not understand it.
+ * Loads GDAL (crs.h). */
+int dfle_dem_set_crs(dfle_dem *dem, const char *crs, dfle_error *err);
+
 size_t dfle_dem_nx(const dfle_dem *dem);
 size_t dfle_dem_ny(const dfle_dem *dem);
 double dfle_dem_dx(const dfle_dem *dem);   /* cell width [m]   */
@@ -103,6 +108,11 @@ const char *dfle_dem_crs_name(const dfle_dem *dem); /* NULL if unknown   */
 const char *dfle_dem_crs_wkt(const dfle_dem *dem);  /* NULL if unknown   */
 int dfle_dem_epsg(const dfle_dem *dem);             /* 0 if unknown      */
 int dfle_dem_is_geographic(const dfle_dem *dem);    /* 1: degrees        */
+
+/* Where the DEM comes from, into a record (record.h): section "dem" with
+ * its file (if read from one), cells, cell size [m], CRS (name, EPSG
+ * code), and whether it was filled. */
+void dfle_dem_describe(const dfle_dem *dem, dfle_record *rec);
 
 /* DFLE_OK if horizontal units are metres (a projected CRS in metres, or
  * no CRS and a grid that does not look like degrees); otherwise
@@ -123,6 +133,29 @@ int dfle_dem_cell_at(const dfle_dem *dem, double E, double N, const char *what,
                      size_t *index, dfle_error *err);
 /* Centre of cell `index` [m]. */
 void dfle_dem_cell_centre(const dfle_dem *dem, size_t index, double *E, double *N);
+
+/* --- dem_warp.c: resampling and cropping through GDAL ----------------- */
+
+/* A new DEM of cells dx x dy [m] (dy 0: = dx) over the same extent from
+ * the same north-west corner (the last column and row reach past the
+ * old edge when the extent is not a whole number of new cells), by
+ * GDAL's warper with `method`: "nearest", "bilinear", "cubic",
+ * "cubicspline", "lanczos", "average", "min", "max", "median", "mode";
+ * NULL: "average" for coarser cells, "bilinear" for finer.  NoData is
+ * left out of every method.  The CRS is kept; the new DEM has no file
+ * and is neither filled nor routed. */
+int dfle_dem_resample(const dfle_dem *dem, double dx, double dy, const char *method,
+                      dfle_dem **out, dfle_error *err);
+
+/* A new DEM of the cells that overlap box = {E_min, E_max, N_min, N_max}
+ * [m] (whole cells, no resampling; through GDAL's translate); the box
+ * may reach past the grid, whose edge then bounds it.  DFLE_EINVAL when
+ * it does not overlap the grid. */
+int dfle_dem_crop(const dfle_dem *dem, const double box[4], dfle_dem **out, dfle_error *err);
+
+/* The outer edges of the cells with data, box = {E_min, E_max, N_min,
+ * N_max} [m]; 0 when every cell is NoData. */
+int dfle_dem_data_extent(const dfle_dem *dem, double box[4]);
 
 /* --- dem_flow.c ------------------------------------------------------ */
 
@@ -239,13 +272,19 @@ dfle_slope_opts dfle_profile_slope(const dfle_profile *p);
  * This is the channel a model of the network's catchment runs on. */
 int dfle_profile_main_stem(const dfle_profile *p, dfle_profile **out, dfle_error *err);
 
+/* The CRS of the DEM the profile comes from, as WKT; NULL: none. */
+const char *dfle_profile_crs_wkt(const dfle_profile *p);
+
 /* CSV (dfle_table_write): `rec` as comment lines (may be NULL), the
- * units line, then E, N, x, d, z, A, S, receiver, one row per cell,
- * numbers with 10 significant digits. */
+ * units line, then E, N, x, d, z, A, S, receiver and, where the DEM has
+ * a CRS, lon and lat (degrees on the CRS's datum, crs.h), one row per
+ * cell, numbers with 10 significant digits. */
 int dfle_profile_write_csv(const dfle_profile *p, const char *path, const dfle_record *rec,
                            dfle_error *err);
 
-/* Where the profile comes from, into a record (record.h): section
+/* Where the profile comes from, into a record (record.h): at the top
+ * level the CRS (crs: its name and EPSG code, lon_lat: the datum of lon
+ * and lat, crs_wkt) where there is one; section
  * "profile" (kind "profile" or "network") with the DEM's file, the
  * direction traced, the point given and snapped [m], the radius, A_min
  * or A_max [m^2], the slope interval ds or dz [m], the cells and the

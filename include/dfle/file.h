@@ -12,7 +12,8 @@
  * (<name> cut to 200 bytes, so that the longest legal name still leaves
  * room).  One left by a process that was killed (kill -9, power loss) is
  * removed by the next write of the same target, once its process is
- * gone.  A device or a FIFO is written in place; a FIFO that no process
+ * gone.  A device or a FIFO is written in place (except by
+ * dfle_file_begin_regular, which refuses them); a FIFO that no process
  * is reading is an error at once, not a wait for ever.
  *
  * A file-size limit (ulimit -f) is reported as EFBIG only if SIGXFSZ is
@@ -48,6 +49,15 @@ int dfle_file_begin(dfle_file *f, const char *path, const char *who, dfle_error 
  * NULL.  Then dfle_file_commit or dfle_file_abort as usual. */
 int dfle_file_begin_external(dfle_file *f, const char *path, const char *who,
                              const char **write_to, dfle_error *err);
+
+/* The same for a library that may remove what it was told to write when
+ * it fails (libnetcdf's nc_create does) or that must seek in it (GDAL's
+ * GeoTIFF and GeoPackage drivers): only a regular file, a new name, or a
+ * link to either is accepted, so *write_to is always a temporary file
+ * this call made.  A device, a FIFO, a socket or a link to one is
+ * refused with DFLE_EIO, saying what it is, and left as it was. */
+int dfle_file_begin_regular(dfle_file *f, const char *path, const char *who,
+                            const char **write_to, dfle_error *err);
 
 /* Finish: check for write errors, flush, fsync, close and rename over
  * the target.  On failure the target is untouched, the temporary file

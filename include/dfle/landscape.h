@@ -55,6 +55,7 @@
 #include "dfle/law.h"
 #include "dfle/model.h"
 #include "dfle/router.h"
+#include "dfle/record.h"
 #include "dfle/solver.h"
 
 #ifdef __cplusplus
@@ -153,6 +154,13 @@ const char *dfle_landscape_field_unit(int field);
 const char *dfle_landscape_field_long_name(int field);
 const char *dfle_landscape_field_standard_name(int field);
 int dfle_landscape_get(dfle_landscape *ls, int field, double *out, dfle_error *err);
+
+/* What the landscape runs, into a record (record.h; landscape_describe.c):
+ * section "landscape" (the grid, time, U, the K and k_df scales as
+ * values or ranges, A0, k_w, b, the hillslope rule and its S_c or D,
+ * edges, NoData border, outlets, combine) and "fluvial", "router",
+ * "law" with each component's params ("off" for a process that is). */
+void dfle_landscape_describe(const dfle_landscape *ls, dfle_record *rec);
 
 /* --- Runs -------------------------------------------------------------- */
 

@@ -3,11 +3,13 @@
  * profile's recorded states, and tables of samples (ensembles).
  *
  * Grids and their time series are in raster.h; these share its variable
- * description (dfle_nc_var) and its choices: the classic 64-bit-offset
- * format (every netCDF reader, no HDF5), CF-1.8 attributes so xarray's
- * open_dataset decodes units, coordinates and fill values as they are,
- * NaN as _FillValue, and the whole file or none (file.h).  libnetcdf
- * is loaded by the first file written (raster.h).
+ * description (dfle_nc_var), options (dfle_nc_opts) and choices:
+ * netCDF-4 with deflate, CF-1.8 attributes so xarray's open_dataset
+ * decodes units, time, coordinates and fill values as they are (units
+ * in UDUNITS' syntax, time in model years "since" year 0 of a noleap
+ * calendar), NaN as _FillValue, provenance as global attributes, and
+ * the whole file or none, written only over a regular file (file.h).
+ * libnetcdf is loaded by the first file written (raster.h).
  */
 #ifndef DFLE_NETCDF_H
 #define DFLE_NETCDF_H
@@ -30,10 +32,11 @@ typedef struct dfle_nc_attr {
 /* A profile's states at nt times: dimensions (time, x), x the distance
  * from the channel head [m] (a coordinate variable, increasing), A(x)
  * the drainage area [m^2] as an auxiliary coordinate, time [yr] of
- * model time; variable k holds nt * n values, time-major. */
+ * model time; variable k holds nt * n values, time-major.  opts (may be
+ * NULL): title, provenance, float32, deflate (mask is for grids). */
 int dfle_nc_write_profiles(const char *path, size_t n, const double *x, const double *A,
                            size_t nt, const double *t, size_t nvars, const dfle_nc_var *vars,
-                           const double *const *values, size_t nattrs, const dfle_nc_attr *attrs,
+                           const double *const *values, const dfle_nc_opts *opts,
                            dfle_error *err);
 
 /* A table of nrows rows along the dimension `dim` ("sample"): numeric

@@ -80,6 +80,48 @@ void dfle_record_stamp(dfle_record *r);
 /* DFLE_OK, or DFLE_ENOMEM if an entry could not be added. */
 int dfle_record_status(const dfle_record *r, dfle_error *err);
 
+/* One entry as a visitor sees it (dfle_record_each): `section` and
+ * `kind` are NULL at the top level; `unit` NULL when none. */
+enum dfle_record_type {
+    DFLE_RECORD_NUMBER,
+    DFLE_RECORD_BOOL,  /* num is 0 or 1 */
+    DFLE_RECORD_TEXT,
+    DFLE_RECORD_LIST   /* items[0 .. nitems) */
+};
+typedef struct dfle_record_entry {
+    const char *section, *kind, *key, *unit;
+    enum dfle_record_type type;
+    int param;                 /* a component's option */
+    double num;
+    const char *text;
+    const char *const *items;
+    size_t nitems;
+} dfle_record_entry;
+
+/* Call fn for every entry in the order the writers use (the top level
+ * first, then each section in the order it was begun); a nonzero return
+ * stops the walk and is returned.  A section without entries is visited
+ * once, with key NULL, so that its kind is seen. */
+int dfle_record_each(const dfle_record *r, int (*fn)(void *ud, const dfle_record_entry *e),
+                     void *ud);
+
+/* The name of an entry in a flat store of name = value (NetCDF global
+ * attributes, GDAL metadata): the top level's "dfle" as "dfle_version",
+ * "date" as "date_created", "about" as "comment", other keys as
+ * dfle_<key>; a section's entry as <section>_<key>, a section's kind
+ * (key NULL) as <section>.  Characters other than letters, digits and
+ * "_.-+@" become '_', and a name never starts with anything but a
+ * letter (netCDF's rule). */
+void dfle_record_flat_name(const dfle_record_entry *e, char *buf, size_t cap);
+
+/* Items as one text: apart by blanks, in a shell's single quotes where
+ * an item needs them, so a command line reads back as typed. */
+void dfle_record_join(const char *const *items, size_t n, char *buf, size_t cap);
+
+/* CF's history line, "<date>: <command>", from the top-level date and
+ * command; 0 (buf untouched) when the record has neither. */
+int dfle_record_history(const dfle_record *r, char *buf, size_t cap);
+
 /* The record as '#' lines (top-level entries one a line, each section
  * on one line); a stream error is left in ferror(fp). */
 void dfle_record_write_comments(const dfle_record *r, FILE *fp);
@@ -92,6 +134,13 @@ int dfle_record_write_json(const dfle_record *r, const char *path, dfle_error *e
  * is NULL or "" (text, indices) are left out; NULL if none is left or
  * memory ran out.  "-" is a dimensionless number. */
 char *dfle_units_line(const char *const *names, const char *const *units, size_t n);
+
+/* A dfle unit ("m^2", "kg/m^3", "-", "m/yr") in the syntax UDUNITS
+ * reads, CF's `units` ("m2", "kg/m3", "1", "m/yr"), into buf; 0 when
+ * UDUNITS has no way to say it (a fractional or symbolic exponent:
+ * "m^2.5 s^2 kg^-1.5", "m^(1-2 m_s)/yr"), which it would otherwise read
+ * as another unit ("m2.5" as 0.5 m2). */
+int dfle_units_udunits(const char *unit, char *buf, size_t cap);
 
 /* One column of a table: numbers or texts. */
 typedef struct dfle_column {

@@ -197,6 +197,53 @@ int dfle_file_begin_external(dfle_file *f, const char *path, const char *who,
     return DFLE_OK;
 }
 
+/* What a node that is not a regular file is, for messages. */
+static const char *node_kind(mode_t m)
+{
+    if (S_ISFIFO(m))
+        return "a FIFO";
+    if (S_ISCHR(m))
+        return "a character device";
+    if (S_ISBLK(m))
+        return "a block device";
+    if (S_ISSOCK(m))
+        return "a socket";
+    if (S_ISDIR(m))
+        return "a directory";
+    return "not a regular file";
+}
+
+int dfle_file_begin_regular(dfle_file *f, const char *path, const char *who,
+                            const char **write_to, dfle_error *err)
+{
+    struct stat st, lst;
+    memset(f, 0, sizeof *f);
+    f->who = who;
+    /* stat follows links: a link to a pipe is judged by the pipe.  The
+     * node is only looked at, never opened (opening a FIFO would wait
+     * for a reader, and a library told to write it could remove it). */
+    if (path[0] != '\0' && stat(path, &st) == 0 && !S_ISREG(st.st_mode)) {
+        int link = lstat(path, &lst) == 0 && S_ISLNK(lst.st_mode);
+        if (S_ISDIR(st.st_mode))
+            return dfle_error_set(err, DFLE_EIO, "%s: cannot write '%s': it is a directory",
+                                  who, path);
+        return dfle_error_set(err, DFLE_EIO, "%s: cannot write '%s': it is %s%s, and this "
+                              "format is written to a temporary file that replaces the target; "
+                              "give the name of a regular file", who, path,
+                              link ? "a link to " : "", node_kind(st.st_mode));
+    }
+    {
+        int rc = dfle_file_begin_external(f, path, who, write_to, err);
+        if (rc == DFLE_OK && f->tmp == NULL) {
+            /* It became a device or a FIFO since it was looked at. */
+            dfle_file_abort(f);
+            return dfle_error_set(err, DFLE_EIO, "%s: cannot write '%s': it is not a regular "
+                                  "file", who, path);
+        }
+        return rc;
+    }
+}
+
 /* fsync a file another program wrote, by name. */
 static int sync_by_name(const char *path)
 {

@@ -2,8 +2,9 @@
  * gdal_lib.h - GDAL, loaded on first use (extlib.h); private to the
  * library.
  *
- * dfle calls GDAL to read DEMs (dem/dem.c) and to write GeoTIFFs
- * (io/raster.c).  The library does not link GDAL: dfle_gdal_load opens
+ * dfle calls GDAL to read, resample and crop DEMs (dem/), to write
+ * GeoTIFFs (io/raster.c) and GeoPackages (io/vector.c, OGR), and for
+ * CRS work: CF grid mappings and longitude/latitude (OSR).  The library does not link GDAL: dfle_gdal_load opens
  * it on the first call that needs it, fills the table below and runs
  * GDALAllRegister, once per process.
  *
@@ -23,6 +24,9 @@
 #include <cpl_error.h>
 #include <cpl_vsi.h>
 #include <gdal.h>
+#include <gdal_alg.h>
+#include <gdal_utils.h>
+#include <ogr_api.h>
 #include <ogr_srs_api.h>
 
 #include "dfle/error.h"
@@ -59,6 +63,42 @@
     X(int, GDALGetMaskFlags, (GDALRasterBandH))                                              \
     X(GDALRasterBandH, GDALGetMaskBand, (GDALRasterBandH))                                   \
     X(void, GDALSetDescription, (GDALMajorObjectH, const char *))                            \
+    X(CPLErr, GDALSetRasterUnitType, (GDALRasterBandH, const char *))                        \
+    X(CPLErr, GDALSetMetadataItem, (GDALMajorObjectH, const char *, const char *, const char *)) \
+    X(GDALWarpAppOptions *, GDALWarpAppOptionsNew, (char **, GDALWarpAppOptionsForBinary *))  \
+    X(void, GDALWarpAppOptionsFree, (GDALWarpAppOptions *))                                  \
+    X(GDALDatasetH, GDALWarp,                                                                \
+      (const char *, GDALDatasetH, int, GDALDatasetH *, const GDALWarpAppOptions *, int *))  \
+    X(GDALTranslateOptions *, GDALTranslateOptionsNew,                                       \
+      (char **, GDALTranslateOptionsForBinary *))                                            \
+    X(void, GDALTranslateOptionsFree, (GDALTranslateOptions *))                              \
+    X(GDALDatasetH, GDALTranslate,                                                           \
+      (const char *, GDALDatasetH, const GDALTranslateOptions *, int *))                     \
+    X(CPLErr, GDALPolygonize,                                                                \
+      (GDALRasterBandH, GDALRasterBandH, OGRLayerH, int, char **, GDALProgressFunc, void *)) \
+    X(OGRLayerH, GDALDatasetCreateLayer,                                                     \
+      (GDALDatasetH, const char *, OGRSpatialReferenceH, OGRwkbGeometryType, CSLConstList))  \
+    X(OGRErr, GDALDatasetStartTransaction, (GDALDatasetH, int))                              \
+    X(OGRErr, GDALDatasetCommitTransaction, (GDALDatasetH))                                  \
+    X(OGRFieldDefnH, OGR_Fld_Create, (const char *, OGRFieldType))                           \
+    X(void, OGR_Fld_Destroy, (OGRFieldDefnH))                                                \
+    X(OGRErr, OGR_L_CreateField, (OGRLayerH, OGRFieldDefnH, int))                            \
+    X(OGRFeatureDefnH, OGR_L_GetLayerDefn, (OGRLayerH))                                      \
+    X(OGRErr, OGR_L_CreateFeature, (OGRLayerH, OGRFeatureH))                                 \
+    X(OGRErr, OGR_L_SetFeature, (OGRLayerH, OGRFeatureH))                                    \
+    X(void, OGR_L_ResetReading, (OGRLayerH))                                                 \
+    X(OGRFeatureH, OGR_L_GetNextFeature, (OGRLayerH))                                        \
+    X(OGRFeatureH, OGR_F_Create, (OGRFeatureDefnH))                                          \
+    X(void, OGR_F_Destroy, (OGRFeatureH))                                                    \
+    X(void, OGR_F_SetFieldDouble, (OGRFeatureH, int, double))                                \
+    X(void, OGR_F_SetFieldInteger64, (OGRFeatureH, int, GIntBig))                            \
+    X(void, OGR_F_SetFieldString, (OGRFeatureH, int, const char *))                          \
+    X(OGRErr, OGR_F_SetGeometryDirectly, (OGRFeatureH, OGRGeometryH))                        \
+    X(OGRGeometryH, OGR_F_GetGeometryRef, (OGRFeatureH))                                     \
+    X(OGRGeometryH, OGR_G_CreateGeometry, (OGRwkbGeometryType))                              \
+    X(void, OGR_G_DestroyGeometry, (OGRGeometryH))                                           \
+    X(void, OGR_G_AddPoint_2D, (OGRGeometryH, double, double))                               \
+    X(double, OGR_G_Area, (OGRGeometryH))                                                    \
     X(OGRSpatialReferenceH, OSRNewSpatialReference, (const char *))                          \
     X(void, OSRDestroySpatialReference, (OGRSpatialReferenceH))                              \
     X(OGRErr, OSRSetFromUserInput, (OGRSpatialReferenceH, const char *))                     \
@@ -71,6 +111,18 @@
     X(const char *, OSRGetAuthorityCode, (OGRSpatialReferenceH, const char *))               \
     X(OGRSpatialReferenceH *, OSRFindMatches, (OGRSpatialReferenceH, char **, int *, int **)) \
     X(void, OSRFreeSRSArray, (OGRSpatialReferenceH *))                                       \
+    X(const char *, OSRGetAttrValue, (OGRSpatialReferenceH, const char *, int))             \
+    X(double, OSRGetProjParm, (OGRSpatialReferenceH, const char *, double, OGRErr *))         \
+    X(double, OSRGetSemiMajor, (OGRSpatialReferenceH, OGRErr *))                              \
+    X(double, OSRGetInvFlattening, (OGRSpatialReferenceH, OGRErr *))                          \
+    X(double, OSRGetPrimeMeridian, (OGRSpatialReferenceH, char **))                           \
+    X(OGRSpatialReferenceH, OSRCloneGeogCS, (OGRSpatialReferenceH))                           \
+    X(int, OSRIsSame, (OGRSpatialReferenceH, OGRSpatialReferenceH))                           \
+    X(void, OSRSetAxisMappingStrategy, (OGRSpatialReferenceH, OSRAxisMappingStrategy))        \
+    X(OGRCoordinateTransformationH, OCTNewCoordinateTransformation,                          \
+      (OGRSpatialReferenceH, OGRSpatialReferenceH))                                          \
+    X(void, OCTDestroyCoordinateTransformation, (OGRCoordinateTransformationH))               \
+    X(int, OCTTransform, (OGRCoordinateTransformationH, int, double *, double *, double *))   \
     X(void, CPLPushErrorHandler, (CPLErrorHandler))                                          \
     X(void, CPLPopErrorHandler, (void))                                                      \
     X(void, CPLQuietErrorHandler, (CPLErr, CPLErrorNum, const char *))                       \
@@ -138,6 +190,48 @@ int dfle_gdal_load(const char *who, dfle_error *err);
 #define CPLErrorReset (dfle_gdal_fn.CPLErrorReset)
 #define CPLGetLastErrorMsg (dfle_gdal_fn.CPLGetLastErrorMsg)
 #define CPLGetLastErrorType (dfle_gdal_fn.CPLGetLastErrorType)
+#define GDALSetRasterUnitType (dfle_gdal_fn.GDALSetRasterUnitType)
+#define GDALSetMetadataItem (dfle_gdal_fn.GDALSetMetadataItem)
+#define GDALWarpAppOptionsNew (dfle_gdal_fn.GDALWarpAppOptionsNew)
+#define GDALWarpAppOptionsFree (dfle_gdal_fn.GDALWarpAppOptionsFree)
+#define GDALWarp (dfle_gdal_fn.GDALWarp)
+#define GDALTranslateOptionsNew (dfle_gdal_fn.GDALTranslateOptionsNew)
+#define GDALTranslateOptionsFree (dfle_gdal_fn.GDALTranslateOptionsFree)
+#define GDALTranslate (dfle_gdal_fn.GDALTranslate)
+#define GDALPolygonize (dfle_gdal_fn.GDALPolygonize)
+#define GDALDatasetCreateLayer (dfle_gdal_fn.GDALDatasetCreateLayer)
+#define GDALDatasetStartTransaction (dfle_gdal_fn.GDALDatasetStartTransaction)
+#define GDALDatasetCommitTransaction (dfle_gdal_fn.GDALDatasetCommitTransaction)
+#define OGR_Fld_Create (dfle_gdal_fn.OGR_Fld_Create)
+#define OGR_Fld_Destroy (dfle_gdal_fn.OGR_Fld_Destroy)
+#define OGR_L_CreateField (dfle_gdal_fn.OGR_L_CreateField)
+#define OGR_L_GetLayerDefn (dfle_gdal_fn.OGR_L_GetLayerDefn)
+#define OGR_L_CreateFeature (dfle_gdal_fn.OGR_L_CreateFeature)
+#define OGR_L_SetFeature (dfle_gdal_fn.OGR_L_SetFeature)
+#define OGR_L_ResetReading (dfle_gdal_fn.OGR_L_ResetReading)
+#define OGR_L_GetNextFeature (dfle_gdal_fn.OGR_L_GetNextFeature)
+#define OGR_F_Create (dfle_gdal_fn.OGR_F_Create)
+#define OGR_F_Destroy (dfle_gdal_fn.OGR_F_Destroy)
+#define OGR_F_SetFieldDouble (dfle_gdal_fn.OGR_F_SetFieldDouble)
+#define OGR_F_SetFieldInteger64 (dfle_gdal_fn.OGR_F_SetFieldInteger64)
+#define OGR_F_SetFieldString (dfle_gdal_fn.OGR_F_SetFieldString)
+#define OGR_F_SetGeometryDirectly (dfle_gdal_fn.OGR_F_SetGeometryDirectly)
+#define OGR_F_GetGeometryRef (dfle_gdal_fn.OGR_F_GetGeometryRef)
+#define OGR_G_CreateGeometry (dfle_gdal_fn.OGR_G_CreateGeometry)
+#define OGR_G_DestroyGeometry (dfle_gdal_fn.OGR_G_DestroyGeometry)
+#define OGR_G_AddPoint_2D (dfle_gdal_fn.OGR_G_AddPoint_2D)
+#define OGR_G_Area (dfle_gdal_fn.OGR_G_Area)
+#define OSRGetAttrValue (dfle_gdal_fn.OSRGetAttrValue)
+#define OSRGetProjParm (dfle_gdal_fn.OSRGetProjParm)
+#define OSRGetSemiMajor (dfle_gdal_fn.OSRGetSemiMajor)
+#define OSRGetInvFlattening (dfle_gdal_fn.OSRGetInvFlattening)
+#define OSRGetPrimeMeridian (dfle_gdal_fn.OSRGetPrimeMeridian)
+#define OSRCloneGeogCS (dfle_gdal_fn.OSRCloneGeogCS)
+#define OSRIsSame (dfle_gdal_fn.OSRIsSame)
+#define OSRSetAxisMappingStrategy (dfle_gdal_fn.OSRSetAxisMappingStrategy)
+#define OCTNewCoordinateTransformation (dfle_gdal_fn.OCTNewCoordinateTransformation)
+#define OCTDestroyCoordinateTransformation (dfle_gdal_fn.OCTDestroyCoordinateTransformation)
+#define OCTTransform (dfle_gdal_fn.OCTTransform)
 #define VSIStatL (dfle_gdal_fn.VSIStatL)
 #define VSIFree (dfle_gdal_fn.VSIFree) /* CPLFree is VSIFree */
 #endif

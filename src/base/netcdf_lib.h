@@ -3,7 +3,8 @@
  * private to the library.
  *
  * dfle calls libnetcdf to write NetCDF files (io/netcdf.c, io/
- * netcdf_1d.c).  The library does not link it (it brings HDF5 and
+ * netcdf_1d.c, io/netcdf_cf.c) and to read a record back
+ * (io/netcdf_read.c).  The library does not link it (it brings HDF5 and
  * curl): dfle_netcdf_load opens it on the first call that needs it and
  * fills the table below, once per process.
  *
@@ -41,6 +42,21 @@
     X(int, nc_put_var1_double, (int, int, const size_t *, const double *))                   \
     X(int, nc_put_vara_double, (int, int, const size_t *, const size_t *, const double *))   \
     X(int, nc_put_var_text, (int, int, const char *))                                        \
+    X(int, nc_open, (const char *, int, int *))                                              \
+    X(int, nc_redef, (int))                                                                  \
+    X(int, nc_def_var_deflate, (int, int, int, int, int))                                    \
+    X(int, nc_def_var_chunking, (int, int, int, const size_t *))                             \
+    X(int, nc_inq_dimid, (int, const char *, int *))                                         \
+    X(int, nc_inq_varid, (int, const char *, int *))                                         \
+    X(int, nc_inq_varndims, (int, int, int *))                                               \
+    X(int, nc_inq_vartype, (int, int, nc_type *))                                            \
+    X(int, nc_inq_attlen, (int, int, const char *, size_t *))                                \
+    X(int, nc_get_att_text, (int, int, const char *, char *))                                \
+    X(int, nc_get_var_double, (int, int, double *))                                          \
+    X(int, nc_get_vara_double, (int, int, const size_t *, const size_t *, double *))         \
+    X(int, nc_put_att_schar, (int, int, const char *, nc_type, size_t, const signed char *)) \
+    X(int, nc_put_vara_schar, (int, int, const size_t *, const size_t *, const signed char *)) \
+    X(int, nc_put_vara_float, (int, int, const size_t *, const size_t *, const float *))     \
     X(const char *, nc_strerror, (int))
 
 #define DFLE_NETCDF_MEMBER(ret, name, params) ret(*name) params;
@@ -73,6 +89,21 @@ int dfle_netcdf_load(const char *who, dfle_error *err);
 #define nc_put_var1_double (dfle_netcdf_fn.nc_put_var1_double)
 #define nc_put_vara_double (dfle_netcdf_fn.nc_put_vara_double)
 #define nc_put_var_text (dfle_netcdf_fn.nc_put_var_text)
+#define nc_open (dfle_netcdf_fn.nc_open)
+#define nc_redef (dfle_netcdf_fn.nc_redef)
+#define nc_def_var_deflate (dfle_netcdf_fn.nc_def_var_deflate)
+#define nc_def_var_chunking (dfle_netcdf_fn.nc_def_var_chunking)
+#define nc_inq_dimid (dfle_netcdf_fn.nc_inq_dimid)
+#define nc_inq_varid (dfle_netcdf_fn.nc_inq_varid)
+#define nc_inq_varndims (dfle_netcdf_fn.nc_inq_varndims)
+#define nc_inq_vartype (dfle_netcdf_fn.nc_inq_vartype)
+#define nc_inq_attlen (dfle_netcdf_fn.nc_inq_attlen)
+#define nc_get_att_text (dfle_netcdf_fn.nc_get_att_text)
+#define nc_get_var_double (dfle_netcdf_fn.nc_get_var_double)
+#define nc_get_vara_double (dfle_netcdf_fn.nc_get_vara_double)
+#define nc_put_att_schar (dfle_netcdf_fn.nc_put_att_schar)
+#define nc_put_vara_schar (dfle_netcdf_fn.nc_put_vara_schar)
+#define nc_put_vara_float (dfle_netcdf_fn.nc_put_vara_float)
 #define nc_strerror (dfle_netcdf_fn.nc_strerror)
 #endif
 

@@ -307,6 +307,47 @@ int dfle_record_status(const dfle_record *r, dfle_error *err)
     return DFLE_OK;
 }
 
+int dfle_record_each(const dfle_record *r, int (*fn)(void *ud, const dfle_record_entry *e),
+                     void *ud)
+{
+    static const enum dfle_record_type types[] = {
+        [T_NUMBER] = DFLE_RECORD_NUMBER, [T_BOOL] = DFLE_RECORD_BOOL,
+        [T_TEXT] = DFLE_RECORD_TEXT, [T_LIST] = DFLE_RECORD_LIST};
+    if (r == NULL)
+        return 0;
+    for (int s = -1; s < (int)r->ns; s++) {
+        int seen = 0, rc;
+        dfle_record_entry v;
+        memset(&v, 0, sizeof v);
+        if (s >= 0) {
+            v.section = r->s[s].name;
+            v.kind = r->s[s].kind;
+        }
+        for (size_t i = 0; i < r->n; i++) {
+            const entry *e = &r->e[i];
+            if (e->section != s)
+                continue;
+            seen = 1;
+            v.key = e->key;
+            v.unit = e->unit;
+            v.type = types[e->type];
+            v.param = e->param;
+            v.num = e->num;
+            v.text = e->text;
+            v.items = (const char *const *)e->items;
+            v.nitems = e->nitems;
+            if ((rc = fn(ud, &v)) != 0)
+                return rc;
+        }
+        if (s >= 0 && !seen) {
+            v.key = NULL;
+            if ((rc = fn(ud, &v)) != 0)
+                return rc;
+        }
+    }
+    return 0;
+}
+
 /* ---- Numbers and texts ------------------------------------------- */
 
 const char *dfle_number_text(double v, char *buf)

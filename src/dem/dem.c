@@ -25,6 +25,10 @@
 #include <strings.h> /* strcasecmp */
 
 #include "base/gdal_lib.h" /* GDAL, loaded by the first dfle_dem_read */
+#include "dfle/crs.h"
+#include "dem/dem_crs.h"
+#include "dem/dem_gdal.h"
+#include "dem/dem_tiff.h"
 
 static char *dup_string(const char *s)
 {
@@ -249,45 +253,58 @@ static const char *gdal_message(const char *fallback)
 static int read_crs(dfle_dem *d, OGRSpatialReferenceH srs, dfle_error *err)
 {
     char *wkt = NULL;
-    const char *name, *auth;
+    dfle_crs_info info;
 
     if (srs == NULL)
         return DFLE_OK;
     if (OSRExportToWkt(srs, &wkt) == OGRERR_NONE && wkt != NULL)
         d->crs_wkt = dup_string(wkt);
     CPLFree(wkt);
-    name = OSRGetName(srs);
-    d->crs_name = dup_string(name != NULL ? name : "unnamed CRS");
-    if (d->crs_wkt == NULL || d->crs_name == NULL)
+    if (d->crs_wkt == NULL)
         return dfle_error_set(err, DFLE_ENOMEM, "dem: out of memory");
-    d->geographic = OSRIsGeographic(srs) != 0;
-    if (OSRIsProjected(srs)) {
-        char *unit = NULL;
-        d->linear_unit = OSRGetLinearUnits(srs, &unit);
-        d->linear_unit_name = dup_string(unit != NULL ? unit : "unknown");
+    dem_crs_describe(srs, &info);
+    d->crs_name = dup_string(info.name);
+    d->geographic = info.geographic;
+    d->epsg = info.epsg;
+    if (info.projected) {
+        d->linear_unit = info.linear_unit;
+        d->linear_unit_name = dup_string(info.linear_unit_name);
         if (d->linear_unit_name == NULL)
             return dfle_error_set(err, DFLE_ENOMEM, "dem: out of memory");
     }
-    /* The EPSG code when the file says it, else GDAL's best match (an
-     * ESRI .prj carries names only); identification is best effort. */
-    auth = OSRGetAuthorityName(srs, NULL);
-    if (auth != NULL && strcmp(auth, "EPSG") == 0 && OSRGetAuthorityCode(srs, NULL) != NULL) {
-        d->epsg = atoi(OSRGetAuthorityCode(srs, NULL));
-    } else {
-        int nm = 0, *conf = NULL;
-        OGRSpatialReferenceH *m = OSRFindMatches(srs, NULL, &nm, &conf);
-        /* 90% and up is PROJ's "same CRS, other names" (e.g. an ESRI
-         * .prj of a UTM zone); lower scores are guesses. */
-        if (m != NULL && nm > 0 && conf[0] >= 90) {
-            auth = OSRGetAuthorityName(m[0], NULL);
-            if (auth != NULL && strcmp(auth, "EPSG") == 0 &&
-                OSRGetAuthorityCode(m[0], NULL) != NULL)
-                d->epsg = atoi(OSRGetAuthorityCode(m[0], NULL));
-        }
-        OSRFreeSRSArray(m);
-        CPLFree(conf);
+    if (d->crs_name == NULL)
+        return dfle_error_set(err, DFLE_ENOMEM, "dem: out of memory");
+    return DFLE_OK;
+}
+
+int dfle_dem_set_crs(dfle_dem *d, const char *crs, dfle_error *err)
+{
+    dfle_crs_info info;
+    char *buf = malloc(DFLE_CRS_WKT_MAX), *wkt = NULL, *name = NULL, *unit = NULL;
+    int st;
+    if (buf == NULL)
+        return dfle_error_set(err, DFLE_ENOMEM, "dem: out of memory");
+    if ((st = dfle_crs_from_text(crs, "dem: crs", 0, buf, DFLE_CRS_WKT_MAX, &info, err)) !=
+        DFLE_OK) {
+        free(buf);
+        return st;
     }
-    CPLErrorReset(); /* a failed identification is not an error of ours */
+    wkt = dup_string(buf);
+    name = dup_string(info.name);
+    if (info.projected)
+        unit = dup_string(info.linear_unit_name);
+    free(buf);
+    if (wkt == NULL || name == NULL || (info.projected && unit == NULL)) {
+        free(wkt), free(name), free(unit);
+        return dfle_error_set(err, DFLE_ENOMEM, "dem: out of memory");
+    }
+    free(d->crs_wkt), free(d->crs_name), free(d->linear_unit_name);
+    d->crs_wkt = wkt;
+    d->crs_name = name;
+    d->linear_unit_name = unit;
+    d->linear_unit = info.projected ? info.linear_unit : 0.0;
+    d->geographic = info.geographic;
+    d->epsg = info.epsg;
     return DFLE_OK;
 }
 
@@ -378,6 +395,20 @@ static int read_dataset(GDALDatasetH ds, const char *path, const dfle_dem_read_o
         goto fail;
     }
     nodata = GDALGetRasterNoDataValue(band, &has_nodata);
+    if (has_nodata && !o->set_nodata &&
+        strcmp(GDALGetDriverShortName(GDALGetDatasetDriver(ds)), "GTiff") == 0) {
+        /* GDAL reads a tag that is no number as 0 (dem_tiff.c). */
+        char text[256];
+        if (dem_tiff_nodata_text(path, text, sizeof text) && !dem_tiff_nodata_valid(text)) {
+            st = dfle_error_set(err, DFLE_EINVAL, "dem: '%s' declares its NoData value as '%s' "
+                                "(the GDAL_NODATA tag), which is not a number; GDAL would read "
+                                "it as %g and take every cell of that elevation for NoData. Fix "
+                                "the file (gdal_edit.py -a_nodata <value> '%s') or say what "
+                                "marks missing data: dfle.dem.read(path, { nodata = ... })",
+                                path, text, nodata, path);
+            goto fail;
+        }
+    }
     if (o->set_nodata) {
         nodata = o->nodata;
         has_nodata = 1;
@@ -441,6 +472,44 @@ static int read_dataset(GDALDatasetH ds, const char *path, const dfle_dem_read_o
     return DFLE_OK;
 fail:
     dfle_dem_free(d);
+    return st;
+}
+
+GDALDatasetH dem_to_gdal(const dfle_dem *d, dfle_error *err)
+{
+    GDALDriverH drv = GDALGetDriverByName("MEM");
+    GDALDatasetH ds;
+    double gt[6] = {d->x0, d->dx, 0.0, d->y0, 0.0, -d->dy};
+    GDALRasterBandH band;
+    if (drv == NULL ||
+        (ds = GDALCreate(drv, "", (int)d->nx, (int)d->ny, 1, GDT_Float64, NULL)) == NULL) {
+        dfle_error_set(err, DFLE_ENOMEM, "dem: GDAL cannot hold the grid in memory: %s",
+                       gdal_message("no MEM driver"));
+        return NULL;
+    }
+    GDALSetGeoTransform(ds, gt);
+    if (d->crs_wkt != NULL)
+        GDALSetProjection(ds, d->crs_wkt);
+    band = GDALGetRasterBand(ds, 1);
+    GDALSetRasterNoDataValue(band, NAN);
+    if (GDALRasterIO(band, GF_Write, 0, 0, (int)d->nx, (int)d->ny, d->z, (int)d->nx, (int)d->ny,
+                     GDT_Float64, 0, 0) != CE_None) {
+        dfle_error_set(err, DFLE_EIO, "dem: GDAL cannot take the grid: %s",
+                       gdal_message("write error"));
+        GDALClose(ds);
+        return NULL;
+    }
+    return ds;
+}
+
+int dem_from_gdal(GDALDatasetH ds, const char *what, dfle_dem **out, dfle_error *err)
+{
+    static const dfle_dem_read_opts defaults = {0, 0, 0.0, NULL};
+    int st = read_dataset(ds, what, &defaults, out, err);
+    if (st == DFLE_OK) {
+        free((*out)->path);
+        (*out)->path = NULL; /* made in memory: no file */
+    }
     return st;
 }
 

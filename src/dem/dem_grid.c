@@ -8,6 +8,8 @@
  */
 #include "dem/dem_internal.h"
 
+#include "dfle/record.h"
+
 #include <math.h>
 
 /* ---------------------------------------------------------------- */
@@ -25,6 +27,24 @@ const char *dfle_dem_crs_name(const dfle_dem *d) { return d->crs_name; }
 const char *dfle_dem_crs_wkt(const dfle_dem *d) { return d->crs_wkt; }
 int dfle_dem_epsg(const dfle_dem *d) { return d->epsg; }
 int dfle_dem_is_geographic(const dfle_dem *d) { return d->geographic; }
+
+void dfle_dem_describe(const dfle_dem *d, dfle_record *rec)
+{
+    dfle_record_section(rec, "dem", NULL);
+    if (d->path != NULL)
+        dfle_record_text(rec, "file", d->path);
+    dfle_record_number(rec, "nx", (double)d->nx, NULL);
+    dfle_record_number(rec, "ny", (double)d->ny, NULL);
+    dfle_record_number(rec, "dx", d->dx, "m");
+    dfle_record_number(rec, "dy", d->dy, "m");
+    dfle_record_number(rec, "x0", d->x0, "m");
+    dfle_record_number(rec, "y0", d->y0, "m");
+    if (d->crs_name != NULL)
+        dfle_record_text(rec, "crs", d->crs_name);
+    if (d->epsg > 0)
+        dfle_record_number(rec, "epsg", (double)d->epsg, NULL);
+    dfle_record_bool(rec, "filled", d->filled);
+}
 
 void dfle_dem_extent(const dfle_dem *d, double ext[4])
 {

@@ -17,6 +17,8 @@
 
 #include <stddef.h>
 #include <stdint.h>
+#include <stdlib.h>
+#include <string.h>
 
 #include "dfle/dem.h"
 #include "dfle/drainage.h"
@@ -44,5 +46,34 @@ struct dfle_dem {
                                receiver, as dfle_dem_order has always
                                listed them (n - n_nodata cells)          */
 };
+
+/* A profile or network (dem_profile.c makes them, dem_profile_out.c
+ * writes them). */
+struct dfle_profile {
+    size_t n;
+    int network;
+    double *f[DFLE_PROFILE_NFIELDS];
+    size_t *receiver;       /* 1-based index of the receiver, 0 = none */
+    double given[2], snapped[2];
+    dfle_slope_opts slope;
+    /* Provenance (dfle_profile_describe): the DEM's file (NULL when it
+     * was made in memory), its CRS as WKT (NULL: none) and the limits
+     * asked for. */
+    char *dem, *crs;
+    int from_head;
+    double A_min, A_max, radius;
+};
+
+/* *dst = a copy of src (NULL stays NULL); nonzero when memory ran out. */
+static inline int profile_copy_text(char **dst, const char *src)
+{
+    *dst = NULL;
+    if (src == NULL)
+        return 0;
+    if ((*dst = malloc(strlen(src) + 1)) == NULL)
+        return 1;
+    memcpy(*dst, src, strlen(src) + 1);
+    return 0;
+}
 
 #endif

@@ -27,20 +27,6 @@
 #include <stdlib.h>
 #include <string.h>
 
-struct dfle_profile {
-    size_t n;
-    int network;
-    double *f[DFLE_PROFILE_NFIELDS];
-    size_t *receiver;       /* 1-based index of the receiver, 0 = none */
-    double given[2], snapped[2];
-    dfle_slope_opts slope;
-    /* Provenance (dfle_profile_describe): the DEM's file (NULL when it
-     * was made in memory) and the limits asked for. */
-    char *dem;
-    int from_head;
-    double A_min, A_max, radius;
-};
-
 void dfle_profile_opts_default(dfle_profile_opts *o)
 {
     memset(o, 0, sizeof *o);
@@ -61,6 +47,7 @@ void dfle_profile_free(dfle_profile *p)
         free(p->f[k]);
     free(p->receiver);
     free(p->dem);
+    free(p->crs);
     free(p);
 }
 
@@ -306,17 +293,14 @@ static int slopes_along(const dfle_dem *d, const flowpath *core, const dfle_slop
     return 0;
 }
 
-/* The DEM's file name, for the profile's provenance. */
+/* The DEM's file name and CRS, for the profile's provenance and files. */
 static int keep_dem_path(dfle_profile *p, const dfle_dem *d, dfle_error *err)
 {
-    const char *path = dfle_dem_path(d);
-    if (path == NULL)
-        return DFLE_OK;
-    if ((p->dem = malloc(strlen(path) + 1)) == NULL) {
+    if (profile_copy_text(&p->dem, dfle_dem_path(d)) != 0 ||
+        profile_copy_text(&p->crs, dfle_dem_crs_wkt(d)) != 0) {
         dfle_profile_free(p);
         return dfle_error_set(err, DFLE_ENOMEM, "dem: out of memory for a profile");
     }
-    strcpy(p->dem, path);
     return DFLE_OK;
 }
 
@@ -625,13 +609,10 @@ int dfle_profile_main_stem(const dfle_profile *p, dfle_profile **out, dfle_error
     memcpy(q->snapped, p->snapped, sizeof q->snapped);
     q->slope = p->slope;
     q->A_min = p->A_min, q->A_max = p->A_max, q->radius = p->radius;
-    if (p->dem != NULL) { /* provenance: the same DEM */
-        size_t len = strlen(p->dem) + 1;
-        if ((q->dem = malloc(len)) == NULL) {
-            dfle_profile_free(q);
-            goto nomem;
-        }
-        memcpy(q->dem, p->dem, len);
+    /* provenance: the same DEM */
+    if (profile_copy_text(&q->dem, p->dem) != 0 || profile_copy_text(&q->crs, p->crs) != 0) {
+        dfle_profile_free(q);
+        goto nomem;
     }
     free(best);
     free(path);
@@ -641,64 +622,6 @@ nomem:
     free(best);
     free(path);
     return dfle_error_set(err, DFLE_ENOMEM, "profile: out of memory for a main stem");
-}
-
-int dfle_profile_write_csv(const dfle_profile *p, const char *path, const dfle_record *rec,
-                           dfle_error *err)
-{
-    static const struct { enum dfle_profile_field f; const char *name, *unit; } fields[] = {
-        {DFLE_PROFILE_E, "E", "m"}, {DFLE_PROFILE_N, "N", "m"}, {DFLE_PROFILE_X, "x", "m"},
-        {DFLE_PROFILE_D, "d", "m"}, {DFLE_PROFILE_Z, "z", "m"}, {DFLE_PROFILE_A, "A", "m^2"},
-        {DFLE_PROFILE_S, "S", "-"}};
-    enum { NF = sizeof fields / sizeof fields[0] };
-    dfle_column cols[NF + 1];
-    double *receiver;
-    int st;
-
-    if (path == NULL)
-        return dfle_error_set(err, DFLE_EINVAL, "profile: no file name given");
-    /* Receivers are whole numbers far below 2^53: exact as doubles. */
-    if ((receiver = malloc(p->n * sizeof *receiver)) == NULL)
-        return dfle_error_set(err, DFLE_ENOMEM, "profile: out of memory");
-    for (size_t i = 0; i < p->n; i++)
-        receiver[i] = (double)p->receiver[i];
-    for (size_t k = 0; k < NF; k++)
-        cols[k] = (dfle_column){fields[k].name, fields[k].unit, p->f[fields[k].f], NULL};
-    cols[NF] = (dfle_column){"receiver", NULL, receiver, NULL};
-    st = dfle_table_write(path, "profile", rec, cols, NF + 1, p->n, 10, err);
-    free(receiver);
-    return st;
-}
-
-void dfle_profile_describe(const dfle_profile *p, dfle_record *rec)
-{
-    const double *D = p->f[DFLE_PROFILE_D];
-    double length = 0;
-    for (size_t i = 0; i < p->n; i++)
-        length = D[i] > length ? D[i] : length;
-    dfle_record_section(rec, "profile", p->network ? "network" : "profile");
-    if (p->dem != NULL)
-        dfle_record_text(rec, "dem", p->dem);
-    if (!p->network)
-        dfle_record_text(rec, "from", p->from_head ? "head" : "outlet");
-    if (isfinite(p->given[0])) {
-        dfle_record_number(rec, "given_E", p->given[0], "m");
-        dfle_record_number(rec, "given_N", p->given[1], "m");
-        dfle_record_number(rec, "snapped_E", p->snapped[0], "m");
-        dfle_record_number(rec, "snapped_N", p->snapped[1], "m");
-    }
-    if (p->radius >= 0)
-        dfle_record_number(rec, "radius", p->radius, "m");
-    if (p->A_min > 0)
-        dfle_record_number(rec, "A_min", p->A_min, "m^2");
-    if (p->A_max > 0)
-        dfle_record_number(rec, "A_max", p->A_max, "m^2");
-    if (p->slope.ds > 0)
-        dfle_record_number(rec, "ds", p->slope.ds, "m");
-    else
-        dfle_record_number(rec, "dz", p->slope.dz, "m");
-    dfle_record_number(rec, "n", (double)p->n, NULL);
-    dfle_record_number(rec, "length", length, "m");
 }
 
 int dfle_profile_channel(const dfle_profile *p, double dx, double k_w, double b,

@@ -5,7 +5,11 @@
  * Both are written in one go, from results already in memory: a run's
  * records and an ensemble's rows are complete when they are written, so
  * there is nothing to append and the file is put in place (renamed over
- * the target) only once it is whole.
+ * the target) only once it is whole.  netCDF-4 with deflate, CF
+ * attributes from netcdf_cf.c.  The records are a grid of (time, x),
+ * not one of CF's discrete sampling geometries: a long profile along a
+ * channel is none of them ("profile" is a vertical one), so the file
+ * has no featureType.
  */
 #include "dfle/netcdf.h"
 
@@ -14,8 +18,8 @@
 #include <stdlib.h>
 #include <string.h>
 
-#include "base/netcdf_lib.h" /* libnetcdf, loaded by the first file (out_begin) */
 #include "dfle/file.h"
+#include "io/netcdf_internal.h" /* libnetcdf, loaded by the first file (out_begin) */
 
 /* One file being written: its temporary name and netCDF id. */
 typedef struct nc_out {
@@ -25,8 +29,7 @@ typedef struct nc_out {
 
 static int out_fail(nc_out *o, int status, const char *what, dfle_error *err)
 {
-    return dfle_error_set(err, DFLE_EIO, "netcdf: cannot write '%s' (%s): %s",
-                          o->file.path != NULL ? o->file.path : "?", what, nc_strerror(status));
+    return nc_cf_fail(o->file.path, status, what, err);
 }
 
 #define NC_DO(call, what)                                                     \
@@ -40,7 +43,7 @@ static int out_fail(nc_out *o, int status, const char *what, dfle_error *err)
 
 static int text_att(int ncid, int var, const char *name, const char *text)
 {
-    return nc_put_att_text(ncid, var, name, strlen(text), text);
+    return nc_cf_put_text(ncid, var, name, text);
 }
 
 static int out_begin(nc_out *o, const char *path, dfle_error *err)
@@ -50,9 +53,9 @@ static int out_begin(nc_out *o, const char *path, dfle_error *err)
     o->ncid = -1;
     if ((st = dfle_netcdf_load("netcdf", err)) != DFLE_OK)
         return st;
-    if ((st = dfle_file_begin_external(&o->file, path, "netcdf", &write_to, err)) != DFLE_OK)
+    if ((st = dfle_file_begin_regular(&o->file, path, "netcdf", &write_to, err)) != DFLE_OK)
         return st;
-    if ((s = nc_create(write_to, NC_CLOBBER | NC_64BIT_OFFSET, &o->ncid)) != NC_NOERR) {
+    if ((s = nc_create(write_to, NC_CLOBBER | NC_NETCDF4, &o->ncid)) != NC_NOERR) {
         o->ncid = -1;
         st = out_fail(o, s, "create", err);
         dfle_file_abort(&o->file);
@@ -61,32 +64,38 @@ static int out_begin(nc_out *o, const char *path, dfle_error *err)
     return DFLE_OK;
 }
 
-/* Global attributes: CF, dfle, then the caller's provenance. */
-static int out_globals(nc_out *o, size_t nattrs, const dfle_nc_attr *attrs, dfle_error *err)
+/* Global attributes: CF, dfle, the record, then the caller's own. */
+static int out_globals(nc_out *o, const char *title, const dfle_record *rec, size_t nattrs,
+                       const dfle_nc_attr *attrs, dfle_error *err)
 {
     int st = DFLE_OK;
-    NC_DO(text_att(o->ncid, NC_GLOBAL, "Conventions", "CF-1.8"), "Conventions");
-    NC_DO(text_att(o->ncid, NC_GLOBAL, "source", "dfle " DFLE_VERSION), "source");
+    int has_history = rec != NULL;
+    NC_DO(nc_cf_put_globals(o->ncid, title, rec), "global attributes");
     for (size_t k = 0; k < nattrs; k++)
-        if (attrs[k].name != NULL && attrs[k].value != NULL)
+        if (attrs[k].name != NULL && attrs[k].value != NULL) {
             NC_DO(text_att(o->ncid, NC_GLOBAL, attrs[k].name, attrs[k].value), attrs[k].name);
+            has_history |= strcmp(attrs[k].name, "history") == 0;
+        }
+    if (!has_history) /* when, and what wrote it */
+        NC_DO(nc_cf_put_provenance(o->ncid, NULL), "history");
 fail:
     return st;
 }
 
-static int def_var(nc_out *o, const dfle_nc_var *v, int ndims, const int *dims, int *id,
-                   dfle_error *err)
+static int def_var(nc_out *o, const dfle_nc_var *v, int ndims, const int *dims, int float32,
+                   int deflate, int *id, dfle_error *err)
 {
     double fill = NAN;
+    nc_type type = float32 ? NC_FLOAT : NC_DOUBLE;
     int st = DFLE_OK;
-    NC_DO(nc_def_var(o->ncid, v->name, NC_DOUBLE, ndims, dims, id), v->name);
-    if (v->units != NULL) /* unknown units are left out, not claimed */
-        NC_DO(text_att(o->ncid, *id, "units", v->units), v->name);
+    NC_DO(nc_def_var(o->ncid, v->name, type, ndims, dims, id), v->name);
+    NC_DO(nc_cf_deflate(o->ncid, *id, deflate), v->name);
+    NC_DO(nc_cf_put_units(o->ncid, *id, v->units), v->name);
     if (v->long_name != NULL)
         NC_DO(text_att(o->ncid, *id, "long_name", v->long_name), v->name);
     if (v->standard_name != NULL)
         NC_DO(text_att(o->ncid, *id, "standard_name", v->standard_name), v->name);
-    NC_DO(nc_put_att_double(o->ncid, *id, "_FillValue", NC_DOUBLE, 1, &fill), v->name);
+    NC_DO(nc_put_att_double(o->ncid, *id, "_FillValue", type, 1, &fill), v->name);
 fail:
     return st;
 }
@@ -113,16 +122,24 @@ static void out_abort(nc_out *o)
 
 int dfle_nc_write_profiles(const char *path, size_t n, const double *x, const double *A,
                            size_t nt, const double *t, size_t nvars, const dfle_nc_var *vars,
-                           const double *const *values, size_t nattrs, const dfle_nc_attr *attrs,
+                           const double *const *values, const dfle_nc_opts *opts,
                            dfle_error *err)
 {
-    static const dfle_nc_var A_var = {"A", "m2", "drainage area", NULL};
+    static const dfle_nc_var A_var = {"A", "m^2", "drainage area", NULL, NULL};
+    dfle_nc_opts op;
     nc_out out, *o = &out;
     int dims[2], tv, xv, av, *vid = NULL, st;
+    double t_max = 0;
 
+    if (opts != NULL)
+        op = *opts;
+    else
+        dfle_nc_opts_default(&op);
     if (n == 0 || nt == 0 || nvars == 0)
         return dfle_error_set(err, DFLE_EINVAL, "netcdf: nothing to write (%zu nodes, %zu times, "
                               "%zu variables)", n, nt, nvars);
+    for (size_t k = 0; k < nt; k++)
+        t_max = t[k] > t_max ? t[k] : t_max;
     if ((vid = malloc(nvars * sizeof *vid)) == NULL)
         return dfle_error_set(err, DFLE_ENOMEM, "netcdf: out of memory");
     if ((st = out_begin(o, path, err)) != DFLE_OK) {
@@ -132,22 +149,20 @@ int dfle_nc_write_profiles(const char *path, size_t n, const double *x, const do
     NC_DO(nc_def_dim(o->ncid, "time", nt, &dims[0]), "time");
     NC_DO(nc_def_dim(o->ncid, "x", n, &dims[1]), "x");
     NC_DO(nc_def_var(o->ncid, "time", NC_DOUBLE, 1, &dims[0], &tv), "time");
-    NC_DO(text_att(o->ncid, tv, "units", "year"), "time");
-    NC_DO(text_att(o->ncid, tv, "long_name", "model time"), "time");
-    NC_DO(text_att(o->ncid, tv, "axis", "T"), "time");
+    NC_DO(nc_cf_put_time(o->ncid, tv, t_max), "time");
     NC_DO(nc_def_var(o->ncid, "x", NC_DOUBLE, 1, &dims[1], &xv), "x");
     NC_DO(text_att(o->ncid, xv, "units", "m"), "x");
     NC_DO(text_att(o->ncid, xv, "long_name", "distance from the channel head"), "x");
     NC_DO(text_att(o->ncid, xv, "axis", "X"), "x");
-    if ((st = def_var(o, &A_var, 1, &dims[1], &av, err)) != DFLE_OK)
+    if ((st = def_var(o, &A_var, 1, &dims[1], 0, op.deflate, &av, err)) != DFLE_OK)
         goto fail;
     for (size_t k = 0; k < nvars; k++) {
-        if ((st = def_var(o, &vars[k], 2, dims, &vid[k], err)) != DFLE_OK)
+        if ((st = def_var(o, &vars[k], 2, dims, op.float32, op.deflate, &vid[k], err)) !=
+            DFLE_OK)
             goto fail;
         NC_DO(text_att(o->ncid, vid[k], "coordinates", "A"), vars[k].name);
     }
-    NC_DO(text_att(o->ncid, NC_GLOBAL, "featureType", "profile"), "featureType");
-    if ((st = out_globals(o, nattrs, attrs, err)) != DFLE_OK)
+    if ((st = out_globals(o, op.title, op.provenance, 0, NULL, err)) != DFLE_OK)
         goto fail;
     NC_DO(nc_enddef(o->ncid), "header");
     NC_DO(nc_put_var_double(o->ncid, tv, t), "time");
@@ -189,7 +204,7 @@ int dfle_nc_write_table(const char *path, const char *dim, size_t nrows, size_t 
     }
     NC_DO(nc_def_dim(o->ncid, dim, nrows, &rows), dim);
     for (size_t k = 0; k < ncols; k++)
-        if ((st = def_var(o, &cols[k], 1, &rows, &vid[k], err)) != DFLE_OK)
+        if ((st = def_var(o, &cols[k], 1, &rows, 0, 4, &vid[k], err)) != DFLE_OK)
             goto fail;
     /* Text as char[row][len], len the longest value (at least 1). */
     for (size_t k = 0; k < ntext; k++) {
@@ -206,7 +221,7 @@ int dfle_nc_write_table(const char *path, const char *dim, size_t nrows, size_t 
         if (text[k].long_name != NULL)
             NC_DO(text_att(o->ncid, tid[k], "long_name", text[k].long_name), text[k].name);
     }
-    if ((st = out_globals(o, nattrs, attrs, err)) != DFLE_OK)
+    if ((st = out_globals(o, NULL, NULL, nattrs, attrs, err)) != DFLE_OK)
         goto fail;
     NC_DO(nc_enddef(o->ncid), "header");
     for (size_t k = 0; k < ncols; k++)

@@ -420,6 +420,24 @@ T["dfle.profile:write_csv"] = function(S)
     return pack(p), nil, S.legal and "write" or nil
 end
 T["dfle.profile:channel"] = function(S) return pack({ dx = S.r.pick{ 5, 50 } }) end
+T["dfle.profile:write_gpkg"] = function(S)
+    local p = S.path("gpkg")
+    return pack(p), nil, S.legal and "write" or nil
+end
+T["dfle.dem:resample"] = function(S)
+    return pack({ dx = S.r.pick{ 45, 90, 200 },
+                  method = S.r.chance(0.5) and S.r.pick{ "nearest", "bilinear", "average" } or nil }),
+           { [1] = { dx = true } }
+end
+T["dfle.dem:crop"] = function(S, self)
+    local ok, p = pcall(point_in, self, S.r)
+    if not ok or S.r.chance(0.3) then return pack({ data = true }) end
+    return pack({ E_min = p[1] - 100, N_max = p[2] + 100, E_max = p[1] + 100, N_min = p[2] - 100 })
+end
+T["dfle.dem:write_gpkg"] = function(S, self)
+    local ok, p = pcall(point_in, self, S.r)
+    return pack(S.path("gpkg"), { outlet = ok and p or { 0, 0 }, A_min = S.r.chance(0.5) and 1e4 or nil })
+end
 
 T["dfle.channel:params"] = function(S) return pack() end
 T["dfle.fluvial:params"] = function(S) return pack() end
@@ -483,6 +501,7 @@ local function landscape_opts(S)
     if r.chance(0.1) then o.combine = S.cb("combine", function(count, A) return 1 end) end
     if r.chance(0.2) then o.U = S.cb("U", function(x, y) return 5e-4 end) end
     if r.chance(0.2) then o.router = false end
+    if r.chance(0.1) then o.crs = r.pick{ "EPSG:32611", "EPSG:3310" } end
     return o
 end
 T["dfle.landscape"] = function(S)
@@ -493,7 +512,8 @@ T["dfle.landscape:run"] = function(S)
     return pack({ years = r.pick{ 100, 1000 }, dt = 500, max_steps = 5, progress = false,
                   method = r.pick{ "implicit", "explicit" },
                   record = r.chance(0.3) and { 0, 500 } or nil,
-                  netcdf = r.chance(0.2) and S.path("nc") or nil }),
+                  netcdf = r.chance(0.2) and S.path("nc") or nil,
+                  float32 = r.chance(0.1) or nil }),
            { [1] = { years = true, max_steps = true, dt = true, record = true } }
 end
 T["dfle.landscape:run_to_steady"] = function(S)

@@ -348,10 +348,24 @@ function I.good_ensemble_csv(S)
     return name
 end
 
+-- Kinds written to a temporary file that replaces the target (GeoTIFF,
+-- NetCDF, GeoPackage): a device, a FIFO or a link to one is refused, and
+-- the name must end in the kind's extension.
+local replaced_only = { tif = true, nc = true, gpkg = true }
+
 -- A file name to write, of kind ext ("csv", "png", "svg"), and whether
 -- writing it must succeed (a legal name in an existing directory, a
 -- link to one, a device that takes data).
 function I.path(S, ext)
+    local p, legal = I.any_path(S, ext)
+    if legal and replaced_only[ext] and (p:find("dev/", 1, true) or p:find("null-link", 1, true) or
+                                         not p:find("%." .. ext .. "$")) then
+        legal = false
+    end
+    return p, legal
+end
+
+function I.any_path(S, ext)
     local r = S.r
     local k = r.int(26)
     local abs = r.chance(0.2) and (I.scratch .. "/") or ""

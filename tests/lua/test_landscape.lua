@@ -378,14 +378,14 @@ tests["GeoTIFF, NetCDF and the map are written and read back"] = function()
     local v = dem:at(15 + 30 * (i % 12), 300 - 15 - 30 * (i // 12))
     T.close(v, z[i + 1], 1e-12, 0, "GeoTIFF z at " .. i)
   end
-  -- a classic (64-bit offset) netCDF file; its contents are checked
-  -- in tests/test_landscape.c
+  -- a netCDF-4 (HDF5) file; its contents are checked in
+  -- tests/test_netcdf.c
   local g = assert(io.open(nc, "rb"))
   local head = g:read(4)
   local rest = g:read("a")
-  T.eq(head, "CDF\2", "netCDF magic")
+  T.eq(head, "\137HDF", "netCDF-4 magic")
   g:close()
-  -- CF attributes (a classic file keeps them as plain text in its header)
+  -- CF attributes (HDF5 keeps them uncompressed)
   for _, a in ipairs{ "Conventions", "CF-1.8", "surface_altitude", "elevation of the land surface",
                       "fluvial erosion rate", "projection_x_coordinate", "m/yr" } do
     T.ok(rest:find(a, 1, true), "netCDF attribute text " .. a)

@@ -119,10 +119,19 @@ tests["run: record = {...}, netcdf = path writes the recorded states"] = functio
     local r = m:run{ years = 1000, record = { 0, 500, 1000 }, netcdf = nc }
     T.eq(#r.records, 3)
     local s = assert(T.read_file(nc))
-    T.eq(s:sub(1, 4), "CDF\2", "classic 64-bit-offset NetCDF")
-    T.has(s, "Conventions", "CF-1.8", "featureType", "profile", "history", "elevation above the outlet")
+    T.eq(s:sub(1, 4), "\137HDF", "netCDF-4 (HDF5)")
+    T.has(s, "Conventions", "CF-1.8", "history", "elevation above the outlet",
+          "common_years since 0000-01-01 00:00:00", "noleap")
+    T.ok(not s:find("featureType", 1, true), "no featureType: a long profile is no CF profile")
+    local f32 = T.tmpname(".nc")
+    m:run{ years = 100, record = { 100 }, netcdf = f32, float32 = true }
+    T.ok(T.read_file(f32) ~= nil, "float32 written")
     T.raises_here(function() return m:run{ years = 10, netcdf = nc } end, "give 'record' times too")
     T.raises_here(function() return m:run{ years = 10, record = { 5 }, netcdf = 7 } end, "netcdf")
+    T.raises_here(function() return m:run{ years = 10, float32 = true } end,
+                  "parameter 'float32' (true or false) goes with 'netcdf'")
+    T.raises_here(function() return m:run{ years = 10, record = { 5 }, netcdf = nc, float32 = 1 } end,
+                  "parameter 'float32' (true or false) goes with 'netcdf'")
 end
 
 return tests

@@ -15,20 +15,13 @@
  * dfle.plot.slope_area take a profile through its slope_area() method
  * (see dfle_lua_slope_area in lua_util.c).
  */
-#include "lua/core/dfle_lua.h"
+#include "lua/analysis/lua_dem.h"
 
 #include <math.h>
 #include <stdio.h>
 #include <string.h>
 
-#include "dfle/dem.h"
 #include "dfle/raster.h"
-
-#define DFLE_LUA_DEM "dfle.dem"
-#define DFLE_LUA_PROFILE "dfle.profile"
-
-typedef struct { dfle_dem *dem; DFLE_LUA_IN_USE; } dfle_lua_dem;
-typedef struct { dfle_profile *p; DFLE_LUA_IN_USE; } dfle_lua_profile;
 
 static dfle_dem *check_dem(lua_State *L, int arg)
 {
@@ -61,8 +54,8 @@ static void push_point(lua_State *L, double E, double N)
 }
 
 /* Field `key` of the options table: {E, N} in map units, finite. */
-static int read_point(lua_State *L, int opts, const char *key, const char *fn, double *E,
-                      double *N)
+int dfle_lua_dem_read_point(lua_State *L, int opts, const char *key, const char *fn, double *E,
+                            double *N)
 {
     int t = lua_getfield(L, opts, key);
     if (t == LUA_TNIL) {
@@ -185,7 +178,8 @@ static int l_dem_write_geotiff(lua_State *L)
     dfle_dem *dem = check_dem(L, 1);
     const char *path = dfle_lua_check_string(L, 2, fn, "the path");
     const char *names[5];
-    const double *bands[5];
+    dfle_raster_band bands[5];
+    dfle_record *rec;
     double A_min = NAN, ext[4];
     const dfle_lua_param params[] = {{"A_min", &A_min}};
     size_t nb = 0, n = dfle_dem_nx(dem) * dfle_dem_ny(dem);
@@ -217,16 +211,20 @@ static int l_dem_write_geotiff(lua_State *L)
         for (size_t j = 0; j < k; j++)
             if (strcmp(names[j], names[k]) == 0)
                 luaL_error(L, "dfle.%s: layer '%s' is listed twice", fn, names[k]);
+        bands[k].name = names[k];
         if (strcmp(names[k], "z") == 0) {
-            bands[k] = z;
+            bands[k].values = z;
+            bands[k].units = "m";
             continue;
         }
         if (strcmp(names[k], "area") == 0) {
-            bands[k] = A;
+            bands[k].values = A;
+            bands[k].units = "m^2";
             continue;
         }
         b = lua_newuserdatauv(L, n * sizeof *b, 0); /* kept on the stack until written */
-        bands[k] = b;
+        bands[k].values = b;
+        bands[k].units = strcmp(names[k], "slope") == 0 ? "-" : NULL; /* codes, a mask */
         if (strcmp(names[k], "channels") == 0 && !(A_min > 0))
             luaL_error(L, "dfle.%s: layer 'channels' needs A_min (m^2, > 0): the drainage area "
                           "where channels begin", fn);
@@ -254,9 +252,14 @@ static int l_dem_write_geotiff(lua_State *L)
     dfle_dem_extent(dem, ext);
     geo = (dfle_raster_geo){ext[0], ext[3], dfle_dem_dx(dem), dfle_dem_dy(dem),
                             dfle_dem_crs_wkt(dem)};
-    if (dfle_raster_write_geotiff(path, dfle_dem_nx(dem), dfle_dem_ny(dem), &geo, nb, bands, names,
+    rec = dfle_lua_push_record(L, "DEM products, one band each");
+    dfle_dem_describe(dem, rec);
+    if (A_min > 0)
+        dfle_record_number(rec, "A_min", A_min, "m^2");
+    if (dfle_raster_write_geotiff(path, dfle_dem_nx(dem), dfle_dem_ny(dem), &geo, nb, bands, rec,
                                   &err) != DFLE_OK)
         return dfle_lua_raise(L, &err);
+    dfle_lua_note_file(L, path);
     dfle_lua_note(L, DFLE_LUA_DETAIL, "wrote %s (%zu band%s)", path, nb, nb == 1 ? "" : "s");
     lua_settop(L, 1);
     return 1;
@@ -301,8 +304,8 @@ static int l_dem_profile(lua_State *L)
     luaL_checktype(L, 2, LUA_TTABLE);
     dfle_lua_read_params(L, 2, fn, params, sizeof params / sizeof params[0], other);
     dfle_profile_opts_default(&o);
-    has_outlet = read_point(L, 2, "outlet", fn, &o.E, &o.N);
-    if ((has_head = read_point(L, 2, "head", fn, &o.E, &o.N)) && has_outlet)
+    has_outlet = dfle_lua_dem_read_point(L, 2, "outlet", fn, &o.E, &o.N);
+    if ((has_head = dfle_lua_dem_read_point(L, 2, "head", fn, &o.E, &o.N)) && has_outlet)
         luaL_error(L, "dfle.%s: give 'outlet' (trace upstream) or 'head' (trace downstream), "
                       "not both", fn);
     if (!has_outlet && !has_head)
@@ -345,7 +348,7 @@ static int l_dem_network(lua_State *L)
                       "cell) is required", fn);
     dfle_network_opts_default(&o);
     o.A_min = A_min;
-    o.has_outlet = read_point(L, 2, "outlet", fn, &o.E, &o.N);
+    o.has_outlet = dfle_lua_dem_read_point(L, 2, "outlet", fn, &o.E, &o.N);
     if (!o.has_outlet)
         forbid(L, 2, "radius", fn, "applies to an outlet only");
     o.radius = check_radius(L, radius, fn);
@@ -636,11 +639,13 @@ void dfle_lua_open_dem(lua_State *L)
     static const luaL_Reg dem_methods[] = {
         {"fill", l_dem_fill}, {"flow", l_dem_flow}, {"at", l_dem_at},
         {"profile", l_dem_profile}, {"network", l_dem_network},
-        {"write_geotiff", l_dem_write_geotiff}, {NULL, NULL}};
+        {"write_geotiff", l_dem_write_geotiff}, {"resample", dfle_lua_dem_resample},
+        {"crop", dfle_lua_dem_crop}, {"write_gpkg", dfle_lua_dem_write_gpkg}, {NULL, NULL}};
     static const luaL_Reg profile_methods[] = {
         {"get", l_profile_get}, {"slope_area", l_profile_slope_area},
         {"write_csv", l_profile_write_csv}, {"channel", l_profile_channel},
-        {"main_stem", l_profile_main_stem}, {NULL, NULL}};
+        {"main_stem", l_profile_main_stem}, {"write_gpkg", dfle_lua_profile_write_gpkg},
+        {NULL, NULL}};
     static const luaL_Reg profile_meta[] = {{"__len", l_profile_len}, {NULL, NULL}};
     static const dfle_lua_type dem_type = {
         .name = DFLE_LUA_DEM, .free = dem_free, .describe = dem_describe,

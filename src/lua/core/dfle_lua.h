@@ -312,6 +312,11 @@ void dfle_lua_record_value(lua_State *L, dfle_record *rec, const char *key, int 
 /* The params a component written in Lua keeps (user value 2 of its
  * object at obj), as parameters of rec's current section. */
 void dfle_lua_record_own_params(lua_State *L, dfle_record *rec, int obj);
+/* The params of a router and a law written in Lua (their params live in
+ * Lua, not in the C component): user values uv_router and uv_law of the
+ * object at obj, into sections "router" and "law". */
+void dfle_lua_record_lua_parts(lua_State *L, dfle_record *rec, int obj, int uv_router,
+                               int uv_law);
 
 /* Remember that the script wrote `path` (records list the files). */
 void dfle_lua_note_file(lua_State *L, const char *path);

@@ -173,6 +173,25 @@ void dfle_lua_record_own_params(lua_State *L, dfle_record *rec, int obj)
     lua_pop(L, 1);
 }
 
+void dfle_lua_record_lua_parts(lua_State *L, dfle_record *rec, int obj, int uv_router,
+                               int uv_law)
+{
+    int top = lua_gettop(L);
+    obj = lua_absindex(L, obj);
+    for (int k = 0; k < 2; k++) {
+        if (lua_getiuservalue(L, obj, k == 0 ? uv_router : uv_law) == LUA_TUSERDATA) {
+            dfle_lua_object *o = lua_touserdata(L, -1);
+            size_t n = k == 0 ? dfle_router_params(o->ptr, NULL, 0)
+                              : dfle_law_params(o->ptr, NULL, 0);
+            if (n == (size_t)-1) {
+                dfle_record_section(rec, k == 0 ? "router" : "law", NULL);
+                dfle_lua_record_own_params(L, rec, lua_gettop(L));
+            }
+        }
+        lua_settop(L, top);
+    }
+}
+
 void dfle_lua_note_file(lua_State *L, const char *path)
 {
     lua_Integer n;

@@ -114,23 +114,6 @@ static int l_fields(lua_State *L)
     return 1;
 }
 
-static int l_set_z(lua_State *L)
-{
-    lua_ls *u = check_ls(L, 1);
-    size_t n;
-    double *z = dfle_lua_check_array(L, 2, "landscape:set_z: z", &n);
-    dfle_error err;
-    if (n != dfle_landscape_nx(u->ls) * dfle_landscape_ny(u->ls))
-        return luaL_error(L, "dfle.landscape:set_z: z has %d values, the grid %d", (int)n,
-                          (int)(dfle_landscape_nx(u->ls) * dfle_landscape_ny(u->ls)));
-    begin(L, "dfle.landscape:set_z");
-    dfle_lua_end_use(L, 1);
-    if (dfle_landscape_set_z(u->ls, z, &err) != DFLE_OK)
-        return dfle_lua_raise(L, &err);
-    lua_settop(L, 1);
-    return 1;
-}
-
 static void push_status(lua_State *L, const dfle_landscape_status *s)
 {
 #define NUM(k, v) (lua_pushnumber(L, (v)), lua_setfield(L, -2, k))
@@ -173,37 +156,13 @@ static int l_step(lua_State *L)
     return 1;
 }
 
-/* What a run records into a NetCDF file. */
+/* What a run carries to its callbacks. */
 typedef struct run_ctx {
     lua_ls *u;
-    dfle_nc *nc;
-    int fields[DFLE_LS_NFIELDS];
-    size_t nf;
-    double *buf;   /* nf * n values (a userdata on the stack) */
+    lua_ls_series series; /* the NetCDF time series (lua_landscape_files.c) */
     const dfle_lua_progress *prog;
     double max_time, tol;
 } run_ctx;
-
-static int record_nc(void *ud, dfle_landscape *ls, size_t k, double t)
-{
-    run_ctx *c = ud;
-    const size_t n = dfle_landscape_nx(ls) * dfle_landscape_ny(ls);
-    const double *vals[DFLE_LS_NFIELDS];
-    dfle_error err;
-    (void)k;
-    for (size_t j = 0; j < c->nf; j++) {
-        if (dfle_landscape_get(ls, c->fields[j], c->buf + j * n, &err) != DFLE_OK) {
-            snprintf(c->u->cb_err, sizeof c->u->cb_err, "%s", err.msg);
-            return 1;
-        }
-        vals[j] = c->buf + j * n;
-    }
-    if (dfle_nc_append(c->nc, t, vals, &err) != DFLE_OK) {
-        snprintf(c->u->cb_err, sizeof c->u->cb_err, "%s", err.msg);
-        return 1;
-    }
-    return 0;
-}
 
 static int progress_cb(void *ud, const dfle_landscape_status *s)
 {
@@ -214,19 +173,11 @@ static int progress_cb(void *ud, const dfle_landscape_status *s)
     return c->prog->update(c->prog->ud, &rs);
 }
 
-static void geo_of(const lua_ls *u, dfle_raster_geo *g)
-{
-    g->x0 = u->x0;
-    g->y0 = u->y0;
-    g->dx = dfle_landscape_dx(u->ls);
-    g->dy = dfle_landscape_dy(u->ls);
-    g->crs_wkt = u->crs;
-}
-
 static int landscape_run(lua_State *L, int steady)
 {
     static const char *const methods[] = {"explicit", "implicit", "direct", "auto", NULL};
-    static const char *const other[] = {"method", "record", "netcdf", "fields", "progress", NULL};
+    static const char *const other[] = {"method", "record", "netcdf", "fields", "float32",
+                                        "progress", NULL};
     const char *fn = steady ? "landscape:run_to_steady" : "landscape:run";
     lua_ls *u = check_ls(L, 1);
     dfle_landscape_run_opts o;
@@ -272,52 +223,8 @@ static int landscape_run(lua_State *L, int steady)
     }
     lua_settop(L, 2);
     /* Records into NetCDF: record = {t, ...} [yr], netcdf = path,
-     * fields = {"z", ...} (default z). */
-    if (lua_istable(L, 2) && lua_getfield(L, 2, "record") != LUA_TNIL) {
-        size_t k;
-        double *times = dfle_lua_check_array(L, 3, "landscape:run: record", &k);
-        const char *path;
-        dfle_nc_var vars[DFLE_LS_NFIELDS];
-        dfle_raster_geo g;
-        const size_t n = dfle_landscape_nx(u->ls) * dfle_landscape_ny(u->ls);
-        o.n_record = k;
-        o.record_times = times;
-        if (lua_getfield(L, 2, "netcdf") != LUA_TSTRING)
-            luaL_error(L, "dfle.%s: 'record' needs 'netcdf', the path of the time series", fn);
-        path = dfle_lua_check_string(L, -1, fn, "netcdf");
-        if (lua_getfield(L, 2, "fields") == LUA_TNIL) {
-            ctx.fields[0] = DFLE_LS_Z;
-            ctx.nf = 1;
-        } else {
-            if (!lua_istable(L, -1))
-                luaL_error(L, "dfle.%s: 'fields' must list 1 to %d field names, got %s", fn,
-                           DFLE_LS_NFIELDS, luaL_typename(L, -1));
-            ctx.nf = lua_rawlen(L, -1);
-            if (ctx.nf == 0 || ctx.nf > DFLE_LS_NFIELDS)
-                luaL_error(L, "dfle.%s: 'fields' must list 1 to %d field names", fn,
-                           DFLE_LS_NFIELDS);
-            for (size_t j = 0; j < ctx.nf; j++) {
-                lua_rawgeti(L, -1, (lua_Integer)j + 1);
-                ctx.fields[j] = field_id(L, -1, fn);
-                lua_pop(L, 1);
-            }
-        }
-        for (size_t j = 0; j < ctx.nf; j++) {
-            vars[j].name = dfle_landscape_field_name(ctx.fields[j]);
-            vars[j].units = dfle_landscape_field_unit(ctx.fields[j]);
-            if (strcmp(vars[j].units, "-") == 0)
-                vars[j].units = "1";
-            vars[j].long_name = dfle_landscape_field_long_name(ctx.fields[j]);
-            vars[j].standard_name = dfle_landscape_field_standard_name(ctx.fields[j]);
-        }
-        ctx.buf = lua_newuserdatauv(L, ctx.nf * n * sizeof(double), 0);
-        geo_of(u, &g);
-        if (dfle_nc_create(path, dfle_landscape_nx(u->ls), dfle_landscape_ny(u->ls), &g, ctx.nf,
-                           vars, "dfle landscape", &ctx.nc, &err) != DFLE_OK)
-            return dfle_lua_raise(L, &err);
-        o.on_record = record_nc;
-        o.on_record_ud = &ctx;
-    }
+     * fields = {"z", ...} (default z), float32 = true. */
+    dfle_lua_ls_series_open(L, u, 2, fn, &o, &ctx.series);
     ctx.prog = dfle_lua_get_progress(L);
     if (lua_istable(L, 2) && lua_getfield(L, 2, "progress") != LUA_TNIL && !lua_toboolean(L, -1))
         ctx.prog = NULL;
@@ -328,7 +235,7 @@ static int landscape_run(lua_State *L, int steady)
         o.progress_ud = &ctx;
     }
     if (dfle_lua_interrupted(L)) {
-        dfle_nc_abort(ctx.nc);
+        dfle_lua_ls_series_abort(&ctx.series);
         dfle_lua_check_interrupt(L, fn);
     }
     o.interrupt = dfle_lua_get_interrupt(L);
@@ -337,14 +244,12 @@ static int landscape_run(lua_State *L, int steady)
     dfle_lua_end_use(L, 1);
     if (ctx.prog != NULL && ctx.prog->finish != NULL)
         ctx.prog->finish(ctx.prog->ud);
-    if (ctx.nc != NULL) {
-        if (st != DFLE_OK)
-            dfle_nc_abort(ctx.nc); /* nothing half-written */
-        else if (dfle_nc_close(ctx.nc, &err) != DFLE_OK)
-            return dfle_lua_raise(L, &err);
-    }
-    if (st != DFLE_OK)
+    if (st != DFLE_OK) {
+        dfle_lua_ls_series_abort(&ctx.series); /* nothing half-written */
         return dfle_lua_ls_raise(L, u, &err);
+    }
+    if (dfle_lua_ls_series_close(L, &ctx.series, &res, &err) != DFLE_OK)
+        return dfle_lua_raise(L, &err);
     if (res.reason == DFLE_STOP_INTERRUPTED)
         dfle_lua_set_interrupt_note(L, "%s stopped at t = %f yr and kept its state (reason "
                                        "\"interrupted\")", fn, dfle_landscape_time(u->ls));
@@ -369,47 +274,6 @@ static int landscape_run(lua_State *L, int steady)
 
 static int l_run(lua_State *L) { return landscape_run(L, 0); }
 static int l_run_to_steady(lua_State *L) { return landscape_run(L, 1); }
-
-/* ls:write_geotiff(path [, fields]) : one band per field (default z). */
-static int l_write_geotiff(lua_State *L)
-{
-    lua_ls *u = check_ls(L, 1);
-    const char *path = dfle_lua_check_string(L, 2, "landscape:write_geotiff", "the path");
-    const size_t n = dfle_landscape_nx(u->ls) * dfle_landscape_ny(u->ls);
-    int fields[DFLE_LS_NFIELDS];
-    const double *bands[DFLE_LS_NFIELDS];
-    const char *names[DFLE_LS_NFIELDS];
-    size_t nf = 0;
-    dfle_raster_geo g;
-    dfle_error err;
-
-    lua_settop(L, 3);
-    if (lua_isnil(L, 3)) {
-        fields[nf++] = DFLE_LS_Z;
-    } else if (lua_type(L, 3) == LUA_TSTRING) {
-        fields[nf++] = field_id(L, 3, "landscape:write_geotiff");
-    } else {
-        luaL_checktype(L, 3, LUA_TTABLE);
-        for (size_t k = 1; k <= lua_rawlen(L, 3) && nf < DFLE_LS_NFIELDS; k++) {
-            lua_rawgeti(L, 3, (lua_Integer)k);
-            fields[nf++] = field_id(L, -1, "landscape:write_geotiff");
-            lua_pop(L, 1);
-        }
-        if (nf == 0)
-            luaL_error(L, "dfle.landscape:write_geotiff: no fields to write");
-    }
-    for (size_t k = 0; k < nf; k++) {
-        bands[k] = get_field(L, fields[k], "dfle.landscape:write_geotiff");
-        names[k] = dfle_landscape_field_name(fields[k]);
-    }
-    (void)n;
-    geo_of(u, &g);
-    if (dfle_raster_write_geotiff(path, dfle_landscape_nx(u->ls), dfle_landscape_ny(u->ls), &g,
-                                  nf, bands, names, &err) != DFLE_OK)
-        return dfle_lua_raise(L, &err);
-    lua_settop(L, 1);
-    return 1;
-}
 
 /* ls:plot(path [, { title =, channels = true, reach = true }]) */
 static int l_plot(lua_State *L)
@@ -487,6 +351,8 @@ static int l_dem(lua_State *L)
                      &g, &dem, &err) != DFLE_OK)
         return dfle_lua_raise(L, &err);
     d->ptr = dem;
+    if (u->crs != NULL && dfle_dem_set_crs(dem, u->crs, &err) != DFLE_OK) /* the same place */
+        return dfle_lua_raise(L, &err);
     return 1;
 }
 
@@ -556,12 +422,19 @@ static void release(lua_State *L, int idx)
     u->crs = NULL;
 }
 
+int dfle_lua_ls_field_id(lua_State *L, int idx, const char *fn) { return field_id(L, idx, fn); }
+
+double *dfle_lua_ls_get_field(lua_State *L, int field, const char *what)
+{
+    return get_field(L, field, what);
+}
+
 void dfle_lua_open_landscape(lua_State *L)
 {
     static const luaL_Reg methods[] = {
         {"run", l_run}, {"run_to_steady", l_run_to_steady}, {"step", l_step},
-        {"get", l_get}, {"fields", l_fields}, {"set_z", l_set_z},
-        {"write_geotiff", l_write_geotiff}, {"plot", l_plot}, {"slope_area", l_slope_area},
+        {"get", l_get}, {"fields", l_fields}, {"set_z", dfle_lua_ls_set_z},
+        {"write_geotiff", dfle_lua_ls_write_geotiff}, {"plot", l_plot}, {"slope_area", l_slope_area},
         {"dem", l_dem}, {NULL, NULL}};
     static const dfle_lua_type type = {
         .name = DFLE_LUA_LANDSCAPE, .free = ls_free, .describe = describe, .methods = methods,

@@ -11,6 +11,8 @@
 #include "lua/core/dfle_lua.h"
 
 #include "dfle/landscape.h"
+#include "dfle/raster.h"
+#include "dfle/record.h"
 
 #define DFLE_LUA_LANDSCAPE "dfle.landscape"
 
@@ -40,9 +42,40 @@ typedef struct lua_ls {
     char cb_err[512]; /* a callback's failure */
 } lua_ls;
 
+/* A run's NetCDF time series (lua_landscape_files.c). */
+typedef struct lua_ls_series {
+    lua_ls *u;
+    dfle_nc *nc;          /* NULL: nothing recorded                  */
+    int fields[DFLE_LS_NFIELDS];
+    size_t nf;
+    double *buf;          /* nf * n values (a userdata on the stack) */
+    dfle_record *rec;     /* provenance (a userdata on the stack)    */
+    dfle_nc **box;        /* nc, held for __gc (a userdata on the stack) */
+    const char *path;
+} lua_ls_series;
+
 /* dfle.landscape{...} -> a landscape (lua_landscape_new.c). */
 int dfle_lua_landscape_new(lua_State *L);
 /* Raise err, preferring a callback's own message (lua_landscape.c). */
 int dfle_lua_ls_raise(lua_State *L, lua_ls *u, const dfle_error *err);
+/* The field named at idx (raises listing the fields), and its nx * ny
+ * values in a scratch userdata left on the stack (lua_landscape.c). */
+int dfle_lua_ls_field_id(lua_State *L, int idx, const char *fn);
+double *dfle_lua_ls_get_field(lua_State *L, int field, const char *what);
+
+/* lua_landscape_files.c: the landscape's record (what it runs, with the
+ * params of components written in Lua); a run's time series from its
+ * options record =, netcdf =, fields =, float32 = at index opts (sets
+ * o's record times and callback; leaves userdata on the stack); its
+ * close after a run that went well (how it ended goes into the file),
+ * or its abort; ls:write_geotiff and ls:set_z. */
+void dfle_lua_record_landscape(lua_State *L, dfle_record *rec, int idx);
+void dfle_lua_ls_series_open(lua_State *L, lua_ls *u, int opts, const char *fn,
+                             dfle_landscape_run_opts *o, lua_ls_series *s);
+int dfle_lua_ls_series_close(lua_State *L, lua_ls_series *s, const dfle_landscape_result *res,
+                             dfle_error *err);
+void dfle_lua_ls_series_abort(lua_ls_series *s);
+int dfle_lua_ls_write_geotiff(lua_State *L);
+int dfle_lua_ls_set_z(lua_State *L);
 
 #endif

@@ -17,6 +17,7 @@
 #include <stdlib.h>
 #include <string.h>
 
+#include "dfle/crs.h"
 #include "dfle/dem.h"
 #include "dfle/raster.h"
 
@@ -275,6 +276,25 @@ static double *catchment(lua_State *L, dfle_dem *dem, double E, double N, size_t
     return z;
 }
 
+/* crs = "EPSG:32611" (any CRS GDAL reads) for a synthetic grid: where
+ * its metres lie, kept as WKT (user value UV_CRS) for every file. */
+static void set_crs(lua_State *L, lua_ls *u, int self)
+{
+    char *wkt;
+    dfle_error err;
+    if (lua_getfield(L, 1, "crs") == LUA_TNIL) {
+        lua_pop(L, 1);
+        return;
+    }
+    wkt = lua_newuserdatauv(L, DFLE_CRS_WKT_MAX, 0); /* scratch: nothing to free on a raise */
+    if (dfle_crs_from_text(dfle_lua_check_string(L, -2, "landscape", "crs"), "landscape: crs",
+                           1, wkt, DFLE_CRS_WKT_MAX, NULL, &err) != DFLE_OK)
+        dfle_lua_raise(L, &err);
+    u->crs = (char *)lua_pushstring(L, wkt);
+    lua_setiuservalue(L, self, UV_CRS);
+    lua_pop(L, 2);
+}
+
 int dfle_lua_landscape_new(lua_State *L)
 {
     dfle_landscape_opts o;
@@ -296,7 +316,7 @@ int dfle_lua_landscape_new(lua_State *L)
         static const char *const others[] = {"z", "noise", "dem", "outlet", "outlets", "edges",
                                              "nodata", "fluvial", "router", "law", "combine",
                                              "hillslope", "cap_channels", "U", "K", "k_e", "k_df",
-                                             NULL};
+                                             "crs", NULL};
         dfle_lua_read_params(L, 1, "landscape", p, sizeof p / sizeof p[0], others);
     }
     /* The userdata first (valid and empty), so refs made below are
@@ -316,7 +336,7 @@ int dfle_lua_landscape_new(lua_State *L)
         if (dfle_dem_check_metric(dem, "a landscape", &err) != DFLE_OK)
             return dfle_lua_raise(L, &err);
         for (const char *const *k = (const char *const[]){"nx", "ny", "dx", "dy", "z", "noise",
-                                                          "x0", "y0", NULL};
+                                                          "x0", "y0", "crs", NULL};
              *k != NULL; k++) {
             if (lua_getfield(L, 1, *k) != LUA_TNIL)
                 luaL_error(L, "dfle.landscape: '%s' comes from the DEM; do not give it with "
@@ -340,6 +360,7 @@ int dfle_lua_landscape_new(lua_State *L)
     } else {
         if (nx == 0 || ny == 0)
             luaL_error(L, "dfle.landscape: give the grid: 'nx' and 'ny' (and 'dx'), or 'dem'");
+        set_crs(L, u, base);
     }
     lua_pop(L, 1);
     dfle_lua_check_whole(L, nx, "landscape", "nx", 1, 1e8);

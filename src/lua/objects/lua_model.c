@@ -290,14 +290,16 @@ static void remember_run(lua_State *L, int steady, const dfle_run_opts *o, doubl
 }
 
 /* Shared by run_to_steady and run: `steady` selects the defaults. */
-/* m:run{ record = {...}, netcdf = path }: the recorded states z(t, x) as
- * a CF NetCDF file (netcdf.h), with the run's provenance. */
+/* m:run{ record = {...}, netcdf = path [, float32 = true] }: the recorded
+ * states z(t, x) as a CF NetCDF file (netcdf.h), with the model's record
+ * (every parameter, the run) as its global attributes. */
 static void write_records(lua_State *L, dfle_model *m, const char *path, const dfle_run_opts *o,
-                          const dfle_run_result *res)
+                          const dfle_run_result *res, int float32)
 {
-    static const dfle_nc_var z_var = {"z", "m", "elevation above the outlet", NULL};
+    static const dfle_nc_var z_var = {"z", "m", "elevation above the outlet", NULL, NULL};
     const double *x, *A, *values[1];
-    dfle_nc_attr attrs[3];
+    dfle_nc_opts no;
+    dfle_record *rec;
     dfle_error err;
     if ((x = dfle_model_field(m, DFLE_FIELD_X, &err)) == NULL ||
         (A = dfle_model_field(m, DFLE_FIELD_A, &err)) == NULL)
@@ -305,13 +307,18 @@ static void write_records(lua_State *L, dfle_model *m, const char *path, const d
     if (res->n_recorded == 0)
         luaL_error(L, "dfle.model:run: no record time was reached; '%s' not written", path);
     values[0] = o->record_z;
-    attrs[0] = (dfle_nc_attr){"title", "dfle: a channel profile's recorded states (m:run)"};
-    attrs[1] = (dfle_nc_attr){"history", dfle_lua_push_history(L)};
-    attrs[2] = (dfle_nc_attr){"U_m_per_yr", lua_pushfstring(L, "%f", dfle_model_U(m))};
+    dfle_nc_opts_default(&no);
+    no.title = "dfle: a channel profile's recorded states (m:run)";
+    no.float32 = float32;
+    rec = dfle_lua_push_record(L, "the recorded states z(time, x) of a channel profile, x "
+                                  "from the head");
+    dfle_lua_record_model(L, rec, 1);
+    no.provenance = rec;
     if (dfle_nc_write_profiles(path, dfle_model_size(m), x, A, res->n_recorded, o->record_times,
-                               1, &z_var, values, 3, attrs, &err) != DFLE_OK)
+                               1, &z_var, values, &no, &err) != DFLE_OK)
         dfle_lua_raise(L, &err);
-    lua_pop(L, 2);
+    lua_pop(L, 1);
+    dfle_lua_note_file(L, path);
     dfle_lua_note(L, DFLE_LUA_DETAIL, "wrote %s (%zu states of %zu nodes)", path, res->n_recorded,
                   dfle_model_size(m));
 }
@@ -342,7 +349,8 @@ static double clock_seconds(void)
 static int model_run(lua_State *L, int steady)
 {
     static const char *const steady_keys[] = {"progress", "method", NULL};
-    static const char *const run_keys[] = {"progress", "method", "record", "netcdf", NULL};
+    static const char *const run_keys[] = {"progress", "method", "record", "netcdf", "float32",
+                                           NULL};
     static const char *const methods[] = {"explicit", "implicit", "direct", "auto", NULL};
     dfle_model *m = dfle_lua_check_model(L, 1);
     const char *fn = steady ? "model:run_to_steady" : "model:run";
@@ -352,6 +360,7 @@ static int model_run(lua_State *L, int steady)
     double max_steps, years = -1;
     const dfle_lua_progress *prog = dfle_lua_get_progress(L);
     const char *netcdf = NULL;
+    int float32 = 0;
     int keep;
     double wall;
     int st;
@@ -433,6 +442,12 @@ static int model_run(lua_State *L, int steady)
                           "times too");
     }
     lua_settop(L, keep);
+    if (lua_istable(L, 2) && lua_getfield(L, 2, "float32") != LUA_TNIL) {
+        if (!lua_isboolean(L, -1) || netcdf == NULL)
+            luaL_error(L, "dfle.%s: parameter 'float32' (true or false) goes with 'netcdf'", fn);
+        float32 = lua_toboolean(L, -1);
+    }
+    lua_settop(L, keep);
     if (lua_istable(L, 2) && lua_getfield(L, 2, "progress") != LUA_TNIL) {
         if (!lua_isboolean(L, -1))
             luaL_error(L, "dfle.%s: parameter 'progress' must be a boolean", fn);
@@ -489,7 +504,7 @@ static int model_run(lua_State *L, int steady)
         lua_setfield(L, -2, "records");
     }
     if (netcdf != NULL)
-        write_records(L, m, netcdf, &o, &res);
+        write_records(L, m, netcdf, &o, &res, float32);
     return 1;
 }
 
@@ -548,25 +563,13 @@ static const struct { const char *key, *unit; } run_opts[] = {
 
 void dfle_lua_record_model(lua_State *L, dfle_record *rec, int idx)
 {
-    static const char *const sections[] = {"channel", "fluvial", "router", "law"};
     dfle_model *m = dfle_lua_check_model(L, idx);
     int top = lua_gettop(L);
 
     idx = lua_absindex(L, idx);
     dfle_model_describe(m, rec);
     /* Components written in Lua keep their params in Lua. */
-    for (int k = UV_ROUTER; k <= UV_LAW; k++) {
-        if (lua_getiuservalue(L, idx, k) == LUA_TUSERDATA) {
-            dfle_lua_object *o = lua_touserdata(L, -1);
-            size_t n = k == UV_ROUTER ? dfle_router_params(o->ptr, NULL, 0)
-                                      : dfle_law_params(o->ptr, NULL, 0);
-            if (n == (size_t)-1) {
-                dfle_record_section(rec, sections[k - 1], NULL);
-                dfle_lua_record_own_params(L, rec, lua_gettop(L));
-            }
-        }
-        lua_settop(L, top);
-    }
+    dfle_lua_record_lua_parts(L, rec, idx, UV_ROUTER, UV_LAW);
     if (lua_getiuservalue(L, idx, UV_U) == LUA_TFUNCTION) {
         dfle_record_section(rec, "model", NULL);
         dfle_record_bool(rec, "U_of_t", 1);
