@@ -216,6 +216,12 @@ figures: all
 MPI_CLI   := $(BUILD)/dfle-mpi
 MPI_OBJ   := $(BUILD)/obj-mpi/src/cli/main.o $(patsubst %.c,$(BUILD)/obj-mpi/%.o,$(wildcard src/mpi/*.c))
 
+# The MPI driver is compiled without Lua's headers (it serves any
+# evaluator); only the command, which plugs the Lua one in, sees them.
+$(BUILD)/obj-mpi/src/mpi/%.o: src/mpi/%.c
+	@mkdir -p $(dir $@)
+	$(MPICC) $(ALL_CFLAGS) -DDFLE_MPI -Isrc -MMD -MP -c $< -o $@
+
 $(BUILD)/obj-mpi/%.o: %.c
 	@mkdir -p $(dir $@)
 	$(MPICC) $(ALL_CFLAGS) -DDFLE_MPI -Isrc $(LUA_CFLAGS) $(GSL_CFLAGS) -MMD -MP -c $< -o $@

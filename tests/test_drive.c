@@ -1,6 +1,6 @@
 /*
  * test_drive.c - the driver layer without Lua: the worker pool
- * (pool.h), dfle_ensemble_run and dfle_invert_run with evaluators
+ * (pool.h), dfle_ensemble_run and dfle_invert_new/run with evaluators
  * written in C on a small model.  Checked: the same results for 1, 2
  * and 3 workers, with and without the calling thread working; files
  * byte-identical for any worker count, after a resume and after an
@@ -614,11 +614,22 @@ static void make_data(void)
     (void)ev;
 }
 
+/* new + run: the status, the result (a copy of the object's) in *out. */
+static int invert(const dfle_invert_opts *o, const dfle_evaluator *ev, dfle_invert **out,
+                  dfle_error *err)
+{
+    int st = dfle_invert_new(o, out, err);
+    if (st == DFLE_OK)
+        st = dfle_invert_run(*out, ev, err);
+    return st;
+}
+
 static void invert_the_same_for_any_workers_and_resumes(void **state)
 {
     dfle_evaluator ev = {&inv_ops, NULL, NULL};
     dfle_invert_opts o;
-    dfle_invert_result *r = NULL, *r2 = NULL;
+    dfle_invert *inv = NULL, *inv2 = NULL;
+    const dfle_invert_result *r, *r2;
     dfle_error err;
     char *ref, *got, name[32], *cut;
     size_t len;
@@ -628,7 +639,8 @@ static void invert_the_same_for_any_workers_and_resumes(void **state)
     INTERRUPT = 0;
     INTERRUPT_AFTER = 0;
     inv_opts(&o, "ref.csv", 30, 1);
-    assert_ok(dfle_invert_run(&o, &ev, &r, &err), &err);
+    assert_ok(invert(&o, &ev, &inv, &err), &err);
+    r = dfle_invert_result_of(inv);
     assert_int_equal(r->have, 31);
     assert_int_equal(r->ran, 30);
     assert_true(r->complete);
@@ -646,29 +658,33 @@ static void invert_the_same_for_any_workers_and_resumes(void **state)
                                 "U,k_df,sigma,log_post,log_like,proposal\n1,0,1,"));
     /* the same chain in memory */
     inv_opts(&o, NULL, 30, 2);
-    assert_ok(dfle_invert_run(&o, &ev, &r2, &err), &err);
+    assert_ok(invert(&o, &ev, &inv2, &err), &err);
+    r2 = dfle_invert_result_of(inv2);
     assert_memory_equal(r2->x, r->x, 31 * 8 * 3 * sizeof *r->x);
     assert_memory_equal(r2->log_post, r->log_post, 31 * 8 * sizeof *r->log_post);
     assert_memory_equal(r2->proposal, r->proposal, 31 * 8);
-    dfle_invert_result_free(r2);
+    dfle_invert_free(inv2);
     for (int w = 2; w <= 3; w++) {
         snprintf(name, sizeof name, "w%d.csv", w);
         inv_opts(&o, name, 30, w);
-        assert_ok(dfle_invert_run(&o, &ev, &r2, &err), &err);
-        dfle_invert_result_free(r2);
+        assert_ok(invert(&o, &ev, &inv2, &err), &err);
+    r2 = dfle_invert_result_of(inv2);
+        dfle_invert_free(inv2);
         got = slurp(name);
         assert_string_equal(got, ref);
         free(got);
     }
     /* extended: 12 steps, then to 30 on 3 workers */
     inv_opts(&o, "ext.csv", 12, 2);
-    assert_ok(dfle_invert_run(&o, &ev, &r2, &err), &err);
-    dfle_invert_result_free(r2);
+    assert_ok(invert(&o, &ev, &inv2, &err), &err);
+    r2 = dfle_invert_result_of(inv2);
+    dfle_invert_free(inv2);
     inv_opts(&o, "ext.csv", 30, 3);
-    assert_ok(dfle_invert_run(&o, &ev, &r2, &err), &err);
+    assert_ok(invert(&o, &ev, &inv2, &err), &err);
+    r2 = dfle_invert_result_of(inv2);
     assert_int_equal(r2->ran, 18);
     assert_close(r2->summary[0].median, r->summary[0].median, 0, 0);
-    dfle_invert_result_free(r2);
+    dfle_invert_free(inv2);
     got = slurp("ext.csv");
     assert_string_equal(got, ref);
     free(got);
@@ -681,9 +697,10 @@ static void invert_the_same_for_any_workers_and_resumes(void **state)
     fclose(fp);
     free(cut);
     inv_opts(&o, "cut.csv", 30, 2);
-    assert_ok(dfle_invert_run(&o, &ev, &r2, &err), &err);
+    assert_ok(invert(&o, &ev, &inv2, &err), &err);
+    r2 = dfle_invert_result_of(inv2);
     assert_true(r2->ran >= 1 && r2->ran <= 2);
-    dfle_invert_result_free(r2);
+    dfle_invert_free(inv2);
     got = slurp("cut.csv");
     assert_string_equal(got, ref);
     free(got);
@@ -695,7 +712,8 @@ static void invert_the_same_for_any_workers_and_resumes(void **state)
         INTERRUPT = 0;
         atomic_store(&EVALS, 0);
         INTERRUPT_AFTER = 60;
-        assert_int_equal(dfle_invert_run(&o, &ev, &r2, &err), DFLE_ECANCELED);
+        assert_int_equal(invert(&o, &ev, &inv2, &err), DFLE_ECANCELED);
+        r2 = dfle_invert_result_of(inv2);
         assert_true(r2->interrupted);
         assert_true(r2->have >= 2 && r2->have < 31);
         assert_msg_contains(err.msg, "running again resumes it");
@@ -704,11 +722,12 @@ static void invert_the_same_for_any_workers_and_resumes(void **state)
             rows += c[1] >= '1' && c[1] <= '9';
         assert_int_equal(rows, r2->have * 8);
         free(got);
-        dfle_invert_result_free(r2);
+        dfle_invert_free(inv2);
         INTERRUPT = 0;
         INTERRUPT_AFTER = 0;
-        assert_ok(dfle_invert_run(&o, &ev, &r2, &err), &err);
-        dfle_invert_result_free(r2);
+        assert_ok(invert(&o, &ev, &inv2, &err), &err);
+    r2 = dfle_invert_result_of(inv2);
+        dfle_invert_free(inv2);
         got = slurp(name);
         assert_string_equal(got, ref);
         free(got);
@@ -716,16 +735,17 @@ static void invert_the_same_for_any_workers_and_resumes(void **state)
     /* a finished chain read back: the same result, nothing run */
     inv_opts(&o, "ref.csv", 30, 1);
     o.read_only = 1;
-    assert_ok(dfle_invert_run(&o, NULL, &r2, &err), &err);
+    assert_ok(invert(&o, NULL, &inv2, &err), &err);
+    r2 = dfle_invert_result_of(inv2);
     assert_int_equal(r2->ran, 0);
     assert_memory_equal(r2->x, r->x, 31 * 8 * 3 * sizeof *r->x);
     assert_memory_equal(r2->tally, r->tally, sizeof r->tally);
-    dfle_invert_result_free(r2);
+    dfle_invert_free(inv2);
     /* another inversion's chain is refused, naming the difference */
     inv_opts(&o, "ref.csv", 30, 1);
     o.seed = 10;
-    assert_int_equal(dfle_invert_run(&o, &ev, &r2, &err), DFLE_EINVAL);
-    assert_null(r2);
+    assert_int_equal(dfle_invert_new(&o, &inv2, &err), DFLE_EINVAL);
+    assert_null(inv2);
     assert_msg_contains(err.msg, "holds another inversion's chain (seed=9 in the file, seed=10 "
                                  "here)");
     /* options checked */
@@ -738,7 +758,7 @@ static void invert_the_same_for_any_workers_and_resumes(void **state)
     o.burn = 30;
     assert_int_equal(dfle_invert_check(&o, &err), DFLE_EINVAL);
     assert_msg_contains(err.msg, "burn (30) must be less than steps (30)");
-    dfle_invert_result_free(r);
+    dfle_invert_free(inv);
     free(ref);
 }
 

@@ -79,8 +79,8 @@ typedef struct dfle_invert_opts {
      * on): what else makes two inversions the same, the data, the model
      * and the likelihood, so that a resume refuses another one's file. */
     const char *identity;
-    int workers;               /* evaluators (>= 1): the calling thread and
-                                * workers - 1 threads                      */
+    int workers;               /* evaluators: the calling thread and
+                                * workers - 1 threads (0: 1)               */
     const volatile sig_atomic_t *interrupt;
     /* Optional: evaluations done/total of this call (failed among them),
      * after each step, from the calling thread. */
@@ -122,7 +122,7 @@ typedef struct dfle_invert_result {
     char **warnings;           /* what to be careful of, sentences         */
 } dfle_invert_result;
 
-/* The options checked (and defaults resolved) as dfle_invert_run does,
+/* The options checked (and defaults resolved) as dfle_invert_new does,
  * without running; a message naming what is wrong. */
 int dfle_invert_check(const dfle_invert_opts *o, dfle_error *err);
 
@@ -130,14 +130,28 @@ int dfle_invert_check(const dfle_invert_opts *o, dfle_error *err);
 int dfle_invert_identity(const dfle_invert_opts *o, char **meta, char **header,
                          dfle_error *err);
 
-/* Run (or resume, or extend) the chain to opts->steps on opts->workers
- * evaluators of ev, then summarise it; *out receives the result in
- * every case it can be (free it with dfle_invert_result_free).
- * DFLE_OK; DFLE_ECANCELED when interrupted (the chain, and the file,
- * hold the whole steps done; running again resumes); or the error. */
-int dfle_invert_run(const dfle_invert_opts *opts, const dfle_evaluator *ev,
-                    dfle_invert_result **out, dfle_error *err);
-void dfle_invert_result_free(dfle_invert_result *r); /* accepts NULL */
+/* An inversion: its options, its chain, its file. */
+typedef struct dfle_invert dfle_invert;
+
+/* Check the options, make room for the chain, and open its file: a new
+ * one, or one of this inversion to resume or extend (another
+ * inversion's is refused, naming the first difference); with
+ * opts->read_only, read a finished chain and summarise it.  opts is
+ * copied, its arrays and texts must outlive the object. */
+int dfle_invert_new(const dfle_invert_opts *opts, dfle_invert **out, dfle_error *err);
+
+/* Run the chain from where it is to opts->steps on opts->workers
+ * evaluators of ev, close the file (sorted), and summarise it.
+ * DFLE_OK (at once when the chain is complete); DFLE_ECANCELED when
+ * interrupted (the chain, and the file, hold the whole steps done;
+ * running again resumes); or the error, the rows written kept. */
+int dfle_invert_run(dfle_invert *inv, const dfle_evaluator *ev, dfle_error *err);
+
+/* The chain and its summaries as they are now.  Valid until the next
+ * dfle_invert_run or dfle_invert_free. */
+const dfle_invert_result *dfle_invert_result_of(const dfle_invert *inv);
+
+void dfle_invert_free(dfle_invert *inv); /* closes the file; accepts NULL */
 
 #ifdef __cplusplus
 }

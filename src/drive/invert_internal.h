@@ -13,13 +13,16 @@
 #include "drive/drive_internal.h"
 
 /* A run: the options with their defaults resolved, and the result it
- * fills. */
+ * fills (dfle_invert, invert_run.h). */
 typedef struct inv_run {
     dfle_invert_opts o;     /* walkers and burn resolved               */
     dfle_invert_result *r;
     dfle_ens_file *file;    /* the chain file, open for appending      */
     dfle_text row;          /* one formatted row                       */
 } inv_run;
+struct dfle_invert {
+    inv_run R;
+};
 
 /* invert_run.c: the options checked, defaults resolved into *res. */
 int inv_resolve(const dfle_invert_opts *o, dfle_invert_opts *res, dfle_error *err);

@@ -74,9 +74,11 @@ int inv_resolve(const dfle_invert_opts *o, dfle_invert_opts *r, dfle_error *err)
     if (!(o->a > 1))
         return dfle_error_set(err, DFLE_EINVAL, "invert: a (the stretch scale) must be > 1 (got %g)",
                               o->a);
-    if (o->workers < 1)
+    if (o->workers < 0)
         return dfle_error_set(err, DFLE_EINVAL, "invert: workers must be >= 1 (got %d)",
                               o->workers);
+    if (r->workers == 0)
+        r->workers = 1;
     if (o->read_only && o->out == NULL)
         return dfle_error_set(err, DFLE_EINVAL, "invert: reading a chain needs its file ('out')");
     return DFLE_OK;
@@ -427,20 +429,31 @@ static int sample(inv_run *R, const dfle_evaluator *ev, dfle_error *err)
     return st;
 }
 
-void dfle_invert_result_free(dfle_invert_result *r)
+/* Drop the summaries of an earlier call (a chain run further). */
+static void unsummarize(dfle_invert_result *r)
 {
-    if (r == NULL)
-        return;
-    free(r->x);
-    free(r->log_post);
-    free(r->log_like);
-    free(r->proposal);
     free(r->summary);
     free(r->tau);
     free(r->acceptance_walkers);
     for (size_t k = 0; k < r->nwarnings; k++)
         free(r->warnings[k]);
     free(r->warnings);
+    r->summary = NULL;
+    r->tau = r->acceptance_walkers = NULL;
+    r->warnings = NULL;
+    r->nwarnings = 0;
+    r->complete = 0;
+}
+
+static void result_free(dfle_invert_result *r)
+{
+    if (r == NULL)
+        return;
+    unsummarize(r);
+    free(r->x);
+    free(r->log_post);
+    free(r->log_like);
+    free(r->proposal);
     free(r);
 }
 
@@ -460,61 +473,99 @@ static int new_result(const dfle_invert_opts *o, dfle_invert_result **out, dfle_
         r->proposal = zalloc(rows, 1, &ok);
     }
     if (!ok) {
-        dfle_invert_result_free(r);
+        result_free(r);
         return dfle_error_set(err, DFLE_ENOMEM, "invert: out of memory for the chain");
     }
     *out = r;
     return DFLE_OK;
 }
 
-int dfle_invert_run(const dfle_invert_opts *opts, const dfle_evaluator *ev,
-                    dfle_invert_result **out, dfle_error *err)
+void dfle_invert_free(dfle_invert *inv)
 {
-    inv_run R;
-    size_t have0;
+    if (inv == NULL)
+        return;
+    dfle_ens_file_close(inv->R.file, 0, NULL);
+    dfle_text_free(&inv->R.row);
+    result_free(inv->R.r);
+    free(inv);
+}
+
+const dfle_invert_result *dfle_invert_result_of(const dfle_invert *inv) { return inv->R.r; }
+
+int dfle_invert_new(const dfle_invert_opts *opts, dfle_invert **out, dfle_error *err)
+{
+    dfle_invert *inv;
+    inv_run *R;
     int st;
 
     *out = NULL;
-    memset(&R, 0, sizeof R);
-    if ((st = inv_resolve(opts, &R.o, err)) != DFLE_OK ||
-        (!R.o.read_only && (st = dfle_evaluator_check(ev, err)) != DFLE_OK) ||
-        (st = new_result(&R.o, &R.r, err)) != DFLE_OK)
-        return st;
-    if (R.o.read_only) {
+    inv = calloc(1, sizeof *inv);
+    if (inv == NULL)
+        return dfle_error_set(err, DFLE_ENOMEM, "invert: out of memory");
+    R = &inv->R;
+    if ((st = inv_resolve(opts, &R->o, err)) != DFLE_OK ||
+        (st = new_result(&R->o, &R->r, err)) != DFLE_OK)
+        goto fail;
+    if (R->o.read_only) {
         /* A chain finished before (a worker replaying a script passes it). */
-        st = inv_read_chain(&R, R.o.out, err);
-        if (st == DFLE_OK && R.r->have < R.r->steps + 1)
-            st = dfle_error_set(err, DFLE_EINVAL, "invert: %s is not a finished chain", R.o.out);
-        goto done;
+        if ((st = inv_read_chain(R, R->o.out, err)) != DFLE_OK)
+            goto fail;
+        if (R->r->have < R->r->steps + 1) {
+            st = dfle_error_set(err, DFLE_EINVAL, "invert: %s is not a finished chain", R->o.out);
+            goto fail;
+        }
+        if (inv_summarize(R->r) != 0) {
+            st = dfle_error_set(err, DFLE_ENOMEM, "invert: out of memory for the summaries");
+            goto fail;
+        }
+    } else if (R->o.out != NULL && (st = inv_open_chain(R, err)) != DFLE_OK) {
+        goto fail;
     }
-    if (R.o.out != NULL && (st = inv_open_chain(&R, err)) != DFLE_OK)
-        goto done;
-    have0 = R.r->have;
-    if (R.o.steps > 0 && R.r->have < R.o.steps + 1) {
-        st = sample(&R, ev, err);
-        R.r->ran = (R.r->have > 0 ? R.r->have - 1 : 0) - (have0 > 0 ? have0 - 1 : 0);
+    *out = inv;
+    return DFLE_OK;
+fail:
+    dfle_invert_free(inv);
+    return st;
+}
+
+int dfle_invert_run(dfle_invert *inv, const dfle_evaluator *ev, dfle_error *err)
+{
+    inv_run *R = &inv->R;
+    size_t have0 = R->r->have;
+    int st = DFLE_OK;
+
+    if (R->o.read_only)
+        return DFLE_OK;
+    unsummarize(R->r);
+    R->r->ran = 0;
+    R->r->interrupted = 0;
+    if (R->o.steps > 0 && R->r->have < R->o.steps + 1) {
+        if ((st = dfle_evaluator_check(ev, err)) != DFLE_OK)
+            return st;
+        st = sample(R, ev, err);
+        R->r->ran = (R->r->have > 0 ? R->r->have - 1 : 0) - (have0 > 0 ? have0 - 1 : 0);
         if (st == DFLE_ECANCELED) {
-            R.r->interrupted = 1;
+            R->r->interrupted = 1;
             st = dfle_error_set(err, st, "invert: interrupted after step %zu of %zu%s%s%s",
-                                R.r->have > 0 ? R.r->have - 1 : 0, R.o.steps,
-                                R.o.out != NULL ? "; the whole steps are in " : "",
-                                R.o.out != NULL ? R.o.out : "",
-                                R.o.out != NULL ? ", and running again resumes it" : "");
-        } else if (st != DFLE_OK && R.o.out != NULL) {
+                                R->r->have > 0 ? R->r->have - 1 : 0, R->o.steps,
+                                R->o.out != NULL ? "; the whole steps are in " : "",
+                                R->o.out != NULL ? R->o.out : "",
+                                R->o.out != NULL ? ", and running again resumes it" : "");
+        } else if (st != DFLE_OK && R->o.out != NULL) {
             char msg[DFLE_ERROR_MSG_MAX];
             dfle_drive_prefix(err, "invert");
-            snprintf(msg, sizeof msg, "%s", err != NULL ? err->msg : "failed");
+            dfle_drive_copy(msg, sizeof msg, err != NULL ? err->msg : "failed");
             dfle_error_set(err, st, "%s (the rows written are kept; run again to resume)", msg);
         } else if (st != DFLE_OK) {
             dfle_drive_prefix(err, "invert");
         }
     }
-    if (R.file != NULL) {
+    if (R->file != NULL) {
         /* Sorted only when whole: the rows are in order already, and an
          * interrupt's message must not wait for the rewrite. */
         dfle_error e2;
-        int st2 = dfle_ens_file_close(R.file, st == DFLE_OK, &e2);
-        R.file = NULL;
+        int st2 = dfle_ens_file_close(R->file, st == DFLE_OK, &e2);
+        R->file = NULL;
         if (st == DFLE_OK && st2 != DFLE_OK) {
             st = st2;
             if (err != NULL)
@@ -522,15 +573,7 @@ int dfle_invert_run(const dfle_invert_opts *opts, const dfle_evaluator *ev,
             dfle_drive_prefix(err, "invert");
         }
     }
-done:
-    dfle_ens_file_close(R.file, 0, NULL);
-    dfle_text_free(&R.row);
-    if (st == DFLE_OK || st == DFLE_ECANCELED) {
-        if (inv_summarize(R.r) != DFLE_OK && st == DFLE_OK)
-            st = dfle_error_set(err, DFLE_ENOMEM, "invert: out of memory for the summaries");
-        *out = R.r;
-    } else {
-        dfle_invert_result_free(R.r);
-    }
+    if ((st == DFLE_OK || st == DFLE_ECANCELED) && inv_summarize(R->r) != 0 && st == DFLE_OK)
+        st = dfle_error_set(err, DFLE_ENOMEM, "invert: out of memory for the summaries");
     return st;
 }
