@@ -225,7 +225,6 @@ static void geo_of(const lua_ls *u, dfle_raster_geo *g)
 
 static int landscape_run(lua_State *L, int steady)
 {
-    static const char *const methods[] = {"explicit", "implicit", "direct", "auto", NULL};
     static const char *const other[] = {"method", "record", "netcdf", "fields", "progress", NULL};
     const char *fn = steady ? "landscape:run_to_steady" : "landscape:run";
     lua_ls *u = check_ls(L, 1);
@@ -265,7 +264,7 @@ static int landscape_run(lua_State *L, int steady)
     o.stable_steps = (size_t)dfle_lua_check_whole(L, stable, fn, "stable_steps", 0, 1e9);
     o.method = steady ? DFLE_METHOD_AUTO : DFLE_METHOD_IMPLICIT;
     if (lua_istable(L, 2) && lua_getfield(L, 2, "method") != LUA_TNIL) {
-        o.method = dfle_lua_check_option(L, -1, fn, "method", methods);
+        o.method = dfle_lua_check_method(L, -1, fn);
         if (!steady && o.method == DFLE_METHOD_DIRECT)
             luaL_error(L, "dfle.landscape:run: method 'direct' finds steady states only; use "
                           "run_to_steady, or 'implicit' or 'explicit' here");
