@@ -63,21 +63,58 @@ void dfle_lua_push_field_text(lua_State *L, int idx, int quote)
     }
 }
 
-/* The reason of a sample whose Lua code raised the value on top. */
+/* The text of the number at idx without pushing anything (nothing may
+ * raise here): as a field (raw: "%lld", 17 digits, nan, inf), or as
+ * lua_tostring writes it ("%.14g", with ".0" on a whole float). */
+static void number_text(lua_State *L, int idx, int raw, char *buf, size_t cap)
+{
+    double v;
+    if (lua_isinteger(L, idx)) {
+        snprintf(buf, cap, "%lld", (long long)lua_tointeger(L, idx));
+        return;
+    }
+    v = lua_tonumber(L, idx);
+    if (raw && (isnan(v) || isinf(v))) {
+        snprintf(buf, cap, "%s", isnan(v) ? "nan" : v > 0 ? "inf" : "-inf");
+        return;
+    }
+    snprintf(buf, cap, raw ? "%.17g" : LUA_NUMBER_FMT, v);
+    if (!raw && buf[strspn(buf, "-0123456789")] == '\0')
+        strncat(buf, ".0", cap - strlen(buf) - 1);
+}
+
+/* The reason of a sample whose Lua code raised the value on top (called
+ * unprotected: it pushes nothing). */
 static void raised(lua_State *L, const dfle_lua_kind *k, dfle_eval_out *out)
 {
+    char num[64];
     out->status = DFLE_EVAL_ERROR;
-    if (k->raw_numbers && lua_type(L, -1) == LUA_TNUMBER) {
-        dfle_lua_push_field_text(L, -1, 0);
+    if (lua_type(L, -1) == LUA_TNUMBER) {
+        number_text(L, -1, k->raw_numbers, num, sizeof num);
+        dfle_eval_reason(out, "%s", num);
+        if (k->raw_numbers)
+            out->flags |= DFLE_EVAL_REASON_NUMBER;
+    } else if (lua_type(L, -1) == LUA_TSTRING) {
         dfle_eval_reason(out, "%s", lua_tostring(L, -1));
-        out->flags |= DFLE_EVAL_REASON_NUMBER;
-    } else if (k->raw_numbers && lua_type(L, -1) != LUA_TSTRING) {
+    } else if (k->raw_numbers) {
         dfle_eval_reason(out, "(error object is a %s value)", luaL_typename(L, -1));
-    } else if (lua_tostring(L, -1) != NULL) {
-        dfle_eval_reason(out, "%s", lua_tostring(L, -1));
     } else {
         dfle_eval_reason(out, "(error object is not a string)");
     }
+}
+
+/* eval_p(sample, ctx, job): the kind's sample as a parallel call in
+ * progress (calls made inside it are nested), protected by the caller;
+ * the sample's own error is raised again once the count is back. */
+static int eval_p(lua_State *L)
+{
+    int st;
+    dfle_lua_par_depth(L, +1);
+    st = lua_pcall(L, 2, 0, 0);
+    dfle_lua_par_depth(L, -1);
+    if (st != LUA_OK)
+        return lua_error(L);
+    return 0;
 }
 
 static int lua_eval(void *state, size_t index, const double *x, dfle_eval_out *out,
@@ -90,14 +127,14 @@ static int lua_eval(void *state, size_t index, const double *x, dfle_eval_out *o
     dfle_lua_job job = {index, x, out};
     (void)err;
 
-    /* Parallel calls made inside a sample run here, in this state. */
-    dfle_lua_par_depth(L, +1);
+    /* Nothing here may raise (the driver's C frames are below): all of
+     * it runs protected. */
+    lua_pushcfunction(L, eval_p);
     lua_pushcfunction(L, k->sample);
     lua_pushvalue(L, w->ctx);
     lua_pushlightuserdata(L, &job);
-    if (lua_pcall(L, 2, 0, 0) != LUA_OK)
+    if (lua_pcall(L, 3, 0, 0) != LUA_OK)
         raised(L, k, out);
-    dfle_lua_par_depth(L, -1);
     lua_settop(L, top);
     if (k->gc_step) /* keep the collector up with what each run leaves behind */
         lua_gc(L, LUA_GCSTEP, 0);
