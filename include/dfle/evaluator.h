@@ -77,9 +77,10 @@ typedef struct dfle_eval_out {
     double *y;                       /* the outputs                       */
     char reason[DFLE_EVAL_REASON_MAX]; /* why, when status is not OK      */
     unsigned flags;
-    double seconds;                  /* set by the pool after eval: the
-                                      * CPU time [s] of the worker's thread
-                                      * that the call took               */
+    double seconds;                  /* the CPU time [s] of the model the
+                                      * sample ran, if eval measures it
+                                      * (its own part left out); else the
+                                      * pool sets the whole call's        */
 } dfle_eval_out;
 
 /* Set out->reason (printf format), cut to fit. */

@@ -132,9 +132,11 @@ static int work_one(dfle_pool *p, worker *w)
         w->out.y = w->y;
         w->out.reason[0] = '\0';
         w->out.flags = 0;
+        w->out.seconds = -1;
         t0 = thread_cpu();
         st = p->ev->ops->eval(w->state, item, w->x, &w->out, &e);
-        w->out.seconds = thread_cpu() - t0;
+        if (w->out.seconds < 0)
+            w->out.seconds = thread_cpu() - t0;
         if (st == DFLE_OK)
             st = t->done(t->ud, item, &w->out, &e);
     }

@@ -135,6 +135,9 @@ static int sample(lua_State *L)
     lua_getfield(L, 1, "box");
     R = lua_touserdata(L, -1);
     lua_pop(L, 1);
+    /* res.forward_seconds is the forward model's own time: not the
+     * priors, the calls into Lua, the collector (0 if it raises) */
+    out->seconds = 0;
     /* The priors written in Lua (the driver has checked the others'
      * support): all of them, then the forward model only if none is 0. */
     for (size_t j = 0; j < R->d; j++) {
@@ -173,7 +176,11 @@ static int sample(lua_State *L)
     jb.R = R;
     jb.x = jl->x;
     jb.mode = MODE_RESIDUALS;
-    forward(L, 1, &jb);
+    {
+        double t0 = now();
+        forward(L, 1, &jb);
+        out->seconds = now() - t0;
+    }
     if (jb.status != DFLE_EVAL_OK) {
         out->status = jb.status;
         dfle_eval_reason(out, "%s", jb.msg);
