@@ -106,12 +106,16 @@ $(BUILD)/obj/bench/%.o: bench/%.c
 	@mkdir -p $(dir $@)
 	$(CC) $(ALL_CFLAGS) -MMD -MP -c $< -o $@
 
+# Archives are made anew: one kept from before a source file was removed
+# would keep its object, and its symbols.
 $(LIB_CORE): $(CORE_OBJ)
 	@mkdir -p $(dir $@)
+	@rm -f $@
 	$(AR) rcs $@ $^
 
 $(LIB_LUA): $(LUA_OBJ)
 	@mkdir -p $(dir $@)
+	@rm -f $@
 	$(AR) rcs $@ $^
 
 $(CLI): $(CLI_OBJ) $(LIB_LUA) $(LIB_CORE)
@@ -218,6 +222,12 @@ figures: all
 
 MPI_CLI   := $(BUILD)/dfle-mpi
 MPI_OBJ   := $(BUILD)/obj-mpi/src/cli/main.o $(patsubst %.c,$(BUILD)/obj-mpi/%.o,$(wildcard src/mpi/*.c))
+
+# The MPI driver is compiled without Lua's headers (it serves any
+# evaluator); only the command, which plugs the Lua one in, sees them.
+$(BUILD)/obj-mpi/src/mpi/%.o: src/mpi/%.c
+	@mkdir -p $(dir $@)
+	$(MPICC) $(ALL_CFLAGS) -DDFLE_MPI -Isrc -MMD -MP -c $< -o $@
 
 $(BUILD)/obj-mpi/%.o: %.c
 	@mkdir -p $(dir $@)

@@ -36,6 +36,7 @@ done
 
 # The architecture: includes go down the layers (doc/c-api.md).
 run layers sh tests/check-layers.sh
+run layers-self-test sh tests/check-layers.sh --self-test
 
 # Lua-level tests of the scripting API (ends with "N passed, N failed").
 run lua-tests $vg "$DFLE" -q tests/lua/run.lua "$DFLE"

@@ -1,13 +1,14 @@
 /*
- * test_ensemble_remote.c - dfle.ensemble sharing its queue with "other
- * processes" through the host's remote hooks (remote_begin,
- * remote_poll), without MPI: a thread stands in for another rank and
- * serves the queue through dfle_lua_ensemble_serve in a state of its
- * own, as an MPI rank's threads do.  Checked: the file equals a run
- * alone, the stand-in ran samples and they count; its failure stops the
- * ensemble with its message, rows kept; an interrupt here is passed on
- * as a stop.  (The MPI transport itself is tested by
- * tests/mpi-ensemble.sh; this runs under the sanitizers and valgrind.)
+ * test_ensemble_remote.c - dfle.ensemble sharing its samples with "other
+ * processes" through a remote (dfle/pool.h) given by the host, without
+ * MPI: a thread stands in for another rank, opens the evaluator from the
+ * key the remote is given (dfle_lua_ensemble_remote, as an MPI rank
+ * does: its state replays the script) and takes samples from the task.
+ * Checked: the file equals a run alone, the stand-in ran samples and
+ * they count; its failure stops the ensemble with its message, rows
+ * kept; an interrupt here is passed on as a stop.  (The MPI transport
+ * itself is tested by tests/mpi-ensemble.sh; this runs under the
+ * sanitizers and valgrind.)
  */
 #include "dfle_test.h"
 
@@ -22,7 +23,9 @@
 #include <lualib.h>
 
 #include "dfle/lua.h"
+#include "dfle/pool.h"
 #include "lua/core/dfle_lua.h"
+#include "lua/drive/lua_drive.h"
 #include "lua/ensemble/lua_ensemble.h"
 
 /* Samples in this process are slowed down (5 ms of CPU) and, through
@@ -47,7 +50,9 @@ static char dir[64];
 
 /* The stand-in rank and what the hooks saw. */
 static struct standin {
-    dfle_lua_ensemble_host host;
+    dfle_lua_host host;  /* the main state's                          */
+    dfle_lua_host rhost; /* the stand-in's: its states see REMOTE     */
+    dfle_remote remote;
     char out[128];
     int fails;           /* its replay raises                         */
     size_t stop_after;   /* raise the interrupt after this many rows  */
@@ -55,10 +60,8 @@ static struct standin {
     volatile sig_atomic_t interrupt;
     pthread_t tid;
     pthread_mutex_t lock;
-    long long call;
-    char *meta, *header;
-    dfle_ens_file *file;
-    dfle_ens_queue *queue;
+    dfle_remote_job job;
+    char *key;
     int started, ended, joined, stop, saw_stop, status;
     size_t ran;
     char msg[DFLE_ERROR_MSG_MAX];
@@ -102,14 +105,21 @@ static lua_State *new_state(int remote)
     return L;
 }
 
-static lua_State *open_state(void *ud, int *nargs, char *msg, size_t msglen)
+static lua_State *open_state(void *ud, int *nargs, dfle_error *err)
 {
-    (void)ud, (void)msg, (void)msglen;
+    (void)ud, (void)err;
     *nargs = 0;
     return new_state(0);
 }
 
-static int standin_next(void *ud, size_t *index)
+static lua_State *open_remote_state(void *ud, int *nargs, dfle_error *err)
+{
+    (void)ud, (void)err;
+    *nargs = 0;
+    return new_state(1);
+}
+
+static int standin_next(void *ud, size_t *item, double *x)
 {
     int stop = 0;
     (void)ud;
@@ -126,67 +136,71 @@ static int standin_next(void *ud, size_t *index)
             break;
         nanosleep(&(struct timespec){0, 1000000}, NULL);
     }
-    return !stop && dfle_ens_queue_next(R.queue, index);
+    return !stop && R.job.task->next(R.job.task->ud, item, x);
 }
 
-static int standin_put(void *ud, size_t index, const char *row, int failed, char *msg,
-                       size_t msglen)
+static int standin_done(void *ud, size_t item, const dfle_eval_out *out, dfle_error *err)
 {
-    dfle_error err;
-    (void)ud, (void)failed;
-    if (dfle_ens_file_append(R.file, index, row, &err) != DFLE_OK) {
-        snprintf(msg, msglen, "%s", err.msg);
-        return -1;
-    }
+    int st;
+    (void)ud;
+    if ((st = R.job.task->done(R.job.task->ud, item, out, err)) != DFLE_OK)
+        return st;
     pthread_mutex_lock(&R.lock);
     if (++R.ran == R.stop_after)
         R.interrupt = SIGINT;
     pthread_mutex_unlock(&R.lock);
-    return 0;
+    return DFLE_OK;
 }
 
+/* The stand-in: the evaluator of the key, on a pool of its own (the
+ * calling thread, this one, its one worker). */
 static void *standin_main(void *arg)
 {
-    char msg[DFLE_ERROR_MSG_MAX] = "";
-    lua_State *L = new_state(1);
+    dfle_evaluator *ev = NULL;
+    dfle_pool *pool = NULL;
+    dfle_pool_opts po;
+    dfle_pool_task t = {standin_next, standin_done, NULL, NULL, NULL, NULL, 0};
+    dfle_error err = {0}, e2;
     int st;
     (void)arg;
-    st = dfle_lua_ensemble_serve(L, 0, R.call, &R.host, R.meta, R.header, standin_next,
-                                 standin_put, NULL, msg, sizeof msg);
-    lua_close(L);
+    dfle_pool_opts_default(&po);
+    po.ninputs = R.job.ninputs;
+    po.noutputs = R.job.noutputs;
+    st = dfle_lua_ensemble_remote(&R.rhost, R.key, &ev, &err);
+    if (st == DFLE_OK)
+        st = dfle_pool_new(ev, &po, &pool, &err);
+    if (st == DFLE_OK)
+        st = dfle_pool_run(pool, &t, &err);
+    if (dfle_pool_free(pool, &e2) != DFLE_OK && st == DFLE_OK) {
+        st = e2.code;
+        err = e2;
+    }
+    dfle_lua_ensemble_remote_free(ev);
     pthread_mutex_lock(&R.lock);
     R.status = st;
-    snprintf(R.msg, sizeof R.msg, "%s", msg);
+    snprintf(R.msg, sizeof R.msg, "%s", err.msg);
     R.ended = 1;
     pthread_mutex_unlock(&R.lock);
     return NULL;
 }
 
-static int remote_begin(void *ud, long long call, int workers, size_t total, const char *meta,
-                        const char *header, dfle_ens_file *file, dfle_ens_queue *queue,
-                        char *msg, size_t msglen)
+static int remote_begin(void *ud, const dfle_remote_job *job, dfle_error *err)
 {
-    (void)ud, (void)workers, (void)total, (void)msg, (void)msglen;
-    R.call = call;
-    R.meta = strdup(meta);
-    R.header = strdup(header);
-    R.file = file;
-    R.queue = queue;
+    (void)ud, (void)err;
+    R.job = *job;
+    R.key = strdup(job->key);
     assert_int_equal(pthread_create(&R.tid, NULL, standin_main, NULL), 0);
     R.started = 1;
     return 1;
 }
 
-static int remote_poll(void *ud, int stop, size_t *done, size_t *failed, char *msg,
-                       size_t msglen)
+static int remote_poll(void *ud, int stop, dfle_error *err)
 {
     int ended;
     (void)ud;
     pthread_mutex_lock(&R.lock);
     if (stop)
         R.stop = R.saw_stop = 1;
-    *done = R.ran;
-    *failed = 0;
     ended = R.ended;
     pthread_mutex_unlock(&R.lock);
     if (!ended)
@@ -195,12 +209,13 @@ static int remote_poll(void *ud, int stop, size_t *done, size_t *failed, char *m
         pthread_join(R.tid, NULL);
         R.joined = 1;
     }
-    if (R.status != 0) {
-        snprintf(msg, msglen, "%s", R.msg);
-        return -1;
-    }
+    if (R.status != 0)
+        return dfle_error_set(err, R.status, "%s", R.msg);
     return 0;
 }
+
+static const dfle_remote_ops standin_ops = {DFLE_REMOTE_VERSION, "standin", remote_begin,
+                                            remote_poll};
 
 static int setup(void **state)
 {
@@ -210,10 +225,12 @@ static int setup(void **state)
         return -1;
     memset(&R, 0, sizeof R);
     pthread_mutex_init(&R.lock, NULL);
+    R.remote.ops = &standin_ops;
     R.host.open_state = open_state;
-    R.host.remote_begin = remote_begin;
-    R.host.remote_poll = remote_poll;
+    R.host.remote = &R.remote;
     R.host.workers = 1;
+    R.rhost.open_state = open_remote_state;
+    R.rhost.workers = 1;
     return 0;
 }
 
@@ -223,8 +240,7 @@ static int teardown(void **state)
     (void)state;
     if (R.started && !R.joined)
         pthread_join(R.tid, NULL);
-    free(R.meta);
-    free(R.header);
+    free(R.key);
     pthread_mutex_destroy(&R.lock);
     snprintf(cmd, sizeof cmd, "rm -rf '%s'", dir);
     return system(cmd) != 0;
@@ -240,7 +256,7 @@ static int run(const char *name, int remote, char **text)
     snprintf(R.out, sizeof R.out, "%s/%s", dir, name);
     L = new_state(0);
     if (remote) {
-        dfle_lua_set_ensemble_host(L, &R.host);
+        dfle_lua_set_host(L, &R.host);
         dfle_lua_set_interrupt(L, &R.interrupt);
     }
     st = lua_pcall(L, 0, 1, 0);

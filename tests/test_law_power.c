@@ -84,7 +84,8 @@ static void bad_parameters_and_ops(void **state)
     dfle_power_law_opts o;
     dfle_law *law = NULL;
     dfle_error err;
-    static const dfle_law_ops incomplete = {.name = "x", .flow_factor = dummy_factor};
+    static const dfle_law_ops incomplete = {
+        .version = DFLE_LAW_OPS_VERSION, .name = "x", .flow_factor = dummy_factor};
     (void)state;
     dfle_power_law_opts_default(&o);
     o.k_df = 0;
@@ -101,6 +102,16 @@ static void bad_parameters_and_ops(void **state)
     assert_int_equal(dfle_law_new(&incomplete, NULL, &law, &err), DFLE_EINVAL);
     assert_msg_contains(err.msg, "rate()");
     assert_null(law);
+    /* a table that does not say which version of law.h it was written for */
+    {
+        dfle_law_ops unversioned = incomplete;
+        unversioned.version = 0;
+        assert_int_equal(dfle_law_new(&unversioned, NULL, &law, &err), DFLE_EINVAL);
+        assert_msg_contains(err.msg, "law x: ops version 0, this library knows 1 to 1");
+        unversioned.version = DFLE_LAW_OPS_VERSION + 1;
+        assert_int_equal(dfle_law_new(&unversioned, NULL, &law, &err), DFLE_EINVAL);
+        assert_null(law);
+    }
     assert_null(dfle_law_power_opts(NULL));
 }
 

@@ -229,9 +229,38 @@ static int mock_rate(void *s, const dfle_law_ctx *ctx, const double *F, double *
 }
 
 static const dfle_router_ops cached_router_ops = {
-    .name = "mock-cached", .route = mock_route, .needs_reroute = mock_never_again};
+    .version = DFLE_ROUTER_OPS_VERSION, .name = "mock-cached", .route = mock_route, .needs_reroute = mock_never_again};
 static const dfle_law_ops mock_law_ops = {
-    .name = "mock", .flow_factor = mock_factor, .rate = mock_rate};
+    .version = DFLE_LAW_OPS_VERSION, .name = "mock", .flow_factor = mock_factor, .rate = mock_rate};
+
+/* A router's table must say which version of router.h it was written for;
+ * the handle owns the state even when it refuses the table. */
+static int destroyed;
+static void count_destroy(void *state)
+{
+    (void)state;
+    destroyed++;
+}
+
+static void ops_tables_say_their_version(void **state)
+{
+    dfle_router_ops ops = cached_router_ops;
+    dfle_router *rt = NULL;
+    dfle_error err;
+    (void)state;
+    ops.version = 0;
+    ops.destroy = count_destroy;
+    destroyed = 0;
+    assert_int_equal(dfle_router_new(&ops, NULL, &rt, &err), DFLE_EINVAL);
+    assert_string_equal(err.msg, "router mock-cached: ops version 0, this library knows 1 to 1 "
+                                 "(set .version = DFLE_ROUTER_OPS_VERSION)");
+    assert_null(rt);
+    assert_int_equal(destroyed, 1);
+    ops.version = DFLE_ROUTER_OPS_VERSION;
+    assert_int_equal(dfle_router_new(&ops, NULL, &rt, &err), DFLE_OK);
+    dfle_router_free(rt);
+    assert_int_equal(destroyed, 2);
+}
 
 static void rig_mocks(rig *r, mock *rk, mock *lk)
 {
@@ -478,6 +507,7 @@ static void describe_lists_every_component(void **state)
 int main(void)
 {
     const struct CMUnitTest tests[] = {
+        cmocka_unit_test(ops_tables_say_their_version),
         cmocka_unit_test(fluvial_only_converges_to_eq26),
         cmocka_unit_test(debris_flow_only_matches_eq19),
         cmocka_unit_test(steady_state_balances_uplift),

@@ -19,9 +19,9 @@
  * temporary file and rename), so that the finished file is the same,
  * byte for byte, whatever the number of workers, ranks or shards.
  *
- * The row text itself is the caller's (the Lua binding formats it);
- * this layer only knows the index field, the lines above the rows and
- * lines.  Appending is thread-safe.  The meta and header lines identify
+ * The row text itself is the caller's (the ensemble driver,
+ * ensemble_run.h, formats it); this layer only knows the index field,
+ * the lines above the rows and lines.  Appending is thread-safe.  The meta and header lines identify
  * the ensemble (resume and gather compare them); the comment lines
  * between them only describe it (the version that started the file,
  * units, options), are written when a file is created and kept as they

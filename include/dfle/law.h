@@ -39,7 +39,13 @@ typedef struct dfle_law_ctx {
     const dfle_flow *flow; /* the routed flow                              */
 } dfle_law_ctx;
 
+/* The version of dfle_law_ops this header describes: set .version to
+ * it.  Later versions only append members; the library reads those a
+ * table's version says it has (SQLite's iVersion). */
+#define DFLE_LAW_OPS_VERSION 1
+
 typedef struct dfle_law_ops {
+    int version;      /* DFLE_LAW_OPS_VERSION */
     const char *name;
     /* Required.  Fill F[0..n) with the flow-dependent factor. */
     int (*flow_factor)(void *state, const dfle_law_ctx *ctx, double *F,

@@ -27,7 +27,13 @@
 extern "C" {
 #endif
 
+/* The version of dfle_router_ops this header describes: set .version
+ * to it.  Later versions only append members; the library reads those a
+ * table's version says it has (SQLite's iVersion). */
+#define DFLE_ROUTER_OPS_VERSION 1
+
 typedef struct dfle_router_ops {
+    int version;      /* DFLE_ROUTER_OPS_VERSION */
     const char *name;
     /* Route the flows over the profile.  S holds n slopes [-] (a base
      * level repeats the slope of its largest donor).  Fill every array

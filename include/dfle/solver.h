@@ -105,6 +105,13 @@ typedef struct dfle_run_opts {
  * that a run with a vanishing time step ends with reason "steps"). */
 void dfle_run_opts_default(dfle_run_opts *o);
 
+/* Check the options as dfle_solver_run does, for a run to steady state
+ * (`steady`: tol > 0) or any run: DFLE_EINVAL with a message naming the
+ * option and its value ("max_time must be > 0 yr (got 0)") without a
+ * prefix, for the caller to add its own (a binding its function's name;
+ * dfle_solver_run says "model: "). */
+int dfle_run_opts_check(const dfle_run_opts *o, int steady, dfle_error *err);
+
 enum dfle_stop_reason {
     DFLE_STOP_STEADY = 0, /* the steady-state criterion was met     */
     DFLE_STOP_TIME = 1,   /* max_time was reached                   */
@@ -133,7 +140,10 @@ typedef struct dfle_run_result {
 /* A solver: one static const table per method, in a file of its own.
  * run() starts from the model's current state and adds to `res` (so a
  * fallback run continues the tally); it may assume `opts` was checked. */
+#define DFLE_SOLVER_OPS_VERSION 1
+
 typedef struct dfle_solver_ops {
+    int version;      /* DFLE_SOLVER_OPS_VERSION */
     const char *name; /* "explicit", "implicit", "direct" */
     int (*run)(dfle_model *m, const dfle_run_opts *opts, dfle_run_result *res,
                dfle_error *err);

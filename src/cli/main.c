@@ -28,9 +28,10 @@
 
 #include "dfle/lua.h"
 #include "lua/core/dfle_lua.h"
-#include "lua/ensemble/lua_ensemble.h" /* ensembles: -j, --shard, worker states */
+#include "lua/drive/lua_drive.h"       /* ensembles, inversions: -j, --shard, worker states */
 #include "cli/progress.h"
 #ifdef DFLE_MPI /* the MPI build, `make mpi` (doc/ensembles.md) */
+#include "lua/ensemble/lua_ensemble.h" /* the evaluator other ranks open from a key */
 #include "mpi/dfle_mpi.h"
 #endif
 
@@ -155,7 +156,7 @@ typedef struct cli {
     char **argv;
     dfle_progress_bar bar;
     dfle_lua_progress hooks;
-    dfle_lua_ensemble_host ens; /* --- ensembles (doc/ensembles.md) --- */
+    dfle_lua_host ens;          /* --- ensembles (doc/ensembles.md) --- */
     double rank_timeout;        /* dfle-mpi: --rank-timeout [s]          */
     double ens_last_draw;
     int ens_drawn;
@@ -251,19 +252,20 @@ static int open_worker_p(lua_State *L)
     return c->argc - c->script;
 }
 
-static lua_State *open_worker(void *ud, int *nargs, char *msg, size_t msglen)
+static lua_State *open_worker(void *ud, int *nargs, dfle_error *err)
 {
     lua_State *L = luaL_newstate();
     int n;
     if (L == NULL) {
-        snprintf(msg, msglen, "cannot create a worker's Lua state: not enough memory");
+        dfle_error_set(err, DFLE_ENOMEM, "cannot create a worker's Lua state: not enough memory");
         return NULL;
     }
     lua_setwarnf(L, drop_warning, NULL);
     lua_pushcfunction(L, open_worker_p);
     lua_pushlightuserdata(L, ud);
     if (lua_pcall(L, 1, LUA_MULTRET, 0) != LUA_OK) {
-        snprintf(msg, msglen, "%s", lua_tostring(L, -1) ? lua_tostring(L, -1) : "worker failed");
+        dfle_error_set(err, DFLE_ECALLBACK, "%s",
+                       lua_tostring(L, -1) ? lua_tostring(L, -1) : "worker failed");
         lua_close(L);
         return NULL;
     }
@@ -366,6 +368,20 @@ static void cli_note(void *ud, int level, const char *line)
 }
 
 #ifdef DFLE_MPI
+/* A rank > 0's evaluator of rank 0's key: the Lua binding's, whose
+ * workers replay the script (rank 0 ran it) up to the call. */
+static int mpi_make_evaluator(void *ud, const char *key, dfle_evaluator **ev, dfle_error *err)
+{
+    cli *c = ud;
+    return dfle_lua_ensemble_remote(&c->ens, key, ev, err);
+}
+
+static void mpi_free_evaluator(void *ud, dfle_evaluator *ev)
+{
+    (void)ud;
+    dfle_lua_ensemble_remote_free(ev);
+}
+
 /* dfle-mpi's lines: warnings (a rank lost) always shown, like Lua's;
  * notes (what each rank ran) with --verbose. */
 static void mpi_tell(void *ud, int warning, const char *line)
@@ -407,7 +423,7 @@ static int pmain(lua_State *L)
     }
     c->ens.open_state = open_worker; /* ensembles */
     c->ens.ud = c;
-    dfle_lua_set_ensemble_host(L, &c->ens);
+    dfle_lua_set_host(L, &c->ens);
     dfle_lua_set_interrupt(L, &interrupted);
     /* arg table: arg[-k] = options and program, arg[0] = script. */
     set_arg_table(L, c);
@@ -506,11 +522,11 @@ int main(int argc, char **argv)
 
 #ifdef DFLE_MPI /* ranks > 0 serve ensembles; rank 0 runs the script */
     {
-        char msg[DFLE_ERROR_MSG_MAX];
+        dfle_error err = {0};
         int size = 1, rank = 0, cores = 0;
-        if (dfle_mpi_init(c.rank_timeout, &rank, &size, &cores, msg, sizeof msg) != 0) {
+        if (dfle_mpi_init(c.rank_timeout, &rank, &size, &cores, &err) != DFLE_OK) {
             if (rank == 0)
-                fprintf(stderr, "%s: %s\n", progname, msg);
+                fprintf(stderr, "%s: %s\n", progname, err.msg);
             dfle_mpi_finish(0);
             return EXIT_FAILURE;
         }
@@ -518,13 +534,15 @@ int main(int argc, char **argv)
         c.ens.ud = &c;
         c.ens.cores = cores; /* this rank's share of its node */
         if (rank > 0) {
+            dfle_mpi_worker w = {mpi_make_evaluator, mpi_free_evaluator, &c, c.ens.workers,
+                                 cores};
             gsl_set_error_handler_off();
-            status = dfle_mpi_worker_loop(&c.ens);
+            status = dfle_mpi_worker_loop(&w);
             dfle_mpi_finish(0);
             return status;
         }
-        if (size > 1 && dfle_mpi_serve(&c.ens, mpi_tell, &c, msg, sizeof msg) != 0) {
-            fprintf(stderr, "%s: %s\n", progname, msg);
+        if (size > 1 && dfle_mpi_serve(&c.ens.remote, mpi_tell, &c, &err) != DFLE_OK) {
+            fprintf(stderr, "%s: %s\n", progname, err.msg);
             dfle_mpi_finish(0);
             return EXIT_FAILURE;
         }

@@ -20,6 +20,15 @@ int dfle_law_new(const dfle_law_ops *ops, void *state, dfle_law **out,
     dfle_law *law;
 
     *out = NULL;
+    if (ops != NULL && (ops->version < 1 || ops->version > DFLE_LAW_OPS_VERSION)) {
+        if (ops->destroy != NULL) /* later versions only append: it is where we look */
+            ops->destroy(state);
+        return dfle_error_set(err, DFLE_EINVAL,
+                              "law %s: ops version %d, this library knows 1 to %d (set "
+                              ".version = DFLE_LAW_OPS_VERSION)",
+                              ops->name != NULL ? ops->name : "?", ops->version,
+                              DFLE_LAW_OPS_VERSION);
+    }
     if (ops == NULL || ops->flow_factor == NULL || ops->rate == NULL) {
         if (ops != NULL && ops->destroy != NULL)
             ops->destroy(state);

@@ -77,6 +77,7 @@ static size_t excess_params(const void *state, dfle_param *out, size_t cap)
 static void excess_destroy(void *state) { free(state); }
 
 static const dfle_law_ops excess_ops = {
+    .version = DFLE_LAW_OPS_VERSION,
     .name = "excess_stress",
     .flow_factor = excess_flow_factor,
     .rate = excess_rate,

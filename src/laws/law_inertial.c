@@ -103,6 +103,7 @@ static size_t inertial_params(const void *state, dfle_param *out, size_t cap)
 static void inertial_destroy(void *state) { free(state); }
 
 static const dfle_law_ops inertial_ops = {
+    .version = DFLE_LAW_OPS_VERSION,
     .name = "inertial",
     .flow_factor = inertial_flow_factor,
     .rate = inertial_rate,

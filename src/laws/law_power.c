@@ -124,6 +124,7 @@ static size_t power_params(const void *state, dfle_param *out, size_t cap)
 static void power_destroy(void *state) { free(state); }
 
 static const dfle_law_ops power_ops = {
+    .version = DFLE_LAW_OPS_VERSION,
     .name = "power",
     .flow_factor = power_flow_factor,
     .rate = power_rate,

@@ -2,38 +2,41 @@
  * dfle_mpi.c - dfle-mpi's start-up, and rank 0's side: a thread that
  * serves the other ranks while the script runs.
  *
- * Rank 0 runs the script.  At each dfle.ensemble its own worker threads
- * run samples as in the plain build, and the service thread shares the
- * same queue and file with the other ranks, each running samples on
- * threads of its own (dfle_mpi_worker.c).  Messages (text, through
- * dfle_mpi_link.c, so no rank ever spins in a blocking MPI call):
+ * Rank 0 runs the script.  When a driver's pool runs a task whose
+ * evaluator has a key (an ensemble), rank 0's own workers take items as
+ * in the plain build, and the service thread shares the same task with
+ * the other ranks, each evaluating items on threads of its own
+ * (dfle_mpi_worker.c).  Messages (text, through dfle_mpi_link.c, so no
+ * rank ever spins in a blocking MPI call; items and results as
+ * dfle_mpi_wire.h writes them):
  *
- *   0 -> r  "E <seq> <call> <workers> <total>\n<meta>\n<header>"
- *                   run ensemble <seq>: the script's <call>-th
- *                   dfle.ensemble (<workers>: the table's, 0 = not given)
- *           "I <seq> <index> ..."   samples to run
- *           "S <seq>"  take no more samples of <seq> (its end, or a stop)
+ *   0 -> r  "E <seq> <workers> <total> <ninputs> <noutputs>\n<key>"
+ *                   run task <seq>: the evaluator that <key> names
+ *                   (<workers>: what the caller asked, 0 = not given)
+ *           "I <seq>\n<item line>..."   items to evaluate
+ *           "S <seq>"  take no more items of <seq> (its end, or a stop)
  *           "H"        heartbeat
  *           "Q [1]"    quit (1: a rank was lost, leave without MPI_Finalize)
- *   r -> 0  "R <seq> <want>\n<f><row>\n..."   rows (f = 1: a failed
- *                   sample), and a request for <want> more indices
+ *   r -> 0  "R <seq> <want>\n<result line>..."   results, and a request
+ *                   for <want> more items
  *           "X <seq> <message>"   the rank failed (its replay, say)
- *           "D <seq> <rows> <threads> <cpu>"  its threads have ended and
- *                   every row is sent (<cpu>: seconds the rank used on it)
+ *           "D <seq> <results> <threads> <cpu>"  its threads have ended
+ *                   and every result is sent (<cpu>: seconds the rank
+ *                   used on it)
  *           "H"        heartbeat
  *
- * A rank asks for about two indices per thread ahead, so its threads
- * never wait for an answer.  Rank 0 ends an ensemble when the queue is
- * empty and no rank holds an index without a row (or at once when it
- * stops: an error, an interrupt); messages of an ended ensemble are
- * dropped by their <seq>.  Before it announces ensemble k + 1 every rank
- * that took part in k has been sent "S k", so a rank has at most one
- * ensemble waiting while it finishes the last one.
+ * A rank asks for about two items per thread ahead, so its threads
+ * never wait for an answer.  Rank 0 ends a task when it has no more
+ * items and no rank holds one without a result (or at once when it
+ * stops: an error, an interrupt); messages of an ended task are dropped
+ * by their <seq>.  Before it announces task k + 1 every rank that took
+ * part in k has been sent "S k", so a rank has at most one task waiting
+ * while it finishes the last one.
  *
  * Lost ranks: every rank says something at least every dfle_link_beat
  * seconds.  Rank 0 takes a rank silent for the timeout (--rank-timeout)
- * as lost: the indices it held go back to the queue (the others run
- * them; having no row, a resumed run would too), its later messages are
+ * as lost: the items it held go back to the task (the others run them;
+ * having no row, a resumed run would too), its later messages are
  * dropped and it is told to quit.  Ranks waiting on a silent rank 0
  * stop the job with a message (dfle_mpi_worker.c).  Under a plain
  * `mpirun` a rank that dies ends the whole job (the others get SIGTERM):
@@ -56,6 +59,7 @@
 #include <unistd.h>
 
 #include "mpi/dfle_mpi_link.h"
+#include "mpi/dfle_mpi_wire.h"
 
 enum { P_IDLE, P_BUSY, P_LOST };
 
@@ -64,8 +68,8 @@ typedef struct peer {
     int state;
     unsigned seq;          /* the ensemble it was told to run (P_BUSY) */
     double heard, said;    /* when it last sent us, and we it, anything [s] */
-    size_t want;           /* indices it asked for and was not given yet */
-    size_t *given;         /* indices it holds without a row */
+    size_t want;           /* items it asked for and was not given yet */
+    size_t *given;         /* items it holds without a result */
     size_t ngiven, capgiven;
 } peer;
 
@@ -80,16 +84,18 @@ static struct service {
     int quit;              /* 1: finish, 2: leave at once (torn down) */
     int stop, fresh;       /* fresh: `cmd` is still to be announced */
     char *cmd;
-    dfle_ens_file *file;
-    dfle_ens_queue *queue;
+    const dfle_pool_task *task;
+    size_t ninputs, noutputs;
     unsigned seq;
     /* set by the service thread */
-    int active;   /* an ensemble is shared (begin .. poll's last call)   */
-    int finished; /* ... and the service no longer touches file, queue  */
+    int active;   /* a task is shared (begin .. poll's last call)        */
+    int finished; /* ... and the service no longer touches the task     */
     int error;
-    int exhausted; /* the queue had nothing for a rank that asked       */
-    size_t done, failed;
+    int exhausted; /* the task had nothing for a rank that asked        */
     char msg[DFLE_ERROR_MSG_MAX];
+    double *x;    /* ninputs: an item's inputs                           */
+    dfle_eval_out out; /* a result read                                  */
+    double *y;    /* noutputs                                            */
     char *notes;     /* lines for the main thread to print: each starts
                       * with 'W' (a warning) or 'N' (a note)             */
     size_t nnotes;
@@ -136,7 +142,7 @@ static int share_of_node(void)
     return count > 0 ? count : 1;
 }
 
-int dfle_mpi_init(double timeout, int *rank, int *size, int *cores, char *msg, size_t msglen)
+int dfle_mpi_init(double timeout, int *rank, int *size, int *cores, dfle_error *err)
 {
     char name[MPI_MAX_PROCESSOR_NAME];
     int provided = 0, len = 0;
@@ -162,12 +168,11 @@ int dfle_mpi_init(double timeout, int *rank, int *size, int *cores, char *msg, s
     MPI_Gather(name, MPI_MAX_PROCESSOR_NAME, MPI_CHAR, S.nodes, MPI_MAX_PROCESSOR_NAME, MPI_CHAR,
                0, MPI_COMM_WORLD);
     /* Rank 0 serves the others from a second thread. */
-    if (*size > 1 && provided < MPI_THREAD_SERIALIZED) {
-        snprintf(msg, msglen, "this MPI library cannot be called from a second thread "
+    if (*size > 1 && provided < MPI_THREAD_SERIALIZED)
+        return dfle_error_set(err, DFLE_EEXTERNAL,
+                              "this MPI library cannot be called from a second thread "
                               "(MPI_THREAD_SERIALIZED), which dfle-mpi needs on rank 0");
-        return -1;
-    }
-    return 0;
+    return DFLE_OK;
 }
 
 /* ------------------------------------------------------------------ */
@@ -214,8 +219,6 @@ static void set_error(const char *fmt, ...)
     va_start(ap, fmt);
     vsnprintf(S.msg, sizeof S.msg, fmt, ap);
     va_end(ap);
-    if (S.queue != NULL)
-        dfle_ens_queue_stop(S.queue);
 }
 
 static int in_ensemble(const peer *p) { return p->state == P_BUSY && p->seq == S.seq; }
@@ -247,8 +250,8 @@ static int take_back(peer *p, size_t index)
     return 0;
 }
 
-/* The shared ensemble is over for the others: no more indices, rows
- * of it dropped from now on, and the main thread may close the file. */
+/* The shared task is over for the others: no more items, results of it
+ * dropped from now on, and the pool no longer waits for them. */
 static void end_ensemble(void)
 {
     char text[32];
@@ -260,19 +263,20 @@ static void end_ensemble(void)
             S.peers[r].want = 0;
         }
     S.finished = 1;
-    S.file = NULL;
-    S.queue = NULL;
+    S.task = NULL;
 }
 
-/* The indices p holds go back to the queue; how many did. */
+/* The items p holds go back to the task; how many did. */
 static size_t release(peer *p)
 {
     size_t back = 0;
     if (S.active && !S.finished && in_ensemble(p)) {
         for (size_t k = 0; k < p->ngiven; k++) {
             dfle_error err;
-            if (dfle_ens_queue_give_back(S.queue, p->given[k], &err) != DFLE_OK)
-                set_error("%s", err.msg);
+            if (S.task->give_back == NULL ||
+                S.task->give_back(S.task->ud, p->given[k], &err) != DFLE_OK)
+                set_error("rank %d's items could not be run again: %s", (int)(p - S.peers),
+                          S.task->give_back == NULL ? "the task cannot take them back" : err.msg);
             else
                 back++;
         }
@@ -304,40 +308,36 @@ static void lose(int r, const char *why)
              others > 0 ? "the other ranks" : "rank 0's own workers");
     else
         note(1, "rank %d (%s) %s: taken as lost", r, S.nodes[r], why);
-    /* No other rank is left in it: the ensemble is rank 0's alone now,
-     * whose worker threads run what is left (started again if they had
-     * run out of samples already: lua_ensemble_pool.c). */
+    /* No other rank is left in it: the task is rank 0's alone now, whose
+     * workers run what is left (again if they had run out of items
+     * already: dfle/pool.h). */
     if (others == 0 && S.active && !S.finished)
         end_ensemble();
 }
 
-/* "R <seq> <want>\n<f><row>\n...": rows to append, and a request. */
+/* "R <seq> <want>\n<result>\n...": results for the task, and a request. */
 static void handle_rows(peer *p, char *m)
 {
     unsigned seq = 0;
     size_t want = 0;
-    char *line = strchr(m, '\n');
+    const char *line = strchr(m, '\n');
 
     if (sscanf(m, "R %u %zu", &seq, &want) != 2 || !S.active || S.finished || !in_ensemble(p) ||
         seq != S.seq)
-        return; /* an ended ensemble's */
+        return; /* an ended task's */
     p->want += want;
-    while (line != NULL && line[1] != '\0') {
-        char *row = line + 2, *end = strchr(row, '\n');
-        int failed = line[1] == '1';
-        size_t index = (size_t)strtoull(row, NULL, 10);
+    line = line != NULL ? line + 1 : NULL;
+    while (line != NULL && *line != '\0' && !S.finished) {
+        size_t item;
         dfle_error err;
-        if (end != NULL)
-            *end = '\0';
-        if (take_back(p, index)) {
-            if (dfle_ens_file_append(S.file, index, row, &err) != DFLE_OK) {
-                set_error("%s", err.msg);
-            } else {
-                S.done++;
-                S.failed += (size_t)failed;
-            }
+        S.out.y = S.y;
+        if (wire_get_result(&line, &item, &S.out, S.noutputs) != 0) {
+            set_error("rank %d (%s) sent a malformed result", (int)(p - S.peers),
+                      S.nodes[p - S.peers]);
+            break;
         }
-        line = end;
+        if (take_back(p, item) && S.task->done(S.task->ud, item, &S.out, &err) != DFLE_OK)
+            set_error("%s", err.msg);
     }
 }
 
@@ -384,22 +384,25 @@ static void serve_wants(void)
 {
     for (int r = 1; r < dfle_link_size; r++) {
         peer *p = &S.peers[r];
-        char text[32 + 21 * 64];
-        size_t len, n = 0, index;
+        wire_buf b = {0};
+        size_t n = 0, item;
         if (!in_ensemble(p) || p->want == 0)
             continue;
-        len = (size_t)snprintf(text, sizeof text, "I %u", S.seq);
-        /* At most 64 indices a message: want is about two per thread. */
-        while (p->want > 0 && n < 64 && dfle_ens_queue_next(S.queue, &index)) {
-            len += (size_t)snprintf(text + len, sizeof text - len, " %zu", index);
-            give(p, index);
+        wire_printf(&b, "I %u\n", S.seq);
+        /* At most 64 items a message: want is about two per thread. */
+        while (p->want > 0 && n < 64 && S.task->next(S.task->ud, &item, S.x)) {
+            wire_put_item(&b, item, S.x, S.ninputs);
+            give(p, item);
             p->want--;
             n++;
         }
         if (p->want > 0 && n < 64)
             S.exhausted = 1;
-        if (n > 0)
-            say(r, text);
+        if (n > 0) {
+            dfle_link_post(r, b.s, b.len);
+            p->said = dfle_link_now();
+        }
+        wire_free(&b);
     }
 }
 
@@ -519,18 +522,20 @@ static void flush_notes(void)
     free(notes);
 }
 
-static int remote_begin(void *ud, long long call, int workers, size_t total, const char *meta,
-                        const char *header, dfle_ens_file *file, dfle_ens_queue *queue,
-                        char *msg, size_t msglen)
+static int remote_begin(void *ud, const dfle_remote_job *job, dfle_error *err)
 {
-    size_t len = strlen(meta) + strlen(header) + 96;
+    size_t len = strlen(job->key) + 128;
     char *cmd = malloc(len);
+    double *x = calloc(job->ninputs ? job->ninputs : 1, sizeof *x);
+    double *y = calloc(job->noutputs ? job->noutputs : 1, sizeof *y);
     int live = 0;
 
     (void)ud;
-    if (cmd == NULL) {
-        snprintf(msg, msglen, "out of memory");
-        return -1;
+    if (cmd == NULL || x == NULL || y == NULL) {
+        free(cmd);
+        free(x);
+        free(y);
+        return dfle_error_set(err, DFLE_ENOMEM, "mpi: out of memory");
     }
     pthread_mutex_lock(&S.lock);
     for (int r = 1; r < dfle_link_size; r++)
@@ -538,25 +543,31 @@ static int remote_begin(void *ud, long long call, int workers, size_t total, con
     if (live == 0) {
         pthread_mutex_unlock(&S.lock);
         free(cmd);
+        free(x);
+        free(y);
         return 0; /* every other rank was lost: this one alone */
     }
     S.seq++;
-    snprintf(cmd, len, "E %u %lld %d %zu\n%s\n%s", S.seq, call, workers, total, meta, header);
+    snprintf(cmd, len, "E %u %d %zu %zu %zu\n%s", S.seq, job->workers, job->total,
+             job->ninputs, job->noutputs, job->key);
     S.cmd = cmd;
     S.fresh = 1;
-    S.file = file;
-    S.queue = queue;
+    S.task = job->task;
+    S.ninputs = job->ninputs;
+    S.noutputs = job->noutputs;
+    free(S.x);
+    free(S.y);
+    S.x = x;
+    S.y = y;
     S.active = 1;
     S.finished = S.stop = S.error = 0;
-    S.done = S.failed = 0;
     S.msg[0] = '\0';
     pthread_cond_signal(&S.wake);
     pthread_mutex_unlock(&S.lock);
     return 1;
 }
 
-static int remote_poll(void *ud, int stop, size_t *done, size_t *failed, char *msg,
-                       size_t msglen)
+static int remote_poll(void *ud, int stop, dfle_error *err)
 {
     int r;
     (void)ud;
@@ -565,21 +576,27 @@ static int remote_poll(void *ud, int stop, size_t *done, size_t *failed, char *m
         S.stop = 1;
         pthread_cond_signal(&S.wake);
     }
-    *done = S.done;
-    *failed = S.failed;
     r = !S.finished ? 1 : S.error ? -1 : 0;
     if (r < 0)
-        snprintf(msg, msglen, "%s", S.msg);
+        dfle_error_set(err, DFLE_ECALLBACK, "%s", S.msg);
     if (r <= 0)
         S.active = 0;
     pthread_mutex_unlock(&S.lock);
     flush_notes();
-    return r;
+    return r < 0 ? DFLE_ECALLBACK : r;
 }
 
-int dfle_mpi_serve(dfle_lua_ensemble_host *host,
-                   void (*tell)(void *ud, int warning, const char *line), void *ud, char *msg,
-                   size_t msglen)
+static const dfle_remote_ops mpi_remote_ops = {
+    .version = DFLE_REMOTE_VERSION,
+    .name = "mpi",
+    .begin = remote_begin,
+    .poll = remote_poll,
+};
+static const dfle_remote mpi_remote = {&mpi_remote_ops, NULL};
+
+int dfle_mpi_serve(const dfle_remote **remote,
+                   void (*tell)(void *ud, int warning, const char *line), void *ud,
+                   dfle_error *err)
 {
     pthread_condattr_t ca;
     double now = dfle_link_now();
@@ -592,14 +609,12 @@ int dfle_mpi_serve(dfle_lua_ensemble_host *host,
     pthread_condattr_setclock(&ca, CLOCK_MONOTONIC);
     pthread_cond_init(&S.wake, &ca);
     pthread_condattr_destroy(&ca);
-    if (pthread_create(&S.tid, NULL, service_main, NULL) != 0) {
-        snprintf(msg, msglen, "cannot start the thread that serves the other ranks");
-        return -1;
-    }
+    if (pthread_create(&S.tid, NULL, service_main, NULL) != 0)
+        return dfle_error_set(err, DFLE_EEXTERNAL,
+                              "cannot start the thread that serves the other ranks");
     S.started = 1;
-    host->remote_begin = remote_begin;
-    host->remote_poll = remote_poll;
-    return 0;
+    *remote = &mpi_remote;
+    return DFLE_OK;
 }
 
 void dfle_mpi_finish(int torn_down)
@@ -617,8 +632,11 @@ void dfle_mpi_finish(int torn_down)
         free(S.peers[r].given);
     free(S.peers);
     free(S.nodes);
+    free(S.x);
+    free(S.y);
     S.peers = NULL;
     S.nodes = NULL;
+    S.x = S.y = NULL;
     /* MPI_Finalize waits for every rank: not for one that is gone. */
     if (!torn_down && !dfle_link_lost)
         MPI_Finalize();

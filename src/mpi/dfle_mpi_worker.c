@@ -1,10 +1,12 @@
 /*
- * dfle_mpi_worker.c - a rank > 0 of dfle-mpi: wait for rank 0's
- * ensembles and run their samples on threads, each with a Lua state of
- * its own that replays the script up to the call (as the plain build's
- * threads do).  The rank's main thread alone talks to rank 0 (the
- * protocol is at the top of dfle_mpi.c): it passes indices in and rows
- * out, asks for indices ahead so that no thread waits on an answer, and
+ * dfle_mpi_worker.c - a rank > 0 of dfle-mpi: wait for rank 0's tasks
+ * and evaluate their items on a pool of threads (dfle/pool.h), the
+ * evaluator made by the command from the key rank 0 sends (for an
+ * ensemble, a Lua state per thread that replays the script up to the
+ * call, as the plain build's threads do).  The rank's main thread alone
+ * talks to rank 0 (the protocol is at the top of dfle_mpi.c): it passes
+ * items in and results out, asks for items ahead so that no thread
+ * waits on an answer, and
  * sends a heartbeat when it has had nothing else to say.  It polls with
  * a growing pause rather than blocking, so a rank between ensembles
  * takes no CPU from the threads of other ranks on its node.
@@ -17,38 +19,39 @@
 #include <stdlib.h>
 #include <string.h>
 #include <time.h>
-
-#include <lua.h>
+#include <unistd.h>
 
 #include "mpi/dfle_mpi_link.h"
+#include "mpi/dfle_mpi_wire.h"
 
-/* One ensemble on this rank. */
+/* One task on this rank. */
 typedef struct job {
-    const dfle_lua_ensemble_host *host;
-    char *cmd; /* the "E" message; meta and header point into it */
-    const char *meta, *header;
+    const dfle_mpi_worker *w;
+    dfle_evaluator *ev;  /* made from the key                          */
+    char *cmd;           /* the "E" message; the key points into it    */
     unsigned seq;
-    long long call;
-    int nthreads, started;
-    pthread_t *tid;
+    size_t ninputs, noutputs;
+    int nthreads;
+    pthread_t runner;    /* runs the pool                              */
+    int started;
     pthread_mutex_t lock;
-    pthread_cond_t work; /* for the threads: indices came, or stop       */
-    pthread_cond_t news; /* for the main thread: a row, a thread ended
-                          * (CLOCK_MONOTONIC)                             */
-    size_t *stock;       /* indices to run: stock[head .. nstock)         */
+    pthread_cond_t work; /* for the threads: items came, or stop       */
+    pthread_cond_t news; /* for the main thread: a result, the end
+                          * (CLOCK_MONOTONIC)                          */
+    size_t *stock;       /* items to run: stock[head .. nstock)        */
+    double *stock_x;     /* their inputs, ninputs each                 */
     size_t head, nstock, capstock;
-    size_t inflight;     /* indices received without a row yet            */
-    size_t ahead;        /* how many to hold: grows when a thread waits   */
+    size_t inflight;     /* items received without a result yet        */
+    size_t ahead;        /* how many to hold: grows when a thread waits */
     int stopping;
-    char *rows;          /* "<f><row>\n"... not yet sent                   */
-    size_t nrows, caprows;
-    int alive;           /* threads running                               */
+    wire_buf rows;       /* results not yet sent                       */
+    int alive;           /* the pool is running                        */
     int error;
     char msg[DFLE_ERROR_MSG_MAX];
-    size_t ran;          /* rows put                                      */
+    size_t ran;          /* results put                                */
     /* main thread only */
-    size_t asked; /* indices asked for, not yet received */
-    int told;     /* the error has been sent             */
+    size_t asked; /* items asked for, not yet received */
+    int told;     /* the error has been sent           */
     struct timespec cpu0; /* the process's CPU time at the start */
 } job;
 
@@ -75,18 +78,16 @@ static void fatal(const char *why)
 }
 
 /* ------------------------------------------------------------------ */
-/* The threads.                                                        */
+/* The pool's task: items from rank 0, results to it.                  */
 
-static pthread_mutex_t open_lock = PTHREAD_MUTEX_INITIALIZER;
-
-static int job_next(void *ud, size_t *index)
+static int job_next(void *ud, size_t *item, double *x)
 {
     job *jb = ud;
     int got = 0;
     pthread_mutex_lock(&jb->lock);
-    /* Ends with indices or a stop: the main thread stops the job when
+    /* Ends with items or a stop: the main thread stops the job when
      * rank 0 says so, and ends the process if rank 0 falls silent. */
-    /* A thread that finds no index waiting: ask further ahead (fast
+    /* A thread that finds no item waiting: ask further ahead (fast
      * samples, a slow answer), twice as far each time, up to 32 a
      * thread, and wake the main thread to ask now rather than at its
      * next round.  Doubling: a round trip to rank 0 takes a few ms, as
@@ -101,43 +102,29 @@ static int job_next(void *ud, size_t *index)
     while (jb->head == jb->nstock && !jb->stopping)
         pthread_cond_wait(&jb->work, &jb->lock);
     if (!jb->stopping && jb->head < jb->nstock) {
-        *index = jb->stock[jb->head++];
+        *item = jb->stock[jb->head];
+        memcpy(x, jb->stock_x + jb->head * jb->ninputs, jb->ninputs * sizeof *x);
+        jb->head++;
         got = 1;
     }
     pthread_mutex_unlock(&jb->lock);
     return got;
 }
 
-static int job_put(void *ud, size_t index, const char *row, int failed, char *msg,
-                   size_t msglen)
+static int job_put(void *ud, size_t item, const dfle_eval_out *out, dfle_error *err)
 {
     job *jb = ud;
-    size_t len = strlen(row);
-    (void)index;
+    (void)err;
     pthread_mutex_lock(&jb->lock);
-    if (jb->nrows + len + 2 > jb->caprows) {
-        size_t cap = 2 * (jb->nrows + len + 2);
-        char *p = realloc(jb->rows, cap);
-        if (p == NULL) {
-            pthread_mutex_unlock(&jb->lock);
-            snprintf(msg, msglen, "out of memory");
-            return -1;
-        }
-        jb->rows = p;
-        jb->caprows = cap;
-    }
-    jb->rows[jb->nrows++] = failed ? '1' : '0';
-    memcpy(jb->rows + jb->nrows, row, len);
-    jb->nrows += len;
-    jb->rows[jb->nrows++] = '\n';
+    wire_put_result(&jb->rows, item, out, jb->noutputs);
     jb->inflight--;
     jb->ran++;
-    /* Wake the main thread only when the stock runs low: the rows go
+    /* Wake the main thread only when the stock runs low: the results go
      * with its next round anyway, and fewer wake-ups cost less CPU. */
     if (2 * (jb->nstock - jb->head) <= jb->ahead)
         pthread_cond_signal(&jb->news);
     pthread_mutex_unlock(&jb->lock);
-    return 0;
+    return DFLE_OK;
 }
 
 static void job_fail(job *jb, const char *msg)
@@ -151,27 +138,46 @@ static void job_fail(job *jb, const char *msg)
     pthread_cond_broadcast(&jb->work);
 }
 
-static void *job_thread(void *arg)
+static void job_halt(void *ud)
+{
+    job *jb = ud;
+    pthread_mutex_lock(&jb->lock);
+    jb->stopping = 1;
+    pthread_cond_broadcast(&jb->work);
+    pthread_mutex_unlock(&jb->lock);
+}
+
+/* The runner thread: the pool on the evaluator, until the items end. */
+static void *job_runner(void *arg)
 {
     job *jb = arg;
-    char msg[DFLE_ERROR_MSG_MAX];
-    int nargs = 0, st = -1;
-    lua_State *L;
+    dfle_pool_opts po;
+    dfle_pool_task t;
+    dfle_pool *pool = NULL;
+    dfle_error err = {0}, e2;
+    int st;
 
-    msg[0] = '\0';
-    /* The host makes states one thread at a time. */
-    pthread_mutex_lock(&open_lock);
-    L = jb->host->open_state(jb->host->ud, &nargs, msg, sizeof msg);
-    pthread_mutex_unlock(&open_lock);
-    if (L != NULL) {
-        st = dfle_lua_ensemble_serve(L, nargs, jb->call, jb->host, jb->meta, jb->header, job_next,
-                                     job_put, jb, msg, sizeof msg);
-        lua_close(L);
+    dfle_pool_opts_default(&po);
+    po.threads = jb->nthreads;
+    po.caller = 0;
+    po.ninputs = jb->ninputs;
+    po.noutputs = jb->noutputs;
+    memset(&t, 0, sizeof t);
+    t.next = job_next;
+    t.done = job_put;
+    t.stop = job_halt;
+    t.ud = jb;
+    st = dfle_pool_new(jb->ev, &po, &pool, &err);
+    if (st == DFLE_OK)
+        st = dfle_pool_run(pool, &t, &err);
+    if (dfle_pool_free(pool, &e2) != DFLE_OK && st == DFLE_OK) {
+        st = e2.code;
+        err = e2;
     }
     pthread_mutex_lock(&jb->lock);
-    if (st != 0)
-        job_fail(jb, msg[0] ? msg : "cannot create a worker's Lua state");
-    jb->alive--;
+    if (st != DFLE_OK && st != DFLE_ECANCELED)
+        job_fail(jb, err.msg[0] ? err.msg : "the rank's workers failed");
+    jb->alive = 0;
     pthread_cond_signal(&jb->news);
     pthread_mutex_unlock(&jb->lock);
     return NULL;
@@ -180,23 +186,24 @@ static void *job_thread(void *arg)
 /* ------------------------------------------------------------------ */
 /* The main thread's side of a job.                                    */
 
-/* Start the ensemble of "E <seq> <call> <workers> <total>\n<meta>\n<header>"
+/* Start the task of "E <seq> <workers> <total> <ninputs> <noutputs>\n<key>"
  * (takes cmd).  A job that cannot start reports its error and ends at
  * its first step. */
-static job *job_start(const dfle_lua_ensemble_host *host, char *cmd)
+static job *job_start(const dfle_mpi_worker *w, char *cmd)
 {
     job *jb = calloc(1, sizeof *jb);
     pthread_condattr_t ca;
-    char *meta, *header;
+    char *key;
     int workers = 0;
     size_t total = 0;
+    dfle_error err = {0};
 
     if (jb == NULL) {
         fprintf(stderr, "dfle-mpi: rank %d: out of memory\n", dfle_link_rank);
         MPI_Abort(MPI_COMM_WORLD, 1);
         return NULL;
     }
-    jb->host = host;
+    jb->w = w;
     jb->cmd = cmd;
     clock_gettime(CLOCK_PROCESS_CPUTIME_ID, &jb->cpu0);
     pthread_mutex_init(&jb->lock, NULL);
@@ -205,53 +212,53 @@ static job *job_start(const dfle_lua_ensemble_host *host, char *cmd)
     pthread_condattr_setclock(&ca, CLOCK_MONOTONIC);
     pthread_cond_init(&jb->news, &ca);
     pthread_condattr_destroy(&ca);
-    meta = strchr(cmd, '\n');
-    header = meta != NULL ? strchr(meta + 1, '\n') : NULL;
-    if (sscanf(cmd, "E %u %lld %d %zu", &jb->seq, &jb->call, &workers, &total) != 4 ||
-        header == NULL) {
+    key = strchr(cmd, '\n');
+    if (sscanf(cmd, "E %u %d %zu %zu %zu", &jb->seq, &workers, &total, &jb->ninputs,
+               &jb->noutputs) != 5 || key == NULL) {
         job_fail(jb, "a malformed message from rank 0");
         return jb;
     }
-    *meta++ = '\0';
-    *header++ = '\0';
-    jb->meta = meta;
-    jb->header = header;
-    jb->nthreads = dfle_lua_par_workers(host, workers, host->cores);
+    key++;
+    if (w->make_evaluator(w->ud, key, &jb->ev, &err) != DFLE_OK) {
+        job_fail(jb, err.msg);
+        return jb;
+    }
+    jb->nthreads = w->workers > 0   ? w->workers
+                   : workers > 0    ? workers
+                   : w->cores > 0   ? w->cores
+                                    : (int)sysconf(_SC_NPROCESSORS_ONLN);
+    if (jb->nthreads < 1)
+        jb->nthreads = 1;
     if ((size_t)jb->nthreads > total)
         jb->nthreads = total > 0 ? (int)total : 1;
     jb->ahead = 2 * (size_t)jb->nthreads; /* two a thread; each wait doubles it */
-    jb->tid = malloc((size_t)jb->nthreads * sizeof *jb->tid);
-    if (jb->tid == NULL) {
-        job_fail(jb, "out of memory");
+    jb->alive = 1;
+    if (pthread_create(&jb->runner, NULL, job_runner, jb) != 0) {
+        jb->alive = 0;
+        job_fail(jb, "cannot start worker threads");
         return jb;
     }
-    pthread_mutex_lock(&jb->lock);
-    for (; jb->started < jb->nthreads; jb->started++) {
-        if (pthread_create(&jb->tid[jb->started], NULL, job_thread, jb) != 0)
-            break;
-        jb->alive++;
-    }
-    if (jb->started == 0)
-        job_fail(jb, "cannot start worker threads");
-    pthread_mutex_unlock(&jb->lock);
+    jb->started = 1;
     return jb;
 }
 
 static void job_free(job *jb)
 {
-    for (int k = 0; k < jb->started; k++)
-        pthread_join(jb->tid[k], NULL);
+    if (jb->started)
+        pthread_join(jb->runner, NULL);
+    if (jb->ev != NULL)
+        jb->w->free_evaluator(jb->w->ud, jb->ev);
     pthread_cond_destroy(&jb->news);
     pthread_cond_destroy(&jb->work);
     pthread_mutex_destroy(&jb->lock);
-    free(jb->tid);
     free(jb->stock);
-    free(jb->rows);
+    free(jb->stock_x);
+    wire_free(&jb->rows);
     free(jb->cmd);
     free(jb);
 }
 
-/* "I <seq> <index>...": indices to run. */
+/* "I <seq>\n<item line>...": items to run. */
 static void job_indices(job *jb, const char *m)
 {
     const char *p = m + 2;
@@ -259,29 +266,39 @@ static void job_indices(job *jb, const char *m)
     unsigned long seq = strtoul(p, &end, 10);
     if (end == p || seq != jb->seq)
         return;
+    p = strchr(end, '\n');
     pthread_mutex_lock(&jb->lock);
-    for (p = end;; p = end) {
-        size_t i = (size_t)strtoull(p, &end, 10);
-        if (end == p)
-            break;
-        if (jb->stopping)
-            continue;
+    for (p = p != NULL ? p + 1 : end + strlen(end); *p != '\0';) {
+        size_t item;
         if (jb->nstock == jb->capstock && jb->head > 0) { /* reuse the front first */
             memmove(jb->stock, jb->stock + jb->head, (jb->nstock - jb->head) * sizeof *jb->stock);
+            memmove(jb->stock_x, jb->stock_x + jb->head * jb->ninputs,
+                    (jb->nstock - jb->head) * jb->ninputs * sizeof *jb->stock_x);
             jb->nstock -= jb->head;
             jb->head = 0;
         }
         if (jb->nstock == jb->capstock) {
             size_t cap = jb->capstock > 0 ? 2 * jb->capstock : 16;
             size_t *s = realloc(jb->stock, cap * sizeof *s);
-            if (s == NULL) {
+            double *sx = s == NULL ? NULL
+                                   : realloc(jb->stock_x, cap * (jb->ninputs ? jb->ninputs : 1) *
+                                                              sizeof *sx);
+            if (s != NULL)
+                jb->stock = s;
+            if (sx == NULL) {
                 job_fail(jb, "out of memory");
                 break;
             }
-            jb->stock = s;
+            jb->stock_x = sx;
             jb->capstock = cap;
         }
-        jb->stock[jb->nstock++] = i;
+        if (wire_get_item(&p, &item, jb->stock_x + jb->nstock * jb->ninputs, jb->ninputs) != 0) {
+            job_fail(jb, "a malformed item from rank 0");
+            break;
+        }
+        if (jb->stopping)
+            continue;
+        jb->stock[jb->nstock++] = item;
         jb->inflight++;
         jb->asked -= jb->asked > 0;
     }
@@ -299,11 +316,12 @@ static void job_stop(job *jb)
     pthread_mutex_unlock(&jb->lock);
 }
 
-/* Send what the threads have for rank 0: rows, a request for more
- * indices, an error, the end.  Returns 1 when the job has ended. */
+/* Send what the threads have for rank 0: results, a request for more
+ * items, an error, the end.  Returns 1 when the job has ended. */
 static int job_step(job *jb)
 {
-    char *rows, head[96], msg[DFLE_ERROR_MSG_MAX + 32];
+    char head[96], msg[DFLE_ERROR_MSG_MAX + 32];
+    wire_buf rows;
     size_t nrows, want = 0, target;
     struct timespec now;
     int alive, fail;
@@ -311,9 +329,8 @@ static int job_step(job *jb)
     pthread_mutex_lock(&jb->lock);
     target = jb->ahead;
     rows = jb->rows;
-    nrows = jb->nrows;
-    jb->rows = NULL;
-    jb->nrows = jb->caprows = 0;
+    nrows = rows.len;
+    memset(&jb->rows, 0, sizeof jb->rows);
     if (!jb->stopping && jb->inflight + jb->asked < target)
         want = target - jb->inflight - jb->asked;
     alive = jb->alive;
@@ -331,12 +348,12 @@ static int job_step(job *jb)
         }
         memcpy(text, head, (size_t)hl);
         if (nrows > 0)
-            memcpy(text + hl, rows, nrows);
+            memcpy(text + hl, rows.s, nrows);
         say(text, (size_t)hl + nrows);
         free(text);
         jb->asked += want;
     }
-    free(rows);
+    wire_free(&rows);
     if (fail) {
         say_str(msg);
         jb->told = 1;
@@ -344,7 +361,7 @@ static int job_step(job *jb)
     if (alive > 0)
         return 0;
     clock_gettime(CLOCK_PROCESS_CPUTIME_ID, &now);
-    snprintf(head, sizeof head, "D %u %zu %d %.3f", jb->seq, jb->ran, jb->started,
+    snprintf(head, sizeof head, "D %u %zu %d %.3f", jb->seq, jb->ran, jb->nthreads,
              (double)(now.tv_sec - jb->cpu0.tv_sec) + 1e-9 * (double)(now.tv_nsec - jb->cpu0.tv_nsec));
     say_str(head);
     return 1;
@@ -368,7 +385,7 @@ static void job_wait(job *jb, double pause)
 /* ------------------------------------------------------------------ */
 /* The loop.                                                           */
 
-int dfle_mpi_worker_loop(const dfle_lua_ensemble_host *host)
+int dfle_mpi_worker_loop(const dfle_mpi_worker *host)
 {
     job *jb = NULL;
     char *waiting = NULL; /* an "E" that came while a job was ending */

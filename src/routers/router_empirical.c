@@ -320,6 +320,7 @@ static void empirical_destroy(void *state)
 }
 
 static const dfle_router_ops empirical_ops = {
+    .version = DFLE_ROUTER_OPS_VERSION,
     .name = "empirical",
     .route = empirical_route,
     .needs_reroute = NULL, /* cheap and local: route every step */

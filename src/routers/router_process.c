@@ -328,6 +328,7 @@ static void process_destroy(void *state)
 }
 
 static const dfle_router_ops process_ops = {
+    .version = DFLE_ROUTER_OPS_VERSION,
     .name = "process",
     .route = process_route,
     .needs_reroute = process_needs_reroute,

@@ -56,37 +56,51 @@ int dfle_method_lookup(const char *name)
     return -1;
 }
 
-static int check_opts(const dfle_run_opts *o, dfle_error *err)
+int dfle_run_opts_check(const dfle_run_opts *o, int steady, dfle_error *err)
 {
     if (!(isfinite(o->max_time) && o->max_time > 0))
-        return dfle_error_set(err, DFLE_EINVAL, "model: max_time must be > 0 yr (got %g)",
-                              o->max_time);
+        return dfle_error_set(err, DFLE_EINVAL, "max_time must be > 0 yr (got %g)", o->max_time);
+    if (steady && !(isfinite(o->tol) && o->tol > 0))
+        return dfle_error_set(err, DFLE_EINVAL, "tol must be > 0 (got %g)", o->tol);
     if (!(isfinite(o->tol) && o->tol >= 0))
-        return dfle_error_set(err, DFLE_EINVAL, "model: tol must be >= 0 (got %g)", o->tol);
+        return dfle_error_set(err, DFLE_EINVAL, "tol must be >= 0 (got %g)", o->tol);
     if (o->max_steps == 0)
-        return dfle_error_set(err, DFLE_EINVAL, "model: max_steps must be > 0");
+        return dfle_error_set(err, DFLE_EINVAL, "max_steps must be > 0");
     if (!(isfinite(o->rtol) && o->rtol > 0 && o->rtol < 1))
-        return dfle_error_set(err, DFLE_EINVAL, "model: rtol must be in (0, 1) (got %g)", o->rtol);
+        return dfle_error_set(err, DFLE_EINVAL, "rtol must be in (0, 1) (got %g)", o->rtol);
     if (!(isfinite(o->direct_tol) && o->direct_tol > 0 && o->direct_tol < 1))
-        return dfle_error_set(err, DFLE_EINVAL, "model: direct_tol must be in (0, 1) (got %g)",
+        return dfle_error_set(err, DFLE_EINVAL, "direct_tol must be in (0, 1) (got %g)",
                               o->direct_tol);
     if (o->n_record > 0 && (o->record_times == NULL || o->record_z == NULL))
-        return dfle_error_set(err, DFLE_EINVAL, "model: record times need a place to record");
+        return dfle_error_set(err, DFLE_EINVAL, "record times need a place to record");
     for (size_t k = 0; k < o->n_record; k++)
         if (!(isfinite(o->record_times[k]) && o->record_times[k] >= 0 &&
               o->record_times[k] <= o->max_time &&
               (k == 0 || o->record_times[k] > o->record_times[k - 1])))
             return dfle_error_set(err, DFLE_EINVAL,
-                                  "model: record times must increase within [0, max_time = %g yr] "
-                                  "(time %zu is %g)", o->max_time, k + 1, o->record_times[k]);
+                                  "record times must increase within the run, [0, %g yr] (time "
+                                  "%zu is %g)", o->max_time, k + 1, o->record_times[k]);
     if (o->method < 0 || o->method > DFLE_METHOD_AUTO)
-        return dfle_error_set(err, DFLE_EINVAL, "model: unknown method %d", o->method);
+        return dfle_error_set(err, DFLE_EINVAL, "unknown method %d", o->method);
     if (o->method == DFLE_METHOD_DIRECT && !(o->tol > 0))
-        return dfle_error_set(err, DFLE_EINVAL,
-                              "model: the direct method finds steady states only (tol > 0)");
+        return dfle_error_set(err, DFLE_EINVAL, "method 'direct' finds steady states only (tol > "
+                              "0): use 'explicit' or 'implicit' for a transient");
     if (o->method == DFLE_METHOD_DIRECT && o->n_record > 0)
-        return dfle_error_set(err, DFLE_EINVAL, "model: the direct method has no time to record at");
+        return dfle_error_set(err, DFLE_EINVAL, "the direct method has no time to record at");
     return DFLE_OK;
+}
+
+/* The checks, as the model's message ("model: ..."). */
+static int check_opts(const dfle_run_opts *o, dfle_error *err)
+{
+    int st = dfle_run_opts_check(o, 0, err);
+    if (st != DFLE_OK && err != NULL) {
+        char msg[DFLE_ERROR_MSG_MAX];
+        memcpy(msg, err->msg, sizeof msg);
+        msg[sizeof msg - 1] = '\0';
+        dfle_error_set(err, st, "model: %s", msg);
+    }
+    return st;
 }
 
 /* A model message without its "model: " prefix, to quote inside another. */

@@ -216,6 +216,7 @@ static int direct_run(dfle_model *m, const dfle_run_opts *o, dfle_run_result *re
 }
 
 const dfle_solver_ops dfle_solver_direct = {
+    .version = DFLE_SOLVER_OPS_VERSION,
     .name = "direct",
     .run = direct_run,
 };

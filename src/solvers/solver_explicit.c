@@ -92,6 +92,7 @@ static int explicit_run(dfle_model *m, const dfle_run_opts *o, dfle_run_result *
 }
 
 const dfle_solver_ops dfle_solver_explicit = {
+    .version = DFLE_SOLVER_OPS_VERSION,
     .name = "explicit",
     .run = explicit_run,
 };

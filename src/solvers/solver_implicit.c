@@ -250,6 +250,7 @@ static int implicit_run(dfle_model *m, const dfle_run_opts *o, dfle_run_result *
 }
 
 const dfle_solver_ops dfle_solver_implicit = {
+    .version = DFLE_SOLVER_OPS_VERSION,
     .name = "implicit",
     .run = implicit_run,
 };

@@ -177,6 +177,10 @@ const char *dfle_lua_check_string(lua_State *L, int idx, const char *fn, const c
  * "bad argument #-2"). */
 int dfle_lua_check_option(lua_State *L, int idx, const char *fn, const char *what,
                           const char *const *choices);
+/* The solver method (enum dfle_method) named by the string at idx,
+ * looked up by dfle_method_lookup; anything else raises "dfle.<fn>:
+ * method must be 'explicit', 'implicit', 'direct' or 'auto' (got 'x')". */
+int dfle_lua_check_method(lua_State *L, int idx, const char *fn);
 /* Push `s` (len bytes) as it can be shown in a message: at most 60
  * characters, NUL and control bytes as \ddd, "..." and the length after
  * a cut; returns the pushed string. */

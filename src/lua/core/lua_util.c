@@ -423,6 +423,22 @@ const char *dfle_lua_opt_string(lua_State *L, int idx, const char *key, const ch
     return s;
 }
 
+int dfle_lua_check_method(lua_State *L, int idx, const char *fn)
+{
+    const char *names[DFLE_METHOD_AUTO + 2];
+    for (int k = 0; k <= DFLE_METHOD_AUTO; k++)
+        names[k] = dfle_method_name(k);
+    names[DFLE_METHOD_AUTO + 1] = NULL;
+    /* dfle_method_lookup is the one place the names are looked up;
+     * the list only makes the message */
+    {
+        int m = dfle_method_lookup(dfle_lua_check_string(L, idx, fn, "method"));
+        if (m >= 0)
+            return m;
+    }
+    return dfle_lua_check_option(L, idx, fn, "method", names);
+}
+
 int dfle_lua_check_option(lua_State *L, int idx, const char *fn, const char *what,
                           const char *const *choices)
 {

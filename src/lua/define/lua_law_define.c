@@ -169,6 +169,7 @@ static void ll_destroy(void *state)
 }
 
 static const dfle_law_ops lua_law_ops = {
+    .version = DFLE_LAW_OPS_VERSION,
     .name = "lua",
     .flow_factor = ll_flow_factor,
     .rate = ll_rate,

@@ -230,6 +230,7 @@ static int lr_node_flow(void *state, const dfle_network *net, size_t i, double S
 }
 
 static const dfle_router_ops lua_router_ops = {
+    .version = DFLE_ROUTER_OPS_VERSION,
     .name = "lua",
     .route = lr_route,
     .needs_reroute = NULL, /* local: routed at every landscape step */

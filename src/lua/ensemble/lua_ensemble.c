@@ -12,28 +12,25 @@
  *   }
  *
  * Parallel workers are threads, each with its own Lua state made by the
- * host (lua_ensemble.h): the worker runs the same script, and the k-th
+ * host (lua/drive/lua_drive.h): the worker runs the same script, and the k-th
  * call of dfle.ensemble in it, instead of running, hands its table over
  * and stops the script (earlier calls return their finished results,
  * read from their files).  So `build`, `measure` and Lua-defined laws
  * run in every worker with their upvalues, and the script up to the
  * ensemble call must do the same thing every time it runs (doc/ensembles.md).
  *
- * This file holds the Lua entry points and the box of C resources they
- * hold while Lua runs; the ensemble's table is checked in
- * lua_ensemble_spec.c, one sample and its row (the same text whichever
- * state ran the sample) are in lua_ensemble_sample.c, the finished file
- * is read back in lua_ensemble_result.c, the worker threads are in
- * lua_ensemble_pool.c, the host and registry keys they share in
- * lua_ensemble_host.c, and the file rules (streaming, resume, sorting,
- * gather) in src/io/ensemble.c.
+ * The run is the C library's (dfle_ensemble_run, dfle/ensemble_run.h:
+ * the design, the rows, the worker pool, the file); this binding reads
+ * the table (lua_ensemble_spec.c), gives the evaluator that runs one
+ * sample in Lua (lua_ensemble_sample.c, on lua/drive/), and reads the
+ * finished file back as the result (lua_ensemble_result.c).  This file
+ * holds the Lua entry points and the box of C resources they hold while
+ * Lua runs.
  */
 #include <math.h>
-#include <pthread.h>
 #include <stdio.h>
 #include <stdlib.h>
 #include <string.h>
-#include <unistd.h>
 
 #include "dfle/sensitivity.h"
 #include "lua/ensemble/lua_ensemble_internal.h"
@@ -41,15 +38,15 @@
 /* ------------------------------------------------------------------ */
 /* C resources held while Lua code runs: freed by __gc if it raises.   */
 
-int dfle_lua_ens_box_gc(lua_State *L)
+static int box_gc(lua_State *L)
 {
     run_box *b = luaL_checkudata(L, 1, RUN_BOX);
-    dfle_ens_file_close(b->file, 0, NULL);
-    dfle_ens_queue_free(b->queue);
     dfle_ens_table_free(b->table);
-    b->file = NULL;
-    b->queue = NULL;
-    b->table = NULL;
+    free(b->meta);
+    free(b->header);
+    if (b->ev_set)
+        dfle_lua_evaluator_release(&b->ev);
+    memset(b, 0, sizeof *b);
     return 0;
 }
 
@@ -88,7 +85,7 @@ static void record_counts(lua_State *L, dfle_record *rec, int res)
  * what is the same for every run (the date and command are here). */
 static void ensemble_record(lua_State *L, int ctx, int res, const char *path, int workers)
 {
-    const dfle_lua_ensemble_host *host = dfle_lua_ens_host(L);
+    const dfle_lua_host *host = dfle_lua_host_of(L);
     dfle_record *rec = dfle_lua_push_record(L, "dfle.ensemble: one row per sample, in index "
                                                "order");
     const char *jpath;
@@ -120,15 +117,34 @@ static void ensemble_record(lua_State *L, int ctx, int res, const char *path, in
 /* ------------------------------------------------------------------ */
 /* dfle.ensemble                                                       */
 
+/* The driver's progress and notes, to the host and the state's notes. */
+typedef struct hooks {
+    lua_State *L;
+    const dfle_lua_host *host;
+} hooks;
+
+static void hook_note(void *ud, const char *line)
+{
+    const hooks *h = ud;
+    dfle_lua_note(h->L, DFLE_LUA_NOTE, "%s", line);
+}
+
+static void hook_progress(void *ud, size_t done, size_t total, size_t failed, double elapsed)
+{
+    const hooks *h = ud;
+    h->host->progress(h->host->ud, done, total, failed, elapsed);
+}
+
 static int l_ensemble(lua_State *L)
 {
-    const dfle_lua_ensemble_host *host = dfle_lua_ens_host(L);
+    const dfle_lua_host *host = dfle_lua_host_of(L);
     lua_Integer call;
-    spec s;
-    int ctx, nw, role, remote = 0, workers;
+    spec *s;
+    int ctx, nw, role, workers, st;
     run_box *box;
     dfle_error err;
-    size_t total, ran = 0;
+    dfle_ensemble_result res;
+    hooks hk = {L, host};
     double started;
     const char *path;
 
@@ -141,107 +157,54 @@ static int l_ensemble(lua_State *L)
     path = lua_tostring(L, -1);
     if (role == DFLE_LUA_PAR_EARLIER) {
         /* An earlier ensemble of the script, finished by the main state. */
-        dfle_lua_ens_push_result(L, "ensemble", path, host ? host->shard_i : 0, host ? host->shard_n : 0, 0);
+        dfle_lua_ens_push_result(L, "ensemble", path, host ? host->shard_i : 0,
+                                 host ? host->shard_n : 0, 0);
         return 1;
     }
 
     dfle_lua_check_interrupt(L, "ensemble");
-    started = dfle_lua_ens_now();
-    box = dfle_lua_ens_new_box(L);
-    lua_getfield(L, ctx, "comments");
-    lua_getfield(L, ctx, "meta");
-    lua_getfield(L, ctx, "header");
-    if (dfle_ens_file_open(path, lua_tostring(L, -2), lua_tostring(L, -3), lua_tostring(L, -1),
-                           (size_t)s.n, s.resume, &box->file, &err) != DFLE_OK ||
-        dfle_ens_queue_new((size_t)s.n, host ? host->shard_i : 0, host ? host->shard_n : 0,
-                           box->file, s.limit, &box->queue, &err) != DFLE_OK)
-        return luaL_error(L, "dfle.ensemble: %s", err.msg);
-    total = dfle_ens_queue_total(box->queue);
-    if (dfle_ens_file_ndone(box->file) > 0 && total > 0)
-        dfle_lua_note(L, DFLE_LUA_NOTE, "ensemble %s: resuming: %zu finished rows kept, %zu "
-                      "sample%s to run", path, dfle_ens_file_ndone(box->file), total,
-                      total == 1 ? "" : "s");
-    else if (dfle_ens_file_ndone(box->file) > 0)
-        dfle_lua_note(L, DFLE_LUA_NOTE, "ensemble %s: all %zu rows were done before; nothing to run",
-                      path, dfle_ens_file_ndone(box->file));
-
-    nw = dfle_lua_par_workers(host, s.workers, host != NULL ? host->cores : 0);
+    started = dfle_lua_now();
+    nw = dfle_lua_par_workers(host, s->workers, host != NULL ? host->cores : 0);
     if (host == NULL || host->open_state == NULL || role == DFLE_LUA_PAR_NESTED)
         nw = 1;
     workers = nw;
-    if ((size_t)nw > total)
-        nw = (int)(total > 0 ? total : 1);
-
-    /* Other processes (MPI ranks) share the queue; this one then runs
+    box = dfle_lua_ens_new_box(L);
+    lua_getfield(L, ctx, "identity");
+    if (dfle_lua_evaluator_init(&box->ev, &dfle_lua_ens_kind, host, L, ctx,
+                                role == DFLE_LUA_PAR_RUN ? call : 0, lua_tostring(L, -1),
+                                &err) != DFLE_OK)
+        return dfle_lua_raise(L, &err);
+    lua_pop(L, 1);
+    box->ev_set = 1;
+    s->o.workers = nw;
+    /* Other processes (MPI ranks) share the samples; this one then runs
      * its share on worker threads, never in the calling state, so that
-     * its main thread stays free to serve them (the pool starts them). */
-    remote = host != NULL && host->remote_begin != NULL && host->open_state != NULL &&
-             total > 0 && role == DFLE_LUA_PAR_RUN;
-    if (nw <= 1 && !remote) {
-        size_t i, failed = 0;
-        double t0 = dfle_lua_ens_now();
-        while (!dfle_lua_interrupted(L) && dfle_ens_queue_next(box->queue, &i)) {
-            /* Parallel calls inside a sample run here, in this state. */
-            dfle_lua_par_depth(L, +1);
-            failed += (size_t)dfle_lua_ens_sample_row(L, ctx, i);
-            dfle_lua_par_depth(L, -1);
-            /* A sample cut short by the interrupt is not a result: its
-             * row is dropped, and a resumed run does it again. */
-            if (dfle_lua_interrupted(L))
-                break;
-            if (dfle_ens_file_append(box->file, i, lua_tostring(L, -1), &err) != DFLE_OK)
-                return luaL_error(L, "dfle.ensemble: %s", err.msg);
-            lua_pop(L, 1);
-            ran++;
-            if (host != NULL && host->progress != NULL)
-                host->progress(host->ud, ran, total, failed, dfle_lua_ens_now() - t0);
-        }
-        if (host != NULL && host->progress_end != NULL && total > 0)
-            host->progress_end(host->ud);
-    } else {
-        pool pl;
-        memset(&pl, 0, sizeof pl);
-        pl.host = host;
-        pl.target = call;
-        pl.meta = lua_tostring(L, -2);
-        pl.header = lua_tostring(L, -1);
-        pl.file = box->file;
-        pl.queue = box->queue;
-        pl.interrupt = dfle_lua_get_interrupt(L);
-        pl.remote = remote;
-        pl.table_workers = s.workers;
-        dfle_lua_ens_run_threads(L, &pl, nw, total);
-        ran = pl.done + pl.rdone;
-        if (pl.error) {
-            dfle_ens_file_close(box->file, 1, NULL);
-            box->file = NULL;
-            return luaL_error(L, "dfle.ensemble: %s (%d rows written are kept; run again to "
-                                 "resume)", pl.msg, (int)ran);
-        }
+     * its main thread stays free to watch them. */
+    s->o.remote = role == DFLE_LUA_PAR_RUN && host != NULL && host->open_state != NULL
+                      ? host->remote
+                      : NULL;
+    s->o.remote_workers = s->workers;
+    s->o.interrupt = dfle_lua_get_interrupt(L);
+    s->o.progress = host != NULL && host->progress != NULL ? hook_progress : NULL;
+    s->o.note = hook_note;
+    s->o.ud = &hk;
+    st = dfle_ensemble_run(&s->o, &box->ev.ev, &res, &err);
+    if (host != NULL && host->progress_end != NULL && res.total > 0)
+        host->progress_end(host->ud);
+    if (st == DFLE_ECANCELED) {
+        dfle_lua_set_interrupt_note(L, "dfle.ensemble stopped taking samples; %d finished rows "
+                                       "are in %s, and running the script again resumes it",
+                                    (int)(res.kept + res.ran), res.path);
+        dfle_lua_check_interrupt(L, "ensemble");
     }
-    {
-        dfle_ens_file *f = box->file;
-        size_t kept = dfle_ens_file_ndone(f);
-        int cut_short = dfle_lua_interrupted(L) && ran < total;
-        box->file = NULL;
-        /* Cut short, the rows stay as written (whole lines, in the order
-         * they finished; the resumed run sorts them): the sorted rewrite
-         * syncs the disk, which on a busy machine takes longer than the
-         * moment between the SIGTERM and the SIGKILL with which mpirun
-         * ends a job, and the message below must get out first. */
-        if (dfle_ens_file_close(f, !cut_short, &err) != DFLE_OK)
-            return luaL_error(L, "dfle.ensemble: %s", err.msg);
-        if (cut_short) {
-            dfle_lua_set_interrupt_note(L, "dfle.ensemble stopped taking samples; %d finished "
-                                           "rows are in %s, and running the script again "
-                                           "resumes it", (int)kept, path);
-            dfle_lua_check_interrupt(L, "ensemble");
-        }
-    }
-    dfle_lua_note(L, DFLE_LUA_DETAIL, "ensemble %s: %zu sample%s run in %.1f s", path, ran,
-                  ran == 1 ? "" : "s", dfle_lua_ens_now() - started);
-    dfle_lua_ens_push_result(L, "ensemble", path, host ? host->shard_i : 0, host ? host->shard_n : 0,
-                (lua_Integer)ran);
+    if (st != DFLE_OK)
+        return dfle_lua_raise(L, &err);
+    if ((size_t)nw > res.total)
+        nw = res.total > 0 ? (int)res.total : 1;
+    dfle_lua_note(L, DFLE_LUA_DETAIL, "ensemble %s: %zu sample%s run in %.1f s", path, res.ran,
+                  res.ran == 1 ? "" : "s", dfle_lua_now() - started);
+    dfle_lua_ens_push_result(L, "ensemble", path, host ? host->shard_i : 0,
+                             host ? host->shard_n : 0, (lua_Integer)res.ran);
     lua_pushinteger(L, workers); /* dfle.pawn(ens) runs its bootstrap on as many */
     lua_setfield(L, -2, "workers");
     ensemble_record(L, ctx, lua_gettop(L), path, nw);
@@ -274,7 +237,10 @@ static int l_gather(lua_State *L)
         lua_Integer k = dfle_lua_check_whole(L, shards, "gather", "shards", 1, 1e6);
         lua_createtable(L, (int)k, 0);
         for (lua_Integer i = 1; i <= k; i++) {
-            dfle_lua_ens_push_shard_path(L, out, (size_t)i, (size_t)k);
+            char p[4096];
+            if (dfle_ensemble_shard_path(out, (size_t)i, (size_t)k, p, sizeof p, &err) != DFLE_OK)
+                return dfle_lua_raise(L, &err);
+            lua_pushstring(L, p);
             lua_rawseti(L, -2, i);
         }
         lua_replace(L, 3);
@@ -314,7 +280,7 @@ static int l_gather(lua_State *L)
  * ran with (at idx, or 0); 0: dfle.pawn's own default, every core. */
 static lua_Integer default_threads(lua_State *L, int ens)
 {
-    const dfle_lua_ensemble_host *host = dfle_lua_ens_host(L);
+    const dfle_lua_host *host = dfle_lua_host_of(L);
     lua_Integer n = 0;
     if (dfle_lua_par_inside(L))
         return 1;
@@ -517,15 +483,14 @@ static int l_pawn_ensemble(lua_State *L)
  * dfle.ensemble call (scripts may skip output there). */
 static int l_worker(lua_State *L)
 {
-    lua_rawgetp(L, LUA_REGISTRYINDEX, &dfle_lua_ens_worker_key);
-    lua_pushboolean(L, lua_touserdata(L, -1) != NULL);
+    lua_pushboolean(L, dfle_lua_is_worker(L));
     return 1;
 }
 
 void dfle_lua_open_ensemble(lua_State *L)
 {
     if (luaL_newmetatable(L, RUN_BOX)) {
-        lua_pushcfunction(L, dfle_lua_ens_box_gc);
+        lua_pushcfunction(L, box_gc);
         lua_setfield(L, -2, "__gc");
     }
     lua_pop(L, 1);

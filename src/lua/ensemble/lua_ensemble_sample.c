@@ -1,70 +1,22 @@
 /*
- * lua_ensemble_sample.c - one sample of dfle.ensemble: build its model,
- * run it to steady state, fit and measure it, all protected, into one
- * CSV row, and the text of the row's fields.
+ * lua_ensemble_sample.c - one sample of dfle.ensemble in Lua, the kind
+ * the Lua evaluator runs (lua/drive/lua_parallel.h): the
+ * parameter table p from the driver's x, then build(p), its steady
+ * state, the slope-area fit and measure, and the outputs by name.  The
+ * driver makes the row (dfle/ensemble_run.h), the same text whichever
+ * state ran the sample.
  *
- * The row is the same text whichever state ran the sample.  A sample that
- * fails (no steady state, a failed fit, a NaN output, an error in the
- * script's build or measure) is a row too, whose status and reason say
- * why: one bad corner of the design does not stop an ensemble.
+ * A sample that fails (no steady state, a failed fit, a NaN output, an
+ * error in the script's build or measure) is a result too, whose status
+ * and reason say why: one bad corner of the design does not stop an
+ * ensemble.
  */
 #include <math.h>
 #include <stdio.h>
+#include <stdlib.h>
 #include <string.h>
 
 #include "lua/ensemble/lua_ensemble_internal.h"
-
-/* ------------------------------------------------------------------ */
-/* The text of a field.                                                */
-
-void dfle_lua_ens_push_number_text(lua_State *L, double v)
-{
-    char buf[40];
-    if (isnan(v))
-        lua_pushliteral(L, "nan");
-    else if (isinf(v))
-        lua_pushstring(L, v > 0 ? "inf" : "-inf");
-    else {
-        snprintf(buf, sizeof buf, "%.17g", v);
-        lua_pushstring(L, buf);
-    }
-}
-
-/* The text of a field value: integers as integers, floats with 17
- * digits, other values as text, quoted when `quote` (quotes doubled;
- * line breaks become spaces either way). */
-void dfle_lua_ens_push_value_text(lua_State *L, int idx, int quote)
-{
-    idx = lua_absindex(L, idx);
-    if (lua_isinteger(L, idx)) {
-        char buf[32];
-        snprintf(buf, sizeof buf, "%lld", (long long)lua_tointeger(L, idx));
-        lua_pushstring(L, buf);
-    } else if (lua_type(L, idx) == LUA_TNUMBER) {
-        dfle_lua_ens_push_number_text(L, lua_tonumber(L, idx));
-    } else {
-        luaL_Buffer b;
-        const char *s = luaL_tolstring(L, idx, NULL); /* stays at the top, below b */
-        luaL_buffinit(L, &b);
-        if (quote)
-            luaL_addchar(&b, '"');
-        for (; *s != '\0'; s++) {
-            if (*s == '\n' || *s == '\r')
-                luaL_addchar(&b, ' ');
-            else if (*s == '"' && quote)
-                luaL_addstring(&b, "\"\"");
-            else
-                luaL_addchar(&b, *s);
-        }
-        if (quote)
-            luaL_addchar(&b, '"');
-        luaL_pushresult(&b);
-        lua_remove(L, -2);
-    }
-}
-
-/* ------------------------------------------------------------------ */
-/* One sample.                                                         */
 
 /* Push the output `runout_A` or `runout_x` of the steady model at m:
  * drainage area or distance of the last node one debris flow reaches
@@ -94,17 +46,54 @@ static void push_runout(lua_State *L, int m, const char *name)
     lua_settop(L, t + 1);
 }
 
-/* run_sample(ctx, i) -> status, reason, values; runs under pcall. */
-static int run_sample(lua_State *L)
+/* The reason (a value at idx: the run's reason, the fit's message) of a
+ * failed sample. */
+static void fail_with(lua_State *L, dfle_eval_out *out, int status, int idx, const char *dflt)
 {
-    lua_Integer i = lua_tointeger(L, 2);
-    int p, m, res, fit, extra, vals;
-    lua_Integer nout;
+    out->status = status;
+    if (lua_type(L, idx) == LUA_TNUMBER) {
+        dfle_lua_push_field_text(L, idx, 0);
+        dfle_eval_reason(out, "%s", lua_tostring(L, -1));
+        out->flags |= DFLE_EVAL_REASON_NUMBER;
+        lua_pop(L, 1);
+    } else if (lua_type(L, idx) == LUA_TSTRING) {
+        dfle_eval_reason(out, "%s", lua_tostring(L, idx));
+    } else if (lua_isnil(L, idx)) {
+        dfle_eval_reason(out, "%s", dflt);
+    } else {
+        dfle_eval_reason(out, "%s", luaL_tolstring(L, idx, NULL));
+        lua_pop(L, 1);
+    }
+}
+
+/* sample(ctx, job): runs protected (lua_evaluator.c). */
+static int sample(lua_State *L)
+{
+    const dfle_lua_job *jb = lua_touserdata(L, 2);
+    dfle_eval_out *out = jb->out;
+    int p, m, res, fit, extra, names, values;
+    lua_Integer nout, np;
 
     lua_settop(L, 2);
-    lua_getfield(L, 1, "design");
-    lua_geti(L, -1, i);
+    /* p: the sample's parameters (a discrete one's chosen value) */
+    lua_getfield(L, 1, "names");
+    names = lua_gettop(L);
+    lua_getfield(L, 1, "values");
+    values = lua_gettop(L);
+    np = (lua_Integer)lua_rawlen(L, names);
+    lua_createtable(L, 0, (int)np);
     p = lua_gettop(L);
+    for (lua_Integer k = 1; k <= np; k++) {
+        lua_geti(L, names, k);
+        if (lua_geti(L, values, k) == LUA_TTABLE) {
+            lua_geti(L, -1, (lua_Integer)jb->x[k - 1] + 1);
+            lua_remove(L, -2);
+        } else {
+            lua_pop(L, 1);
+            lua_pushnumber(L, jb->x[k - 1]);
+        }
+        lua_rawset(L, p);
+    }
     lua_getfield(L, 1, "build");
     lua_pushvalue(L, p);
     lua_call(L, 1, 1);
@@ -124,13 +113,9 @@ static int run_sample(lua_State *L)
     res = lua_gettop(L);
     lua_getfield(L, res, "converged");
     if (!lua_toboolean(L, -1)) {
-        lua_pushliteral(L, "not_converged");
-        if (lua_getfield(L, res, "reason") == LUA_TNIL) {
-            lua_pop(L, 1);
-            lua_pushliteral(L, "no steady state");
-        }
-        lua_pushnil(L);
-        return 3;
+        lua_getfield(L, res, "reason");
+        fail_with(L, out, DFLE_EVAL_NOT_CONVERGED, -1, "no steady state");
+        return 0;
     }
     lua_pop(L, 1);
 
@@ -140,10 +125,8 @@ static int run_sample(lua_State *L)
     lua_getfield(L, 1, "fit");
     lua_call(L, 2, 2);
     if (lua_isnil(L, -2)) {
-        lua_pushliteral(L, "fit_failed");
-        lua_insert(L, -2);
-        lua_pushnil(L);
-        return 3;
+        fail_with(L, out, DFLE_EVAL_FIT_FAILED, -1, "nil");
+        return 0;
     }
     lua_pop(L, 1);
     fit = lua_gettop(L);
@@ -164,27 +147,26 @@ static int run_sample(lua_State *L)
 
     lua_getfield(L, 1, "outputs");
     nout = luaL_len(L, -1);
-    lua_createtable(L, (int)nout, 0);
-    vals = lua_gettop(L);
     for (lua_Integer k = 1; k <= nout; k++) {
+        int top = lua_gettop(L), t = LUA_TNIL;
         const char *name;
-        int t = LUA_TNIL;
-        lua_geti(L, vals - 1, k);
+        double v;
+        lua_geti(L, top, k);
         name = lua_tostring(L, -1);
         if (extra)
             t = lua_getfield(L, extra, name);
         if (t == LUA_TNIL) {
-            lua_settop(L, vals + 1);
+            lua_settop(L, top + 1);
             lua_pushstring(L, name);
             t = lua_rawget(L, fit); /* raw: the fit table raises on unknown keys */
         }
         if (t == LUA_TNIL) {
-            lua_settop(L, vals + 1);
+            lua_settop(L, top + 1);
             lua_pushstring(L, name);
             t = lua_rawget(L, res);
         }
         if (t == LUA_TNIL && (strcmp(name, "runout_A") == 0 || strcmp(name, "runout_x") == 0)) {
-            lua_settop(L, vals + 1);
+            lua_settop(L, top + 1);
             push_runout(L, m, name);
             t = LUA_TNUMBER;
         }
@@ -192,87 +174,59 @@ static int run_sample(lua_State *L)
             return luaL_error(L, "output '%s' is %s (not a fit value%s)", name,
                               t == LUA_TNIL ? "missing" : luaL_typename(L, -1),
                               extra ? " nor returned by measure" : "; compute it in measure");
-        if (!isfinite(lua_tonumber(L, -1))) {
-            lua_pushliteral(L, "nan");
-            lua_pushfstring(L, "output '%s' is %s", name,
-                            dfle_lua_number_text(L, lua_tonumber(L, -2)));
-            lua_remove(L, -2);
-            lua_pushnil(L);
-            return 3;
-        }
-        lua_rawseti(L, vals, k);
-        lua_settop(L, vals);
+        v = lua_tonumber(L, -1);
+        out->y[k - 1] = v;
+        if (!isfinite(v))
+            return 0; /* the driver names it: status "nan" */
+        lua_settop(L, top);
     }
-    lua_pushliteral(L, "ok");
-    lua_pushliteral(L, "");
-    lua_pushvalue(L, vals);
-    return 3;
+    return 0;
 }
 
-/* Run sample i with the context at ctx; push its row text.  Returns 1
- * if the sample failed (its row says why). */
-int dfle_lua_ens_sample_row(lua_State *L, int ctx, size_t i)
+/* prepare(table): a worker's context. */
+static int prepare(lua_State *L)
 {
-    int failed, top, p, names, outputs;
-    lua_Integer np, nout;
-    dfle_lua_text pc;
-    char buf[32];
+    spec *s;
+    lua_settop(L, 1);
+    dfle_lua_ens_read_spec(L, 1, "ensemble", &s, dfle_lua_host_of(L));
+    return 1;
+}
 
-    lua_pushcfunction(L, run_sample);
-    lua_pushvalue(L, ctx);
-    lua_pushinteger(L, (lua_Integer)i);
-    if (lua_pcall(L, 2, 3, 0) != LUA_OK) {
-        if (lua_type(L, -1) != LUA_TSTRING && lua_type(L, -1) != LUA_TNUMBER) {
-            const char *tn = luaL_typename(L, -1);
-            lua_pop(L, 1);
-            lua_pushfstring(L, "(error object is a %s value)", tn);
-        }
-        lua_pushliteral(L, "error");
-        lua_insert(L, -2);
-        lua_pushnil(L);
+const dfle_lua_kind dfle_lua_ens_kind = {
+    .kind = DFLE_LUA_PAR_ENSEMBLE,
+    .name = "lua.ensemble",
+    .prepare = prepare,
+    .what = "ensemble",
+    .sample = sample,
+    .raw_numbers = 1,
+    .gc_step = 0,
+};
+
+/* ------------------------------------------------------------------ */
+/* The evaluator other processes open from a key.                      */
+
+int dfle_lua_ensemble_remote(const dfle_lua_host *host, const char *key, dfle_evaluator **ev,
+                             dfle_error *err)
+{
+    dfle_lua_eval_spec *s = calloc(1, sizeof *s);
+    int st;
+    *ev = NULL;
+    if (s == NULL)
+        return dfle_error_set(err, DFLE_ENOMEM, "out of memory");
+    if ((st = dfle_lua_evaluator_from_key(s, &dfle_lua_ens_kind, host, key, err)) != DFLE_OK) {
+        free(s);
+        return st;
     }
-    /* stack: status, reason, values */
-    top = lua_gettop(L);
-    failed = strcmp(lua_tostring(L, top - 2), "ok") != 0;
-    lua_getfield(L, ctx, "design");
-    lua_geti(L, -1, (lua_Integer)i);
-    p = lua_gettop(L);
-    lua_getfield(L, ctx, "names");
-    names = lua_gettop(L);
-    lua_getfield(L, ctx, "outputs");
-    outputs = lua_gettop(L);
-    np = (lua_Integer)lua_rawlen(L, names);
-    nout = (lua_Integer)lua_rawlen(L, outputs);
-    dfle_lua_text_init(L, &pc);
-    snprintf(buf, sizeof buf, "%zu", i);
-    dfle_lua_text_str(L, &pc, buf);
-    for (lua_Integer k = 1; k <= np; k++) {
-        dfle_lua_text_str(L, &pc, ",");
-        lua_geti(L, names, k);
-        lua_gettable(L, p);
-        dfle_lua_ens_push_value_text(L, -1, 1);
-        dfle_lua_text_add(L, &pc);
-        lua_pop(L, 1);
-    }
-    for (lua_Integer k = 1; k <= nout; k++) {
-        dfle_lua_text_str(L, &pc, ",");
-        if (lua_istable(L, top)) {
-            lua_geti(L, top, k);
-            dfle_lua_ens_push_number_text(L, lua_tonumber(L, -1));
-            dfle_lua_text_add(L, &pc);
-            lua_pop(L, 1);
-        } else {
-            dfle_lua_text_str(L, &pc, "nan");
-        }
-    }
-    dfle_lua_text_str(L, &pc, ",");
-    lua_pushvalue(L, top - 2);
-    dfle_lua_text_add(L, &pc);
-    dfle_lua_text_str(L, &pc, ",");
-    dfle_lua_ens_push_value_text(L, top - 1, 1);
-    dfle_lua_text_add(L, &pc);
-    dfle_lua_text_finish(L, &pc);
-    lua_replace(L, top - 2);
-    lua_settop(L, top - 2);
-    return failed;
+    *ev = &s->ev;
+    return DFLE_OK;
+}
+
+void dfle_lua_ensemble_remote_free(dfle_evaluator *ev)
+{
+    dfle_lua_eval_spec *s;
+    if (ev == NULL)
+        return;
+    s = ev->ud;
+    dfle_lua_evaluator_release(s);
+    free(s);
 }

@@ -11,107 +11,59 @@
  *
  * The call is a parallel call like dfle.ensemble: on the dfle command,
  * worker threads replay the script up to it and evaluate proposals in
- * their own Lua states (lua_invert_pool.c).  This file is the entry
- * point: the table (lua_invert_spec.c), the chain file opened or resumed
- * (lua_invert_chain.c), the point estimate (lua_invert_lsq.c), the
- * sampling loop (lua_invert_loop.c), the result (lua_invert_result.c).
+ * their own Lua states (lua/drive/).  The sampler, the chain file and
+ * its resume are the C library's (dfle/invert_run.h).  This file is the
+ * entry point: the table (lua_invert_spec.c), the chain opened or
+ * resumed, the point estimate (lua_invert_lsq.c), the sampling on the
+ * evaluator of lua_invert_eval.c, the result (lua_invert_result.c).
  * doc/inversion.md has the statistics.
  */
 #include <math.h>
 #include <stdio.h>
 #include <stdlib.h>
 #include <string.h>
-#include <sys/stat.h>
 
 #include "lua/invert/lua_invert_internal.h"
 
-/* The first setting in which two identity lines differ, as
- * "seed=3 in the file, seed=4 here". */
-static void push_difference(lua_State *L, const char *file, const char *mine)
+/* The driver's progress, to the host. */
+static void hook_progress(void *ud, size_t done, size_t total, size_t failed, double elapsed)
 {
-    const char *a = file, *b = mine;
-    while (*a != '\0' && *b != '\0') {
-        size_t la = strcspn(a, " "), lb = strcspn(b, " ");
-        if (la != lb || strncmp(a, b, la) != 0) {
-            lua_pushlstring(L, a, la);
-            lua_pushlstring(L, b, lb);
-            lua_pushfstring(L, "%s in the file, %s here", lua_tostring(L, -2),
-                            lua_tostring(L, -1));
-            lua_replace(L, -3);
-            lua_pop(L, 1);
-            return;
-        }
-        a += la + (a[la] == ' ');
-        b += lb + (b[lb] == ' ');
-    }
-    lua_pushliteral(L, "the file's first lines differ");
+    const dfle_lua_host *h = ud;
+    h->progress(h->ud, done, total, failed, elapsed);
 }
 
-/* Open the chain file: a longer chain in it is fine (its first steps
- * serve), so the file's own length sets how many rows it may hold. */
-static void open_chain(lua_State *L, int ctx, inv_run *R, const char *path)
+/* The chain's arrays, where the result and the figures read them. */
+static void note_chain(inv_run *R)
 {
-    size_t n = (R->steps + 1) * R->walkers;
-    dfle_error err;
-    char msg[DFLE_ERROR_MSG_MAX];
-    lua_getfield(L, ctx, "meta");
-    lua_getfield(L, ctx, "header");
-    if (R->resume) {
-        struct stat sb;
-        if (stat(path, &sb) == 0 && S_ISREG(sb.st_mode) && sb.st_size > 0) {
-            /* the table is held by the box, whose __gc frees it if we raise */
-            dfle_ens_table *t;
-            if (dfle_ens_table_read(path, &R->table, &err) != DFLE_OK)
-                luaL_error(L, "dfle.invert: %s is not a chain of dfle.invert (%s); remove it, pass "
-                              "resume = false, or choose another 'out'", path, err.msg);
-            t = R->table;
-            if (t->nrows > 0 && t->index[t->nrows - 1] > n)
-                n = t->index[t->nrows - 1];
-            if (strcmp(t->meta, lua_tostring(L, -2)) != 0 ||
-                strcmp(t->header, lua_tostring(L, -1)) != 0) {
-                push_difference(L, t->meta, lua_tostring(L, -2));
-                luaL_error(L, "dfle.invert: %s holds another inversion's chain (%s); remove it, "
-                              "pass resume = false, or choose another 'out'", path,
-                           lua_tostring(L, -1));
-            }
-            dfle_ens_table_free(R->table);
-            R->table = NULL;
-        }
-    }
-    if (dfle_ens_file_open(path, lua_tostring(L, -2), NULL, lua_tostring(L, -1), n, R->resume,
-                           &R->file, &err) != DFLE_OK)
-        luaL_error(L, "dfle.invert: %s", err.msg);
-    lua_pop(L, 2);
-    if (dfle_ens_file_ndone(R->file) > 0 && inv_read_chain(R, path, msg, sizeof msg) != 0)
-        luaL_error(L, "dfle.invert: %s", msg);
+    const dfle_invert_result *r = dfle_invert_result_of(R->inv);
+    R->walkers = r->walkers;
+    R->steps = r->steps;
+    R->burn = r->burn;
+    R->have = r->have;
+    R->X = r->x;
+    R->LP = r->log_post;
+    R->LL = r->log_like;
+    R->ST = r->proposal;
 }
 
 static int l_invert(lua_State *L)
 {
-    const dfle_lua_ensemble_host *host = dfle_lua_ens_host(L);
+    const dfle_lua_host *host = dfle_lua_host_of(L);
     lua_Integer call;
-    int role, ctx, lsq_idx = 0;
+    int role, ctx, lsq_idx = 0, st;
     inv_run *R;
     const char *out;
-    size_t K, ran = 0, have0;
-    char msg[DFLE_ERROR_MSG_MAX];
-    double t0 = dfle_lua_ens_now();
+    dfle_error err;
+    double t0 = dfle_lua_now();
 
     lua_settop(L, 1);
     role = dfle_lua_par_enter(L, DFLE_LUA_PAR_INVERT, 1, &call);
     inv_read_spec(L, 1, &R);
     ctx = lua_gettop(L);
     R->nested = role == DFLE_LUA_PAR_NESTED;
-    K = R->walkers;
     lua_getfield(L, ctx, "out");
     out = lua_tostring(L, -1); /* held by ctx */
     lua_pop(L, 1);
-    R->X = calloc((R->steps + 1) * K * R->d, sizeof *R->X);
-    R->LP = calloc((R->steps + 1) * K, sizeof *R->LP);
-    R->LL = calloc((R->steps + 1) * K, sizeof *R->LL);
-    R->ST = calloc((R->steps + 1) * K, 1);
-    if (R->X == NULL || R->LP == NULL || R->LL == NULL || R->ST == NULL)
-        return luaL_error(L, "dfle.invert: out of memory for the chain");
 
     if (role == DFLE_LUA_PAR_EARLIER) {
         /* A worker replaying the script: this inversion is finished. */
@@ -119,45 +71,62 @@ static int l_invert(lua_State *L)
             return luaL_error(L, "dfle.invert: a worker replaying the script for a later parallel "
                                  "call met this inversion, which has no 'out' file to read its "
                                  "result from; give it out = \"...\" (doc/inversion.md)");
-        if (inv_read_chain(R, out, msg, sizeof msg) != 0)
-            return luaL_error(L, "dfle.invert: %s", msg);
-        if (R->have < R->steps + 1)
-            return luaL_error(L, "dfle.invert: %s is not a finished chain", out);
+        R->o.read_only = 1;
+        if (dfle_invert_new(&R->o, &R->inv, &err) != DFLE_OK)
+            return dfle_lua_raise(L, &err);
+        note_chain(R);
         R->lsq = 0;
-        inv_push_result(L, ctx, R, 0, 0, 0);
+        inv_push_result(L, ctx, R, 0, 0);
         return 1;
     }
-    if (out != NULL)
-        open_chain(L, ctx, R, out);
-    have0 = R->have;
+    {
+        int nw = dfle_lua_par_workers(host, R->o.workers, 0);
+        if (host == NULL || host->open_state == NULL || R->nested)
+            nw = 1;
+        R->o.workers = nw;
+    }
+    R->o.interrupt = dfle_lua_get_interrupt(L);
+    R->o.progress = host != NULL && host->progress != NULL && !R->nested ? hook_progress : NULL;
+    R->o.ud = (void *)host;
+    /* The chain file first: another inversion's is refused before the
+     * point estimate takes its time. */
+    if (dfle_invert_new(&R->o, &R->inv, &err) != DFLE_OK)
+        return dfle_lua_raise(L, &err);
     if (R->lsq && R->nmodel >= 1) {
         dfle_lua_par_depth(L, +1);
         inv_push_lsq(L, ctx, R);
         dfle_lua_par_depth(L, -1);
         lsq_idx = lua_gettop(L);
     }
-    if (R->steps > 0 && R->have < R->steps + 1) {
-        int nw = dfle_lua_par_workers(host, R->workers, 0);
-        if (host == NULL || host->open_state == NULL || R->nested)
-            nw = 1;
-        if (inv_sample(L, ctx, R, nw, call, msg, sizeof msg) != 0) {
-            dfle_ens_file *f = R->file;
-            R->file = NULL;
-            dfle_ens_file_close(f, 0, NULL);
-            return luaL_error(L, "dfle.invert: %s%s", msg,
-                              out != NULL ? " (the rows written are kept; run again to resume)"
-                                          : "");
-        }
-        ran = (R->have > 0 ? R->have - 1 : 0) - (have0 > 0 ? have0 - 1 : 0);
+    lua_getfield(L, ctx, "identity");
+    st = dfle_lua_evaluator_init(&R->ev, &inv_kind, host, L, ctx, call, lua_tostring(L, -1), &err);
+    lua_pop(L, 1);
+    if (st != DFLE_OK)
+        return dfle_lua_raise(L, &err);
+    R->ev_set = 1;
+    /* Parallel calls made by build run in the evaluating state. */
+    dfle_lua_par_depth(L, +1);
+    st = dfle_invert_run(R->inv, &R->ev.ev, &err);
+    dfle_lua_par_depth(L, -1);
+    if (host != NULL && host->progress_end != NULL && !R->nested)
+        host->progress_end(host->ud);
+    note_chain(R);
+    if (st == DFLE_ECANCELED) {
+        const dfle_invert_result *r = dfle_invert_result_of(R->inv);
+        if (out != NULL)
+            dfle_lua_set_interrupt_note(L, "dfle.invert stopped after step %d of %d; the whole "
+                                           "steps are in %s, and running the script again "
+                                           "resumes it", (int)(r->have > 0 ? r->have - 1 : 0),
+                                        (int)r->steps, out);
+        else
+            dfle_lua_set_interrupt_note(L, "dfle.invert stopped after step %d of %d (no 'out' "
+                                           "file: the chain is lost)",
+                                        (int)(r->have > 0 ? r->have - 1 : 0), (int)r->steps);
+        dfle_lua_check_interrupt(L, "invert");
     }
-    if (R->file != NULL) {
-        dfle_ens_file *f = R->file;
-        dfle_error err;
-        R->file = NULL;
-        if (dfle_ens_file_close(f, 1, &err) != DFLE_OK)
-            return luaL_error(L, "dfle.invert: %s", err.msg);
-    }
-    inv_push_result(L, ctx, R, lsq_idx, dfle_lua_ens_now() - t0, ran);
+    if (st != DFLE_OK)
+        return dfle_lua_raise(L, &err);
+    inv_push_result(L, ctx, R, lsq_idx, dfle_lua_now() - t0);
     return 1;
 }
 

@@ -1,13 +1,15 @@
 /*
- * lua_invert_eval.c - one evaluation of the log posterior in one Lua
- * state: the prior, then the forward model (build(p, channel), its steady
- * state, its slopes at the data's areas), then the likelihood.
+ * lua_invert_eval.c - one evaluation in one Lua state: the priors
+ * written in Lua, then the forward model (build(p, channel), its steady
+ * state, its slopes at the data's areas), then the likelihood (the
+ * driver adds the other priors, dfle/invert_run.h).
  *
  * Everything runs protected: a failed forward run is an outcome with a
- * status and a message, counted by the sampler as zero likelihood, never
- * an error that unwinds the chain.  The model built for an evaluation is
- * closed at once: its arrays are C memory the Lua collector does not see,
- * and thousands of evaluations would otherwise pile them up.
+ * status and a message, counted by the sampler (dfle/invert_run.h) as
+ * zero likelihood, never an error that unwinds the chain.  The model
+ * built for an evaluation is closed at once: its arrays are C memory the
+ * Lua collector does not see, and thousands of evaluations would
+ * otherwise pile them up.
  */
 #include <math.h>
 #include <stdio.h>
@@ -18,7 +20,7 @@
 
 #include "dfle/likelihood.h"
 
-enum { MODE_POSTERIOR, MODE_RESIDUALS, MODE_PREDICT };
+enum { MODE_RESIDUALS, MODE_PREDICT };
 
 typedef struct job {
     inv_run *R;
@@ -28,8 +30,8 @@ typedef struct job {
     const double *Aq;
     double *Sq;
     /* out */
-    int status;
-    double lp, ll, fwd;
+    int status;         /* DFLE_EVAL_*                          */
+    double fwd;
     char msg[INV_MSG];
 } job;
 
@@ -53,7 +55,7 @@ static void close_model(lua_State *L, int idx)
 }
 
 /* The forward model at jb->x: p, build, steady state, then residuals or
- * slopes at Aq.  Sets jb->status (INV_ACCEPTED standing for "ok"). */
+ * slopes at Aq.  Sets jb->status; raises what build or the run raise. */
 static void forward(lua_State *L, int ctx, job *jb)
 {
     inv_run *R = jb->R;
@@ -93,7 +95,7 @@ static void forward(lua_State *L, int ctx, job *jb)
         lua_getfield(L, -2, "reason");
         snprintf(jb->msg, sizeof jb->msg, "no steady state: %s",
                  lua_tostring(L, -1) ? lua_tostring(L, -1) : "?");
-        jb->status = INV_NOT_CONVERGED;
+        jb->status = DFLE_EVAL_NOT_CONVERGED;
         close_model(L, m);
         return;
     }
@@ -111,72 +113,112 @@ static void forward(lua_State *L, int ctx, job *jb)
     close_model(L, m);
     if (st != DFLE_OK) {
         snprintf(jb->msg, sizeof jb->msg, "%.*s", (int)sizeof jb->msg - 1, err.msg);
-        jb->status = INV_INVALID;
+        jb->status = DFLE_EVAL_INVALID;
         return;
     }
-    jb->status = INV_ACCEPTED;
+    jb->status = DFLE_EVAL_OK;
 }
 
-/* eval_p(ctx, job): runs protected. */
-static int eval_p(lua_State *L)
-{
-    job *jb = lua_touserdata(L, 2);
-    inv_run *R = jb->R;
-    double lprior = 0, t0;
+/* ------------------------------------------------------------------ */
+/* The evaluator's sample: ln L and the Lua densities of a proposal.   */
 
-    jb->lp = jb->ll = -INFINITY;
-    if (jb->mode == MODE_POSTERIOR) {
-        for (size_t j = 0; j < R->d; j++)
-            lprior += dfle_prior_logpdf(&R->prior[j], jb->x[j]);
-        if (!(lprior > -INFINITY)) {
-            jb->status = INV_OUTSIDE;
-            snprintf(jb->msg, sizeof jb->msg, "outside the prior");
-            return 0;
+/* sample(ctx, job): runs protected (lua_evaluator.c); a raise is an
+ * error of this proposal. */
+static int sample(lua_State *L)
+{
+    const dfle_lua_job *jl = lua_touserdata(L, 2);
+    dfle_eval_out *out = jl->out;
+    inv_run *R;
+    job jb;
+    int zero = 0;
+
+    lua_getfield(L, 1, "box");
+    R = lua_touserdata(L, -1);
+    lua_pop(L, 1);
+    /* res.forward_seconds is the forward model's own time: not the
+     * priors, the calls into Lua, the collector (0 if it raises) */
+    out->seconds = 0;
+    /* The priors written in Lua (the driver has checked the others'
+     * support): all of them, then the forward model only if none is 0. */
+    for (size_t j = 0; j < R->d; j++) {
+        double v;
+        if (!R->custom[j])
+            continue;
+        lua_getfield(L, 1, "density");
+        lua_getfield(L, 1, "names");
+        lua_geti(L, -1, (lua_Integer)j + 1);
+        lua_gettable(L, -3);
+        lua_pushnumber(L, jl->x[j]);
+        lua_call(L, 1, 1);
+        if (lua_type(L, -1) != LUA_TNUMBER) {
+            lua_geti(L, -2, (lua_Integer)j + 1);
+            return luaL_error(L, "the prior density of '%s' must return a number (ln p), got "
+                                 "%s", lua_tostring(L, -1), luaL_typename(L, -2));
         }
-        for (size_t j = 0; j < R->d; j++) {
-            double v;
-            if (!R->custom[j])
-                continue;
-            lua_getfield(L, 1, "density");
+        v = lua_tonumber(L, -1);
+        lua_pop(L, 3);
+        if (isnan(v) || v == INFINITY) {
             lua_getfield(L, 1, "names");
             lua_geti(L, -1, (lua_Integer)j + 1);
-            lua_gettable(L, -3);
-            lua_pushnumber(L, jb->x[j]);
-            lua_call(L, 1, 1);
-            if (lua_type(L, -1) != LUA_TNUMBER) {
-                lua_geti(L, -2, (lua_Integer)j + 1);
-                return luaL_error(L, "the prior density of '%s' must return a number (ln p), got "
-                                     "%s", lua_tostring(L, -1), luaL_typename(L, -2));
-            }
-            v = lua_tonumber(L, -1);
-            lua_pop(L, 3);
-            if (isnan(v) || v == INFINITY) {
-                lua_getfield(L, 1, "names");
-                lua_geti(L, -1, (lua_Integer)j + 1);
-                return luaL_error(L, "the prior density of '%s' returned %s at %s",
-                                  lua_tostring(L, -1), dfle_lua_number_text(L, v),
-                                  dfle_lua_number_text(L, jb->x[j]));
-            }
-            lprior += v;
+            return luaL_error(L, "the prior density of '%s' returned %s at %s",
+                              lua_tostring(L, -1), dfle_lua_number_text(L, v),
+                              dfle_lua_number_text(L, jl->x[j]));
         }
-        if (!(lprior > -INFINITY)) {
-            jb->status = INV_OUTSIDE;
-            snprintf(jb->msg, sizeof jb->msg, "zero prior density");
-            return 0;
-        }
+        out->y[1 + j] = v;
+        zero |= v == -INFINITY;
     }
-    t0 = now();
+    if (zero) {
+        out->status = DFLE_EVAL_OUTSIDE;
+        dfle_eval_reason(out, "zero prior density");
+        return 0;
+    }
+    memset(&jb, 0, sizeof jb);
+    jb.R = R;
+    jb.x = jl->x;
+    jb.mode = MODE_RESIDUALS;
+    {
+        double t0 = now();
+        forward(L, 1, &jb);
+        out->seconds = now() - t0;
+    }
+    if (jb.status != DFLE_EVAL_OK) {
+        out->status = jb.status;
+        dfle_eval_reason(out, "%s", jb.msg);
+        return 0;
+    }
+    out->y[0] = dfle_gauss_loglike(R->nobs, R->r, R->sigma_free ? jl->x[R->d - 1] : R->sigma);
+    return 0;
+}
+
+/* prepare(table): a worker's context. */
+static int prepare(lua_State *L)
+{
+    inv_run *R;
+    lua_settop(L, 1);
+    inv_read_spec(L, 1, &R);
+    return 1;
+}
+
+const dfle_lua_kind inv_kind = {
+    .kind = DFLE_LUA_PAR_INVERT,
+    .name = "lua.invert",
+    .prepare = prepare,
+    .what = "inversion",
+    .sample = sample,
+    .raw_numbers = 0,
+    .gc_step = 1,
+};
+
+/* ------------------------------------------------------------------ */
+/* The point estimate's and the predictions' runs, in the main state.  */
+
+/* run_p(ctx, job): runs protected. */
+static int run_p(lua_State *L)
+{
+    job *jb = lua_touserdata(L, 2);
+    double t0 = now();
     forward(L, 1, jb);
     jb->fwd += now() - t0;
-    if (jb->status != INV_ACCEPTED || jb->mode != MODE_POSTERIOR)
-        return 0;
-    jb->ll = dfle_gauss_loglike(R->nobs, R->r, R->sigma_free ? jb->x[R->d - 1] : R->sigma);
-    if (!(jb->ll > -INFINITY)) {
-        jb->status = INV_INVALID;
-        snprintf(jb->msg, sizeof jb->msg, "the likelihood is zero or NaN");
-        return 0;
-    }
-    jb->lp = lprior + jb->ll;
     return 0;
 }
 
@@ -184,17 +226,16 @@ static void run_job(lua_State *L, int ctx, job *jb)
 {
     int top = lua_gettop(L);
     ctx = lua_absindex(L, ctx);
-    jb->status = INV_ERROR;
+    jb->status = DFLE_EVAL_ERROR;
     jb->msg[0] = '\0';
     /* Parallel calls made by build run here, in this state. */
     dfle_lua_par_depth(L, +1);
-    lua_pushcfunction(L, eval_p);
+    lua_pushcfunction(L, run_p);
     lua_pushvalue(L, ctx);
     lua_pushlightuserdata(L, jb);
     if (lua_pcall(L, 2, 0, 0) != LUA_OK) {
         const char *m = lua_tostring(L, -1);
-        jb->status = INV_ERROR;
-        jb->lp = jb->ll = -INFINITY;
+        jb->status = DFLE_EVAL_ERROR;
         snprintf(jb->msg, sizeof jb->msg, "%s", m != NULL ? m : "(error object is not a string)");
     }
     dfle_lua_par_depth(L, -1);
@@ -203,42 +244,23 @@ static void run_job(lua_State *L, int ctx, job *jb)
     lua_gc(L, LUA_GCSTEP, 0);
 }
 
-/* A job of `mode` at x, run in L; the job is left for the caller. */
-static void run(lua_State *L, int ctx, inv_run *R, const double *x, int mode, job *jb)
-{
-    memset(jb, 0, sizeof *jb);
-    jb->R = R;
-    jb->x = x;
-    jb->mode = mode;
-    run_job(L, ctx, jb);
-}
-
-int inv_eval(lua_State *L, int ctx, inv_run *R, const double *x, double *lp, double *ll,
-             double *fwd, char *msg, size_t msglen)
-{
-    job jb;
-    run(L, ctx, R, x, MODE_POSTERIOR, &jb);
-    *lp = jb.lp;
-    *ll = jb.ll;
-    *fwd += jb.fwd;
-    if (msg != NULL)
-        snprintf(msg, msglen, "%s", jb.msg);
-    return jb.status;
-}
-
 int inv_residuals(lua_State *L, int ctx, inv_run *R, const double *x, double *fwd,
                   dfle_error *err)
 {
     job jb;
-    run(L, ctx, R, x, MODE_RESIDUALS, &jb);
+    memset(&jb, 0, sizeof jb);
+    jb.R = R;
+    jb.x = x;
+    jb.mode = MODE_RESIDUALS;
+    run_job(L, ctx, &jb);
     *fwd += jb.fwd;
-    if (jb.status != INV_ACCEPTED)
+    if (jb.status != DFLE_EVAL_OK)
         return dfle_error_set(err, DFLE_EFIT, "%s", jb.msg);
     return DFLE_OK;
 }
 
 int inv_predict_at(lua_State *L, int ctx, inv_run *R, const double *x, size_t n,
-                   const double *Aq, double *Sq, char *msg, size_t msglen)
+                   const double *Aq, double *Sq)
 {
     job jb;
     memset(&jb, 0, sizeof jb);
@@ -249,7 +271,5 @@ int inv_predict_at(lua_State *L, int ctx, inv_run *R, const double *x, size_t n,
     jb.Aq = Aq;
     jb.Sq = Sq;
     run_job(L, ctx, &jb);
-    if (msg != NULL)
-        snprintf(msg, msglen, "%s", jb.msg);
     return jb.status;
 }

@@ -2,59 +2,42 @@
  * lua_invert_internal.h - what the files of dfle.invert share (not
  * installed):
  *
- *   lua_invert.c         the entry point: spec, chain file, point
- *                        estimate, sampling, result
+ *   lua_invert.c         the entry point: spec, chain, point estimate,
+ *                        sampling, result
  *   lua_invert_spec.c    the table checked into a problem (priors, data,
- *                        channel) and its identity line
+ *                        channel), the driver's options and the
+ *                        identity of the problem
  *   lua_invert_data.c    the data binned into areas and log slopes
  *   lua_invert_lsq.c     the least-squares point estimate
- *   lua_invert_loop.c    the sampling loop
- *   lua_invert_eval.c    one log-posterior evaluation in one Lua state
- *   lua_invert_pool.c    worker threads evaluating batches of proposals
- *   lua_invert_chain.c   chain rows: formatting, and reading back to resume
+ *   lua_invert_eval.c    one evaluation in one Lua state: the forward
+ *                        model and the likelihood (the evaluator's kind)
  *   lua_invert_result.c  the result table, its summary text, predictions
  *   lua_invert_plot.c    dfle.plot.corner, dfle.plot.posterior_predictive
  *
- * Every Lua state that evaluates the posterior (the main one and each
- * worker's, see lua_ensemble_internal.h for the replay) builds its own
- * inv_problem from the same table, so evaluations are pure functions of
- * the parameters and the chain does not depend on who evaluated what.
+ * The sampler, the chain file, resume, the worker pool, the summaries
+ * and diagnostics are the C library's (dfle/invert_run.h).  Every Lua
+ * state that evaluates the posterior (the main one and each worker's,
+ * lua/drive/ replays the script) builds its own inv_run from the same
+ * table, so evaluations are pure functions of the parameters and the
+ * chain does not depend on who evaluated what.
  */
 #ifndef DFLE_LUA_INVERT_INTERNAL_H
 #define DFLE_LUA_INVERT_INTERNAL_H
 
-#include <pthread.h>
 #include <stddef.h>
 #include <stdint.h>
 
-#include "lua/core/dfle_lua.h"
-#include "lua/ensemble/lua_ensemble_internal.h"
 #include "dfle/csv.h"
-#include "dfle/ensemble.h"
-#include "dfle/mcmc.h"
+#include "dfle/invert_run.h"
 #include "dfle/prior.h"
+#include "lua/core/dfle_lua.h"
+#include "lua/drive/lua_parallel.h"
 
 #define INV_BOX "dfle.invert_run"
 #define INV_RESULT "dfle.inversion"
-#define INV_MSG 200 /* a failed evaluation's message, kept per proposal */
+#define INV_MSG DFLE_INVERT_MSG
 
-/* What became of a walker's proposal at a step (the chain's `proposal`
- * column); the failures are tallied. */
-enum inv_status {
-    INV_INITIAL,     /* step 0: the starting ensemble                  */
-    INV_ACCEPTED,
-    INV_REJECTED,    /* evaluated, not accepted                        */
-    INV_OUTSIDE,     /* outside the prior's support: not run           */
-    INV_NOT_CONVERGED, /* no steady state                              */
-    INV_INVALID,     /* a profile the likelihood cannot use            */
-    INV_ERROR,       /* raised: in build, the run, a prior density     */
-    INV_NSTATUS
-};
-extern const char *const inv_status_name[INV_NSTATUS];
-
-typedef struct inv_pool inv_pool;
-
-/* The problem and, in the main state, the run: freed by the box's __gc
+/* The problem and, in the main state, the chain: freed by the box's __gc
  * if anything raises. */
 typedef struct inv_run {
     /* --- the problem: free parameters (sigma last when inferred) --- */
@@ -67,26 +50,22 @@ typedef struct inv_run {
     size_t nobs;
     double *A_obs, *lnS_obs; /* the binned data                         */
     double *r;               /* nobs residuals: scratch                 */
-    /* --- sampler settings --- */
-    size_t walkers, steps, burn;
-    uint64_t seed;
-    double a;
-    int lsq, resume, workers, nested;
+    /* --- the driver's options (names, priors point into this box) --- */
+    dfle_invert_opts o;
+    const char **names;      /* d: held by the context table            */
+    int lsq, nested;
     /* --- the run (main state only) --- */
-    dfle_mcmc *mc;
-    dfle_ens_file *file;
-    double *X, *LP, *LL;     /* (steps + 1) x K (x d): the chain        */
-    unsigned char *ST;       /* (steps + 1) x K: enum inv_status         */
-    size_t done;             /* steps complete in X (0 = only the start) */
-    size_t have;             /* steps + 1 held in X (a file may hold more)*/
-    inv_pool *pool;
+    dfle_invert *inv;        /* the chain                               */
     dfle_csv *csv;           /* data file being read                    */
-    dfle_ens_table *table;   /* chain file being checked                */
-    char *row;               /* one formatted row                       */
-    size_t rowcap;
-    double fwd_seconds;      /* forward-model CPU time, all evaluators  */
-    size_t evaluations;      /* forward runs by this call               */
-    size_t init_failed;      /* starting draws without a density        */
+    dfle_lua_eval_spec ev;   /* the evaluator's texts                   */
+    int ev_set;
+    char *text[2];           /* the driver's texts, pushed then freed   */
+    /* the chain as the result shows it (the driver's arrays)           */
+    size_t walkers, steps, burn, have;
+    const double *X, *LP, *LL;
+    const unsigned char *ST;
+    double lsq_seconds;      /* forward-model CPU time of the estimate  */
+    size_t lsq_evaluations;
 } inv_run;
 
 /* The context table of an inversion (lua_invert_spec.c) holds: names,
@@ -99,20 +78,16 @@ typedef struct inv_run {
 void inv_read_spec(lua_State *L, int arg, inv_run **box);
 void inv_push_box(lua_State *L); /* a new, empty run box */
 
-/* lua_invert_eval.c: the log posterior of x (d values) in L with the
- * context at ctx; never raises.  *lp is -inf for every failure, whose
- * status is returned with a message in msg (may be NULL).  *fwd adds the
- * forward model's CPU time [s]. */
-int inv_eval(lua_State *L, int ctx, inv_run *R, const double *x, double *lp, double *ll,
-             double *fwd, char *msg, size_t msglen);
+/* lua_invert_eval.c: the evaluator's kind for dfle.invert. */
+extern const dfle_lua_kind inv_kind;
 /* Residuals at x (the model parameters, natural units) into R->r;
  * DFLE_OK, DFLE_EFIT for a failed run (message in err). */
 int inv_residuals(lua_State *L, int ctx, inv_run *R, const double *x, double *fwd,
                   dfle_error *err);
 /* Forward run at x, then the model's slopes at n areas Aq into Sq
- * (for predictions); status as inv_eval. */
+ * (for predictions): DFLE_EVAL_OK or a failure's status. */
 int inv_predict_at(lua_State *L, int ctx, inv_run *R, const double *x, size_t n,
-                   const double *Aq, double *Sq, char *msg, size_t msglen);
+                   const double *Aq, double *Sq);
 
 /* lua_invert_data.c: data = profile | file | {A =, S =} of the table at
  * arg into R->A_obs, lnS_obs; pushes the data table of the result ({A,
@@ -124,34 +99,9 @@ size_t inv_clip_to_channel(inv_run *R, const dfle_channel *ch);
 /* lua_invert_lsq.c: push res.lsq (never raises on a failed fit). */
 void inv_push_lsq(lua_State *L, int ctx, inv_run *R);
 
-/* lua_invert_loop.c: run the chain from R->have to R->steps on nw
- * evaluators (the main thread and nw - 1 workers replaying to the
- * call-th dfle.invert); sets ctx.failure_messages.  0, or -1 with msg
- * (the workers are stopped either way). */
-int inv_sample(lua_State *L, int ctx, inv_run *R, int nw, lua_Integer call, char *msg,
-               size_t msglen);
-
-/* lua_invert_pool.c */
-int inv_pool_start(lua_State *L, inv_run *R, int nthreads, lua_Integer call, const char *meta,
-                   char *msg, size_t msglen);
-/* Evaluate n points (n x d) in L (ctx) and on the workers; statuses,
- * log posteriors and likelihoods by point; messages INV_MSG apart.
- * Returns 0, or -1 when a worker failed (message in msg). */
-int inv_pool_eval(lua_State *L, int ctx, inv_run *R, size_t n, const double *x, double *lp,
-                  double *ll, unsigned char *st, char *msgs, char *msg, size_t msglen);
-/* Stop and join the workers; -1 with msg if one of them failed. */
-int inv_pool_stop(inv_run *R, char *msg, size_t msglen);
-
-/* lua_invert_chain.c */
-/* Format the row of (step, walker) from the chain in R into R->row. */
-int inv_format_row(inv_run *R, size_t step, size_t k);
-/* Read an existing chain file back into R->X.. (after the file is open
- * and checked); sets R->done.  0 or -1 with msg. */
-int inv_read_chain(inv_run *R, const char *path, char *msg, size_t msglen);
-
-/* lua_invert_result.c: push the result table of the chain in R. */
-void inv_push_result(lua_State *L, int ctx, inv_run *R, int lsq_idx, double elapsed,
-                     size_t ran);
+/* lua_invert_result.c: push the result table of the chain in R->inv
+ * (its arrays noted in R for predictions and plots). */
+void inv_push_result(lua_State *L, int ctx, inv_run *R, int lsq_idx, double elapsed);
 /* The result's context table (for predictions), pushed; raises if the
  * value at idx is not a result. */
 int inv_result_ctx(lua_State *L, int idx);

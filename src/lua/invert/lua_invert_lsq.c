@@ -33,9 +33,9 @@ static int lsq_residuals(void *ud, const double *u, double *r, dfle_error *err)
         if (!(dfle_prior_logpdf(&R->prior[j], jb->x[j]) > -INFINITY))
             return DFLE_EFIT;
     }
-    if (inv_residuals(jb->L, jb->ctx, R, jb->x, &R->fwd_seconds, err) != DFLE_OK)
+    if (inv_residuals(jb->L, jb->ctx, R, jb->x, &R->lsq_seconds, err) != DFLE_OK)
         return DFLE_EFIT;
-    R->evaluations++;
+    R->lsq_evaluations++;
     memcpy(r, R->r, R->nobs * sizeof *r);
     return DFLE_OK;
 }

@@ -70,15 +70,11 @@ static void add_warning(lua_State *L, int warn, const char *fmt, ...)
     lua_rawseti(L, warn, (lua_Integer)lua_rawlen(L, warn) + 1);
 }
 
-void inv_push_result(lua_State *L, int ctx, inv_run *R, int lsq_idx, double elapsed,
-                     size_t ran)
+void inv_push_result(lua_State *L, int ctx, inv_run *R, int lsq_idx, double elapsed)
 {
-    const size_t K = R->walkers, d = R->d, N = R->steps, burn = R->burn;
+    const dfle_invert_result *r = dfle_invert_result_of(R->inv);
+    const size_t K = r->walkers, d = r->d, N = r->steps;
     int res, names, warn;
-    size_t tally[INV_NSTATUS] = {0};
-    double *tau = lua_newuserdatauv(L, (d + 1) * sizeof *tau, 0);
-    double tau_max = 0, tau_use;
-    int windowed = 1;
 
     lua_newtable(L);
     res = lua_gettop(L);
@@ -90,28 +86,31 @@ void inv_push_result(lua_State *L, int ctx, inv_run *R, int lsq_idx, double elap
     warn = lua_gettop(L);
     lua_pushinteger(L, (lua_Integer)K), lua_setfield(L, res, "walkers");
     lua_pushinteger(L, (lua_Integer)N), lua_setfield(L, res, "steps");
-    lua_pushinteger(L, (lua_Integer)burn), lua_setfield(L, res, "burn");
-    lua_pushinteger(L, (lua_Integer)R->seed), lua_setfield(L, res, "seed");
-    lua_pushinteger(L, (lua_Integer)ran), lua_setfield(L, res, "ran");
-    lua_pushinteger(L, (lua_Integer)R->evaluations), lua_setfield(L, res, "evaluations");
-    lua_pushnumber(L, R->fwd_seconds), lua_setfield(L, res, "forward_seconds");
+    lua_pushinteger(L, (lua_Integer)r->burn), lua_setfield(L, res, "burn");
+    lua_pushinteger(L, (lua_Integer)R->o.seed), lua_setfield(L, res, "seed");
+    lua_pushinteger(L, (lua_Integer)r->ran), lua_setfield(L, res, "ran");
+    lua_pushinteger(L, (lua_Integer)(r->evaluations + R->lsq_evaluations));
+    lua_setfield(L, res, "evaluations");
+    lua_pushnumber(L, r->forward_seconds + R->lsq_seconds);
+    lua_setfield(L, res, "forward_seconds");
     lua_pushnumber(L, elapsed), lua_setfield(L, res, "elapsed");
-    lua_pushinteger(L, (lua_Integer)R->init_failed), lua_setfield(L, res, "init_failed");
+    lua_pushinteger(L, (lua_Integer)r->init_failed), lua_setfield(L, res, "init_failed");
     lua_getfield(L, ctx, "out"), lua_setfield(L, res, "file");
     lua_getfield(L, ctx, "data"), lua_setfield(L, res, "data");
-    if (lua_getfield(L, ctx, "failure_messages") == LUA_TNIL) {
-        lua_pop(L, 1);
-        lua_newtable(L);
-    }
+    /* the first message of each kind of failure (of this call) */
+    lua_newtable(L);
+    for (int k = DFLE_PROPOSAL_OUTSIDE; k < DFLE_PROPOSAL_N; k++)
+        if (r->failure[k][0] != '\0') {
+            lua_pushstring(L, r->failure[k]);
+            lua_setfield(L, -2, dfle_proposal_name(k));
+        }
     lua_setfield(L, res, "failure_messages");
     if (!R->sigma_free)
         lua_pushnumber(L, R->sigma), lua_setfield(L, res, "sigma");
 
-    if (N >= 1 && R->have == N + 1) {
-        const size_t npost = N - burn, m = npost * K;
-        const double *post = R->X + (burn + 1) * K * d;
-        size_t acc = 0, best = 0;
-        lua_Integer ess;
+    if (r->complete) {
+        const size_t m = r->nsamples;
+        const double *post = r->x + (r->burn + 1) * K * d;
         /* samples after burn-in, step by step, walker by walker */
         lua_createtable(L, 0, (int)d + 2);
         for (size_t j = 0; j < d; j++) {
@@ -125,7 +124,7 @@ void inv_push_result(lua_State *L, int ctx, inv_run *R, int lsq_idx, double elap
             lua_settable(L, -3);
         }
         for (int k = 0; k < 2; k++) {
-            const double *v = (k == 0 ? R->LP : R->LL) + (burn + 1) * K;
+            const double *v = (k == 0 ? r->log_post : r->log_like) + (r->burn + 1) * K;
             lua_createtable(L, (int)m, 0);
             for (size_t i = 0; i < m; i++) {
                 lua_pushnumber(L, v[i]);
@@ -135,103 +134,48 @@ void inv_push_result(lua_State *L, int ctx, inv_run *R, int lsq_idx, double elap
         }
         lua_setfield(L, res, "samples");
         lua_pushinteger(L, (lua_Integer)m), lua_setfield(L, res, "nsamples");
-        /* summaries */
         lua_createtable(L, 0, (int)d);
         for (size_t j = 0; j < d; j++) {
-            dfle_summary s;
-            dfle_summarize(post + j, m, d, &s, NULL);
             lua_geti(L, names, (lua_Integer)j + 1);
-            push_summary(L, &s);
+            push_summary(L, &r->summary[j]);
             lua_settable(L, -3);
         }
         lua_setfield(L, res, "summary");
-        /* autocorrelation times of the samples after burn-in */
-        for (size_t j = 0; j < d; j++)
-            tau[j] = NAN;
-        if (npost >= 2)
-            dfle_mcmc_autocorr(post, npost, K, d, 5.0, tau, &windowed, NULL);
         lua_createtable(L, 0, (int)d);
         for (size_t j = 0; j < d; j++) {
             lua_geti(L, names, (lua_Integer)j + 1);
-            lua_pushnumber(L, tau[j]);
+            lua_pushnumber(L, r->tau[j]);
             lua_settable(L, -3);
-            if (isnan(tau[j]) || tau[j] > tau_max)
-                tau_max = isnan(tau[j]) ? INFINITY : tau[j];
         }
         lua_setfield(L, res, "tau");
-        lua_pushnumber(L, tau_max), lua_setfield(L, res, "tau_max");
-        /* An estimate below 1 step (a few steps after burn-in give tau
-         * = 0 by chance: the lag-1 correlation of two values is -1/2)
-         * counts as 1, so that a short chain is never "converged" with
-         * more effective samples than samples. */
-        tau_use = fmax(tau_max, 1.0);
-        ess = isfinite(tau_use) ? (lua_Integer)((double)m / tau_use) : 0;
-        lua_pushinteger(L, ess), lua_setfield(L, res, "ess");
-        /* acceptance and failures over steps 1 .. N */
+        lua_pushnumber(L, r->tau_max), lua_setfield(L, res, "tau_max");
+        lua_pushinteger(L, (lua_Integer)r->ess), lua_setfield(L, res, "ess");
         lua_createtable(L, (int)K, 0);
         for (size_t k = 0; k < K; k++) {
-            size_t a = 0;
-            for (size_t s = 1; s <= N; s++)
-                a += R->ST[s * K + k] == INV_ACCEPTED;
-            acc += a;
-            lua_pushnumber(L, (double)a / (double)N);
+            lua_pushnumber(L, r->acceptance_walkers[k]);
             lua_rawseti(L, -2, (lua_Integer)k + 1);
         }
         lua_setfield(L, res, "acceptance_walkers");
-        lua_pushnumber(L, (double)acc / (double)(N * K)), lua_setfield(L, res, "acceptance");
-        for (size_t i = K; i < (N + 1) * K; i++)
-            tally[R->ST[i]]++;
-        for (size_t i = 0; i < (N + 1) * K; i++)
-            if (R->LP[i] > R->LP[best])
-                best = i;
+        lua_pushnumber(L, r->acceptance), lua_setfield(L, res, "acceptance");
         lua_createtable(L, 0, (int)d + 1);
         for (size_t j = 0; j < d; j++) {
             lua_geti(L, names, (lua_Integer)j + 1);
-            lua_pushnumber(L, R->X[best * d + j]);
+            lua_pushnumber(L, r->x[r->best * d + j]);
             lua_settable(L, -3);
         }
-        set_num(L, "log_post", R->LP[best]);
-        set_num(L, "log_like", R->LL[best]);
+        set_num(L, "log_post", r->log_post[r->best]);
+        set_num(L, "log_like", r->log_like[r->best]);
         lua_setfield(L, res, "best");
-        /* what to trust: emcee's rule of thumb, N > 50 tau */
-        lua_pushboolean(L, windowed && isfinite(tau_use) && (double)npost >= 50 * tau_use);
+        lua_pushboolean(L, r->converged);
         lua_setfield(L, res, "converged");
-        if (!windowed || !isfinite(tau_max))
-            add_warning(L, warn, "the chain is too short to estimate the autocorrelation time "
-                                 "(%zu steps after burn-in); the intervals are unreliable: run "
-                                 "many more steps", npost);
-        else if ((double)npost < 50 * tau_use && npost < 100)
-            add_warning(L, warn, "the chain is too short: %zu steps after burn-in are fewer than "
-                                 "50 autocorrelation times (tau = %.1f steps, itself "
-                                 "underestimated on so short a chain); the intervals are rough: "
-                                 "run many more steps", npost, tau_max);
-        else if ((double)npost < 50 * tau_use)
-            add_warning(L, warn, "the chain is too short: %zu steps after burn-in are fewer than "
-                                 "50 autocorrelation times (tau = %.1f steps); the intervals are "
-                                 "rough, run at least %.0f steps", npost, tau_max,
-                        ceil(50 * tau_use + (double)burn));
-        if (isfinite(tau_max) && (double)burn < 2 * tau_max)
-            add_warning(L, warn, "burn-in (%zu steps) is shorter than 2 autocorrelation times "
-                                 "(tau = %.1f): the start may still show in the samples", burn,
-                        tau_max);
-        if ((double)acc < 0.1 * (double)(N * K))
-            add_warning(L, warn, "low acceptance (%.3f): the walkers rarely move; see the "
-                                 "failures and the priors", (double)acc / (double)(N * K));
-        {
-            size_t fails = tally[INV_NOT_CONVERGED] + tally[INV_INVALID] + tally[INV_ERROR];
-            if ((double)fails > 0.05 * (double)(N * K))
-                add_warning(L, warn, "%.1f %% of the proposals failed in the forward model (%zu "
-                                     "not converged, %zu invalid profiles, %zu errors); they count "
-                                     "as zero likelihood", 100.0 * (double)fails / (double)(N * K),
-                            tally[INV_NOT_CONVERGED], tally[INV_INVALID], tally[INV_ERROR]);
-        }
-    } else if (N >= 1) {
-        add_warning(L, warn, "the chain is not complete");
     }
+    /* the driver's warnings, then the problem's */
+    for (size_t k = 0; k < r->nwarnings; k++)
+        add_warning(L, warn, "%s", r->warnings[k]);
     lua_createtable(L, 0, 5);
-    for (int k = INV_OUTSIDE; k < INV_NSTATUS; k++) {
-        lua_pushinteger(L, (lua_Integer)tally[k]);
-        lua_setfield(L, -2, inv_status_name[k]);
+    for (int k = DFLE_PROPOSAL_OUTSIDE; k < DFLE_PROPOSAL_N; k++) {
+        lua_pushinteger(L, (lua_Integer)r->tally[k]);
+        lua_setfield(L, -2, dfle_proposal_name(k));
     }
     lua_setfield(L, res, "failures");
     lua_getfield(L, ctx, "data");
@@ -258,7 +202,6 @@ void inv_push_result(lua_State *L, int ctx, inv_run *R, int lsq_idx, double elap
     lua_rawset(L, -3);
     lua_pop(L, 1);
     lua_settop(L, res);
-    lua_replace(L, res - 1); /* over the tau scratch */
 }
 
 /* ------------------------------------------------------------------ */
@@ -324,7 +267,7 @@ static int l_predict(lua_State *L)
         size_t at = (R->burn + 1) * K + (size_t)(((double)i + 0.5) * (double)npost / (double)n);
         const double *x = R->X + at * d;
         double sigma = R->sigma_free ? x[d - 1] : R->sigma;
-        if (inv_predict_at(L, ctx, R, x, nA, A, row, NULL, 0) != INV_ACCEPTED)
+        if (inv_predict_at(L, ctx, R, x, nA, A, row) != DFLE_EVAL_OK)
             continue;
         /* The noise at the NOISE quantiles of N(0, 1), the same at every
          * area: a smooth band, and no random numbers. */
@@ -436,9 +379,9 @@ static int l_tostring(lua_State *L)
     lua_getfield(L, 1, "failures");
     if (lua_istable(L, -1)) {
         dfle_lua_text_str(L, &parts, "  proposals:");
-        for (int k = INV_OUTSIDE; k < INV_NSTATUS; k++) {
-            lua_getfield(L, -1, inv_status_name[k]);
-            snprintf(line, sizeof line, " %s %d", inv_status_name[k], (int)lua_tointeger(L, -1));
+        for (int k = DFLE_PROPOSAL_OUTSIDE; k < DFLE_PROPOSAL_N; k++) {
+            lua_getfield(L, -1, dfle_proposal_name(k));
+            snprintf(line, sizeof line, " %s %d", dfle_proposal_name(k), (int)lua_tointeger(L, -1));
             lua_pop(L, 1);
             dfle_lua_text_str(L, &parts, line);
         }

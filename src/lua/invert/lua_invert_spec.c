@@ -1,8 +1,9 @@
 /*
  * lua_invert_spec.c - the dfle.invert table checked into a problem: the
  * free parameters and their priors, the fixed ones, the binned data, the
- * channel the data's A(x) gives, the sampler's settings, and the line
- * that identifies the inversion in its chain file.
+ * channel the data's A(x) gives, the sampler's settings (the driver's
+ * options, dfle/invert_run.h, checked by it), and what identifies the
+ * problem in the chain file's first line.
  *
  * Every state that evaluates the posterior runs this on the same table
  * (workers replay the script to it), so it must be a pure function of
@@ -20,10 +21,6 @@
 
 #define DEFAULT_NBINS 30
 #define DEFAULT_STEPS 2000
-#define DEFAULT_WALKERS 32
-
-const char *const inv_status_name[INV_NSTATUS] = {
-    "initial", "accepted", "rejected", "outside_prior", "not_converged", "invalid_profile", "error"};
 
 /* ------------------------------------------------------------------ */
 /* The box: C memory of a run, freed by __gc if anything raises.       */
@@ -31,22 +28,18 @@ const char *const inv_status_name[INV_NSTATUS] = {
 static int box_gc(lua_State *L)
 {
     inv_run *R = luaL_checkudata(L, 1, INV_BOX);
-    inv_pool_stop(R, NULL, 0);
-    dfle_ens_file_close(R->file, 0, NULL);
-    dfle_ens_table_free(R->table);
+    dfle_invert_free(R->inv);
     dfle_csv_free(R->csv);
-    dfle_mcmc_free(R->mc);
     free(R->prior);
     free(R->logs);
     free(R->custom);
     free(R->A_obs);
     free(R->lnS_obs);
     free(R->r);
-    free(R->X);
-    free(R->LP);
-    free(R->LL);
-    free(R->ST);
-    free(R->row);
+    free(R->text[0]);
+    free(R->text[1]);
+    if (R->ev_set)
+        dfle_lua_evaluator_release(&R->ev);
     memset(R, 0, sizeof *R);
     return 0;
 }
@@ -239,7 +232,11 @@ static int cmp_str(const void *a, const void *b)
     return strcmp(*(const char *const *)a, *(const char *const *)b);
 }
 
-static void push_meta(lua_State *L, int ctx, inv_run *R)
+/* What the first line of the chain file says after the sampler's
+ * settings and the priors (the driver writes those): the fixed sigma and
+ * parameters, fingerprints of the data and the channel, the run options
+ * and build's byte code.  Pushed (ctx.problem). */
+static void push_problem(lua_State *L, int ctx, inv_run *R)
 {
     dfle_lua_text t;
     char buf[512];
@@ -251,18 +248,6 @@ static void push_meta(lua_State *L, int ctx, inv_run *R)
     lua_getfield(L, ctx, "fixed");
     fixed = lua_gettop(L);
     dfle_lua_text_init(L, &t);
-    snprintf(buf, sizeof buf, "# dfle.invert v1 seed=%llu walkers=%zu a=%.17g params=",
-             (unsigned long long)R->seed, R->walkers, R->a);
-    dfle_lua_text_str(L, &t, buf);
-    for (size_t j = 0; j < R->d; j++) {
-        if (j > 0)
-            dfle_lua_text_str(L, &t, ";");
-        lua_geti(L, names, (lua_Integer)j + 1);
-        dfle_lua_text_add(L, &t);
-        dfle_lua_text_str(L, &t, ":");
-        dfle_prior_describe(&R->prior[j], buf, sizeof buf);
-        dfle_lua_text_str(L, &t, buf);
-    }
     if (!R->sigma_free) {
         snprintf(buf, sizeof buf, " sigma=%.17g", R->sigma);
         dfle_lua_text_str(L, &t, buf);
@@ -354,25 +339,31 @@ static void push_meta(lua_State *L, int ctx, inv_run *R)
         dfle_lua_text_str(L, &t, "?");
     }
     dfle_lua_text_finish(L, &t);
-    lua_setfield(L, ctx, "meta");
+    lua_setfield(L, ctx, "problem");
     lua_settop(L, names - 1);
 }
 
-static void push_header(lua_State *L, int ctx, inv_run *R)
+/* The chain file's first lines, by the driver (which checks the
+ * sampler's settings): ctx.meta, ctx.header, ctx.identity. */
+static void push_identity(lua_State *L, int ctx, inv_run *R)
 {
-    dfle_lua_text t;
-    lua_getfield(L, ctx, "names");
-    dfle_lua_text_init(L, &t);
-    dfle_lua_text_str(L, &t, "index,step,walker");
-    for (size_t j = 0; j < R->d; j++) {
-        dfle_lua_text_str(L, &t, ",");
-        lua_geti(L, t.t - 1, (lua_Integer)j + 1);
-        dfle_lua_text_add(L, &t);
-    }
-    dfle_lua_text_str(L, &t, ",log_post,log_like,proposal");
-    dfle_lua_text_finish(L, &t);
-    lua_setfield(L, ctx, "header");
+    dfle_error err;
+    lua_getfield(L, ctx, "problem");
+    R->o.identity = lua_tostring(L, -1); /* held by ctx */
     lua_pop(L, 1);
+    /* the texts are the box's until freed (its __gc frees them if a push
+     * raises) */
+    if (dfle_invert_identity(&R->o, &R->text[0], &R->text[1], &err) != DFLE_OK)
+        dfle_lua_raise(L, &err);
+    lua_pushstring(L, R->text[0]);
+    lua_setfield(L, ctx, "meta");
+    lua_pushstring(L, R->text[1]);
+    lua_setfield(L, ctx, "header");
+    lua_pushfstring(L, "%s\n%s", R->text[0], R->text[1]);
+    lua_setfield(L, ctx, "identity");
+    free(R->text[0]);
+    free(R->text[1]);
+    R->text[0] = R->text[1] = NULL;
 }
 
 /* ------------------------------------------------------------------ */
@@ -589,51 +580,48 @@ void inv_read_spec(lua_State *L, int arg, inv_run **box)
                       "them (use more bins, or fix parameters)", (int)R->nobs,
                    R->nobs == 0 ? " (none inside the channel's areas)" : "", (int)R->nmodel);
 
-    /* Sampler settings. */
-    R->steps = (size_t)dfle_lua_check_whole(L, steps, "invert", "steps", 0, 1e7);
-    if (burn < 0)
-        burn = floor(steps / 4);
-    R->burn = (size_t)dfle_lua_check_whole(L, burn, "invert", "burn", 0, 1e7);
-    if (R->steps > 0 && R->burn >= R->steps)
-        luaL_error(L, "dfle.invert: burn (%d) must be less than steps (%d): the samples after "
-                      "burn-in are the posterior", (int)R->burn, (int)R->steps);
-    if (walkers == 0) {
-        walkers = DEFAULT_WALKERS;
-        while (walkers < 2.0 * (double)R->d)
-            walkers += 2;
+    /* Sampler settings, read here, checked by the driver (below). */
+    dfle_invert_opts_default(&R->o);
+    R->o.d = R->d;
+    R->o.priors = R->prior;
+    {
+        const char **nm = lua_newuserdatauv(L, R->d * sizeof *nm, 0);
+        lua_getfield(L, ctx, "names");
+        for (size_t j = 0; j < R->d; j++) {
+            lua_geti(L, -1, (lua_Integer)j + 1);
+            nm[j] = lua_tostring(L, -1); /* held by ctx.names */
+            lua_pop(L, 1);
+        }
+        lua_pop(L, 1);
+        lua_setfield(L, ctx, "c_names");
+        R->o.names = R->names = nm;
     }
-    R->walkers = (size_t)dfle_lua_check_whole(L, walkers, "invert", "walkers", 4, 1e5);
-    if (R->walkers % 2 != 0 || R->walkers < 2 * R->d)
-        luaL_error(L, "dfle.invert: walkers must be even and at least twice the %d free "
-                      "parameters (got %d)", (int)R->d, (int)R->walkers);
-    if ((double)(R->steps + 1) * (double)R->walkers * (double)(R->d + 3) > 4e8)
-        luaL_error(L, "dfle.invert: %d walkers x %d steps would hold %.1f GB of chain in "
-                      "memory; use fewer steps or walkers", (int)R->walkers, (int)R->steps,
-                   (double)(R->steps + 1) * (double)R->walkers * (double)(R->d + 3) * 8e-9);
-    R->seed = (uint64_t)dfle_lua_check_whole(L, seed, "invert", "seed", 0, 4294967295.0);
-    if (!(a > 1))
-        luaL_error(L, "dfle.invert: a (the stretch scale) must be > 1 (got %s)",
-                   dfle_lua_number_text(L, a));
-    R->a = a;
-    R->workers = (int)dfle_lua_check_whole(L, workers, "invert", "workers", 0, 4096);
+    R->o.steps = (size_t)dfle_lua_check_whole(L, steps, "invert", "steps", 0, 1e7);
+    if (burn >= 0)
+        R->o.burn = (size_t)dfle_lua_check_whole(L, burn, "invert", "burn", 0, 1e7);
+    if (walkers != 0)
+        R->o.walkers = (size_t)dfle_lua_check_whole(L, walkers, "invert", "walkers", 4, 1e5);
+    R->o.seed = (unsigned long)dfle_lua_check_whole(L, seed, "invert", "seed", 0, 4294967295.0);
+    R->o.a = a;
+    R->o.workers = (int)dfle_lua_check_whole(L, workers, "invert", "workers", 0, 4096);
     R->lsq = 1;
-    R->resume = 1;
     for (int k = 0; k < 2; k++) {
         const char *key = k == 0 ? "lsq" : "resume";
         if (lua_getfield(L, arg, key) != LUA_TNIL) {
             if (!lua_isboolean(L, -1))
                 luaL_error(L, "dfle.invert: parameter '%s' must be a boolean, got %s", key,
                            luaL_typename(L, -1));
-            *(k == 0 ? &R->lsq : &R->resume) = lua_toboolean(L, -1);
+            *(k == 0 ? &R->lsq : &R->o.resume) = lua_toboolean(L, -1);
         }
         lua_pop(L, 1);
     }
     if (lua_getfield(L, arg, "out") != LUA_TNIL && lua_type(L, -1) != LUA_TSTRING)
         luaL_error(L, "dfle.invert: parameter 'out' (the chain's CSV file) must be a file name, "
                       "got %s", luaL_typename(L, -1));
+    R->o.out = lua_tostring(L, -1); /* held by ctx */
     lua_setfield(L, ctx, "out");
 
-    push_meta(L, ctx, R);
-    push_header(L, ctx, R);
+    push_problem(L, ctx, R);
+    push_identity(L, ctx, R);
     lua_settop(L, ctx);
 }

@@ -175,7 +175,6 @@ static int progress_cb(void *ud, const dfle_landscape_status *s)
 
 static int landscape_run(lua_State *L, int steady)
 {
-    static const char *const methods[] = {"explicit", "implicit", "direct", "auto", NULL};
     static const char *const other[] = {"method", "record", "netcdf", "fields", "float32",
                                         "progress", NULL};
     const char *fn = steady ? "landscape:run_to_steady" : "landscape:run";
@@ -216,7 +215,7 @@ static int landscape_run(lua_State *L, int steady)
     o.stable_steps = (size_t)dfle_lua_check_whole(L, stable, fn, "stable_steps", 0, 1e9);
     o.method = steady ? DFLE_METHOD_AUTO : DFLE_METHOD_IMPLICIT;
     if (lua_istable(L, 2) && lua_getfield(L, 2, "method") != LUA_TNIL) {
-        o.method = dfle_lua_check_option(L, -1, fn, "method", methods);
+        o.method = dfle_lua_check_method(L, -1, fn);
         if (!steady && o.method == DFLE_METHOD_DIRECT)
             luaL_error(L, "dfle.landscape:run: method 'direct' finds steady states only; use "
                           "run_to_steady, or 'implicit' or 'explicit' here");

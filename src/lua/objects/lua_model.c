@@ -266,12 +266,11 @@ static int lua_uplift(void *ud, double t, double *U, dfle_error *err)
  * model's records (dfle_lua_record_model). */
 static void remember_run(lua_State *L, int steady, const dfle_run_opts *o, double years)
 {
-    static const char *const methods[] = {"explicit", "implicit", "direct", "auto"};
     lua_createtable(L, 0, 3);
     lua_pushstring(L, steady ? "run_to_steady" : "run");
     lua_setfield(L, -2, "kind");
     lua_createtable(L, 0, 5);
-    lua_pushstring(L, (int)o->method >= 0 && (int)o->method < 4 ? methods[o->method] : "?");
+    lua_pushstring(L, dfle_method_name(o->method));
     lua_setfield(L, -2, "method_asked"); /* the result says which ran */
     if (steady) {
         lua_pushnumber(L, o->tol), lua_setfield(L, -2, "tol");
@@ -351,7 +350,6 @@ static int model_run(lua_State *L, int steady)
     static const char *const steady_keys[] = {"progress", "method", NULL};
     static const char *const run_keys[] = {"progress", "method", "record", "netcdf", "float32",
                                            NULL};
-    static const char *const methods[] = {"explicit", "implicit", "direct", "auto", NULL};
     dfle_model *m = dfle_lua_check_model(L, 1);
     const char *fn = steady ? "model:run_to_steady" : "model:run";
     dfle_run_opts o;
@@ -373,14 +371,6 @@ static int model_run(lua_State *L, int steady)
         const dfle_lua_param params[] = {{"tol", &o.tol}, {"max_time", &o.max_time},
                                          {"max_steps", &max_steps}, {"direct_tol", &o.direct_tol}};
         dfle_lua_read_params(L, 2, fn, params, 4, steady_keys);
-        if (!(o.tol > 0))
-            luaL_error(L, "dfle.%s: tol must be > 0 (got %s)", fn, dfle_lua_number_text(L, o.tol));
-        if (!(o.max_time > 0))
-            luaL_error(L, "dfle.%s: max_time must be > 0 yr (got %s)", fn,
-                       dfle_lua_number_text(L, o.max_time));
-        if (!(o.direct_tol > 0 && o.direct_tol < 1))
-            luaL_error(L, "dfle.%s: direct_tol must be in (0, 1) (got %s)", fn,
-                       dfle_lua_number_text(L, o.direct_tol));
     } else {
         const dfle_lua_param params[] = {{"years", &years}, {"max_steps", &max_steps},
                                          {"rtol", &o.rtol}};
@@ -389,11 +379,9 @@ static int model_run(lua_State *L, int steady)
         if (lua_getfield(L, 2, "years") == LUA_TNIL)
             luaL_error(L, "dfle.model:run: parameter 'years' is required");
         lua_pop(L, 1);
+        /* `years` is this API's name for the run's max_time */
         if (!(years > 0))
             luaL_error(L, "dfle.model:run: years must be > 0 (got %s)", dfle_lua_number_text(L, years));
-        if (!(o.rtol > 0 && o.rtol < 1))
-            luaL_error(L, "dfle.model:run: rtol must be in (0, 1) (got %s)",
-                       dfle_lua_number_text(L, o.rtol));
         o.max_time = years;
         o.tol = 0; /* plain time stepping: no steady-state stop */
     }
@@ -402,35 +390,20 @@ static int model_run(lua_State *L, int steady)
         if (lua_type(L, -1) != LUA_TSTRING)
             luaL_error(L, "dfle.%s: parameter 'method' must be a string, got %s", fn,
                        dfle_lua_typename(L, -1));
-        {
-            /* Not luaL_checkoption: the value is a field, not an
-             * argument ("bad argument #-2"), and the choices help. */
-            const char *name = dfle_lua_check_string(L, -1, fn, "method");
-            int k = 0;
-            while (methods[k] != NULL && strcmp(methods[k], name) != 0)
-                k++;
-            if (methods[k] == NULL)
-                luaL_error(L, "dfle.%s: method must be 'explicit', 'implicit', 'direct' or "
-                              "'auto' (got '%s')", fn, dfle_lua_shown(L, name, strlen(name)));
-            o.method = k;
-        }
-        if (!steady && o.method == DFLE_METHOD_DIRECT)
-            luaL_error(L, "dfle.model:run: method 'direct' finds steady states only; use "
-                          "run_to_steady, or 'explicit' or 'implicit' here");
+        o.method = dfle_lua_check_method(L, -1, fn);
     }
     lua_settop(L, 2);
     if (lua_istable(L, 2) && lua_getfield(L, 2, "record") != LUA_TNIL) {
         size_t k;
-        double *times = dfle_lua_check_array(L, 3, "model:run: record", &k);
-        for (size_t j = 0; j < k; j++)
-            if (!(times[j] >= 0 && times[j] <= years && (j == 0 || times[j] > times[j - 1])))
-                luaL_error(L, "dfle.model:run: record times must increase within [0, years = %s] "
-                              "(time %d is %s)", dfle_lua_number_text(L, years), (int)j + 1,
-                           dfle_lua_number_text(L, times[j]));
+        o.record_times = dfle_lua_check_array(L, 3, "model:run: record", &k);
         o.n_record = k;
-        o.record_times = times;
-        o.record_z = lua_newuserdatauv(L, (k ? k : 1) * dfle_model_size(m) * sizeof(double), 0);
+        o.record_z = (double *)o.record_times; /* checked below, before the space is made */
     }
+    /* The options, checked once, by the solvers' own rules. */
+    if (dfle_run_opts_check(&o, steady, &err) != DFLE_OK)
+        return luaL_error(L, "dfle.%s: %s", fn, err.msg);
+    if (o.n_record > 0)
+        o.record_z = lua_newuserdatauv(L, o.n_record * dfle_model_size(m) * sizeof(double), 0);
     keep = lua_gettop(L); /* the record arrays stay for the run */
     if (lua_istable(L, 2) && lua_getfield(L, 2, "netcdf") != LUA_TNIL) {
         if (lua_type(L, -1) != LUA_TSTRING)

@@ -228,7 +228,8 @@ dfle_trace_prog *dfle_trace_compile(lua_State *L, int fidx, int pidx, const dfle
     dfle_trace_prog *p;
     int n_params = 0, symbolic;
 
-    if (!dfle_trace_release_checked(dfle_trace_release(), why, why_len)) {
+    if (!dfle_trace_release_checked(dfle_trace_release(), why, why_len) ||
+        !dfle_trace_vm_ok(L, why, why_len)) {
         lua_pushnil(L); /* this Lua's opcodes and arithmetic are unknown */
         return NULL;
     }

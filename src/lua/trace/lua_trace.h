@@ -53,6 +53,20 @@ long dfle_trace_release(void);
  * was not (lua_trace_release.c). */
 int dfle_trace_release_checked(long release, char *why, size_t why_len);
 
+/* The running Lua checked against the tracer (lua_trace_vm.c): a probe
+ * function compiled and dumped by it must have the header and opcodes
+ * the tracer reads.  dfle_trace_vm_check_dump checks a dump (1, or 0
+ * with why); dfle_trace_vm_push_probe pushes the running Lua's dump of
+ * the probe (nil if it gives none); dfle_trace_vm_verify records the
+ * verdict for L's state, of that dump or (dump NULL) of the running
+ * Lua's, warning once if it refuses; dfle_trace_vm_ok reads it back (1,
+ * or 0 with why).  dfle_trace_compile refuses everything while the
+ * verdict refuses. */
+int dfle_trace_vm_check_dump(const char *dump, size_t len, char *why, size_t why_len);
+void dfle_trace_vm_push_probe(lua_State *L);
+void dfle_trace_vm_verify(lua_State *L, const char *dump, size_t len);
+int dfle_trace_vm_ok(lua_State *L, char *why, size_t why_len);
+
 /* Trace the function at index fidx, with the params table at pidx.
  * Returns the program and pushes its guard table, or returns NULL,
  * pushes nil and writes the reason (a sentence fragment such as

@@ -18,7 +18,8 @@
 #include <string.h>
 
 
-/* Lua 5.4 opcodes the scan refuses (lopcodes.h order, stable in 5.4). */
+/* Lua 5.4 opcodes the scan refuses (lopcodes.h order, stable in 5.4;
+ * lua_trace_vm.c checks the running Lua compiles them so). */
 enum { OP_SETUPVAL = 10, OP_EQ = 57, OP_EQK = 60, OP_EQI = 61 };
 
 typedef struct { const unsigned char *p, *end; int bad; } reader;
@@ -56,8 +57,11 @@ static void rd_string(reader *r)
         rd_skip(r, n - 1);
 }
 
-/* One function of a binary chunk (ldump.c's layout) and its nested ones. */
-static unsigned scan_function(reader *r, int depth)
+/* One function of a binary chunk (ldump.c's layout) and its nested ones;
+ * the opcodes of its own code (not the nested functions') go to ops
+ * when it is not NULL (up to cap; *nops how many there are). */
+static unsigned scan_function(reader *r, int depth, unsigned char *ops, size_t cap,
+                              size_t *nops)
 {
     unsigned found = 0;
     size_t n;
@@ -76,6 +80,11 @@ static unsigned scan_function(reader *r, int depth)
         }
         memcpy(&ins, r->p, 4);
         r->p += 4;
+        if (ops != NULL) {
+            if (i < cap)
+                ops[i] = (unsigned char)(ins & 0x7f);
+            *nops = n;
+        }
         switch (ins & 0x7f) {
         case OP_EQ: case OP_EQK: case OP_EQI: found |= FOUND_EQ; break;
         case OP_SETUPVAL: found |= FOUND_SETUPVAL; break;
@@ -95,7 +104,7 @@ static unsigned scan_function(reader *r, int depth)
     rd_skip(r, 3 * rd_size(r)); /* upvalue descriptions */
     n = rd_size(r);             /* nested functions */
     for (size_t i = 0; i < n && !r->bad; i++)
-        found |= scan_function(r, depth + 1);
+        found |= scan_function(r, depth + 1, NULL, 0, NULL);
     rd_skip(r, rd_size(r)); /* line info */
     n = rd_size(r);         /* absolute line info */
     for (size_t i = 0; i < n && !r->bad; i++)
@@ -137,13 +146,57 @@ void dfle_trace_push_dump(lua_State *L, int fidx)
     lua_remove(L, -2);
 }
 
-unsigned dfle_trace_scan(lua_State *L, int fidx)
+/* The header of a chunk lua_dump wrote: Lua 5.4's signature, version,
+ * format and data, 4-byte instructions, 8-byte integers and floats of
+ * this machine's order.  0, with r past it, or -1 with why. */
+static int read_header(reader *r, char *why, size_t why_len)
 {
     static const unsigned char header[] = {0x1b, 'L', 'u', 'a', 0x54, 0x00, 0x19, 0x93,
                                            '\r', '\n', 0x1a, '\n', 4};
+    const int64_t luac_int = 0x5678;
+    const double luac_num = 370.5;
+    if ((size_t)(r->end - r->p) < sizeof header + 2 + 16 + 1 ||
+        memcmp(r->p, header, sizeof header) != 0) {
+        size_t k = 0;
+        while (r->p + k < r->end && k < sizeof header && r->p[k] == header[k])
+            k++;
+        snprintf(why, why_len, "its byte-code header differs from Lua 5.4.4's at byte %zu", k);
+        return -1;
+    }
+    r->p += sizeof header;
+    if (r->p[0] != 8 || r->p[1] != 8 || memcmp(r->p + 2, &luac_int, 8) != 0 ||
+        memcmp(r->p + 10, &luac_num, 8) != 0) {
+        snprintf(why, why_len, "its byte code has other integers or floats than the tracer "
+                               "reads (sizes %d and %d)", r->p[0], r->p[1]);
+        return -1;
+    }
+    r->p += 2 + 16 + 1; /* the sizes, LUAC_INT, LUAC_NUM, the main function's upvalues */
+    return 0;
+}
+
+int dfle_trace_chunk_opcodes(const char *chunk, size_t len, unsigned char *ops, size_t cap,
+                             size_t *nops, char *why, size_t why_len)
+{
+    reader r;
+    r.p = (const unsigned char *)chunk;
+    r.end = r.p + len;
+    r.bad = 0;
+    *nops = 0;
+    if (read_header(&r, why, why_len) != 0)
+        return -1;
+    if (scan_function(&r, 0, ops, cap, nops) & FOUND_BAD) {
+        snprintf(why, why_len, "its byte code has another layout than Lua 5.4.4's");
+        return -1;
+    }
+    return 0;
+}
+
+unsigned dfle_trace_scan(lua_State *L, int fidx)
+{
     reader r;
     size_t len;
     unsigned found;
+    char why[8];
 
     dfle_trace_push_dump(L, fidx);
     if (lua_isnil(L, -1)) {
@@ -153,14 +206,11 @@ unsigned dfle_trace_scan(lua_State *L, int fidx)
     r.p = (const unsigned char *)lua_tolstring(L, -1, &len);
     r.end = r.p + len;
     r.bad = 0;
-    if (len < sizeof header + 2 || memcmp(r.p, header, sizeof header) != 0) {
+    if (read_header(&r, why, sizeof why) != 0) {
         lua_pop(L, 1);
         return FOUND_BAD;
     }
-    r.p += sizeof header;
-    rd_skip(&r, 2);                              /* sizes of lua_Integer, lua_Number */
-    rd_skip(&r, (size_t)r.p[-2] + r.p[-1] + 1); /* LUAC_INT, LUAC_NUM, sizeupvalues */
-    found = scan_function(&r, 0);
+    found = scan_function(&r, 0, NULL, 0, NULL);
     lua_pop(L, 1);
     return found;
 }

@@ -289,12 +289,14 @@ dfle_trace_prog *dfle_trace_cache_find(lua_State *L, int fidx, int pidx,
     cache_state *c = state_of(L);
     const template_ud *u;
     dfle_trace_prog *p;
+    char why[8];
     int top;
 
     fidx = lua_absindex(L, fidx);
     pidx = lua_absindex(L, pidx);
     top = lua_gettop(L);
-    if (c == NULL || !lua_checkstack(L, 24)) {
+    /* no program of a Lua the tracer does not read, however it got here */
+    if (c == NULL || !lua_checkstack(L, 24) || !dfle_trace_vm_ok(L, why, sizeof why)) {
         lua_pushnil(L);
         return NULL;
     }

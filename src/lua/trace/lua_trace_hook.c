@@ -8,7 +8,8 @@
  * keeps finite results, so the tests could not otherwise check the
  * replay against Lua where the rules differ most: NaN, infinities, -0.0.
  * The hooks are no part of the module's API; they live in the registry
- * (debug.getregistry()["dfle.trace.replay"], ["dfle.trace.stats"]),
+ * (debug.getregistry()["dfle.trace.replay"], ["dfle.trace.stats"],
+ * ["dfle.trace.vm"]: the check of the running Lua fed another dump),
  * where only tests and benchmarks look.
  */
 #include "lua/core/dfle_lua.h"
@@ -88,9 +89,41 @@ static void set_hook(lua_State *L, const char *name, lua_CFunction fn)
     lua_pop(L, 1);
 }
 
+/* vm() -> this Lua's dump of the tracer's probe; vm(dump) -> true, or
+ * false and why, for that dump; vm(dump, true) also makes it this
+ * state's verdict (a test of the refusal). */
+static int l_vm(lua_State *L)
+{
+    size_t len;
+    const char *dump;
+    char why[200];
+    if (lua_isnoneornil(L, 1)) {
+        dfle_trace_vm_push_probe(L);
+        return 1;
+    }
+    dump = luaL_checklstring(L, 1, &len);
+    if (lua_toboolean(L, 2))
+        dfle_trace_vm_verify(L, dump, len);
+    if (dfle_trace_vm_check_dump(dump, len, why, sizeof why)) {
+        lua_pushboolean(L, 1);
+        return 1;
+    }
+    lua_pushboolean(L, 0);
+    lua_pushstring(L, why);
+    return 2;
+}
+
 void dfle_lua_open_trace_hook(lua_State *L)
 {
+    char why[8];
+    /* The Lua running this state, checked once (the first binding opened
+     * in it; its verdict is read by every copy). */
+    if (lua_getfield(L, LUA_REGISTRYINDEX, "dfle.trace.vm") == LUA_TNIL &&
+        dfle_trace_vm_ok(L, why, sizeof why))
+        dfle_trace_vm_verify(L, NULL, 0);
+    lua_pop(L, 1);
     dfle_trace_cache_open(L);
     set_hook(L, "dfle.trace.replay", l_replay);
     set_hook(L, "dfle.trace.stats", l_stats);
+    set_hook(L, "dfle.trace.vm", l_vm);
 }

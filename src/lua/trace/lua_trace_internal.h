@@ -80,6 +80,11 @@ dfle_trace_prog *dfle_trace_clone(const dfle_trace_prog *prog);
  * not read (another Lua version). */
 enum { FOUND_EQ = 1, FOUND_SETUPVAL = 2, FOUND_BAD = 4 };
 unsigned dfle_trace_scan(lua_State *L, int fidx);
+/* The opcodes of the first function of a chunk (lua_dump's), up to cap
+ * into ops (*nops: how many it has), after checking the chunk's header:
+ * 0, or -1 with why (lua_trace_vm.c checks the running Lua with it). */
+int dfle_trace_chunk_opcodes(const char *chunk, size_t len, unsigned char *ops, size_t cap,
+                             size_t *nops, char *why, size_t why_len);
 
 /* ---- during a trace: lua_trace.c, lua_trace_node.c, lua_trace_outside.c */
 

@@ -1,0 +1,159 @@
+/*
+ * invert_run.h - an inversion run from C: the affine-invariant ensemble
+ * sampler (mcmc.h) over the priors (prior.h) and a log likelihood given
+ * by an evaluator (evaluator.h), its proposals evaluated on a worker
+ * pool (pool.h), the chain streamed to a resumable file, and the
+ * summaries and diagnostics of the samples after burn-in (mcmc_diag.h).
+ * What dfle.invert is, without Lua: the binding reads the table, gives
+ * an evaluator that runs the script's build through the slope-area
+ * likelihood, and builds the result table (doc/inversion.md).
+ *
+ * The evaluator of an inversion gives, for a proposal x (d values in
+ * natural units, inside the priors' supports), y[0] = ln L(x) and, for
+ * each parameter j whose prior is DFLE_PRIOR_CUSTOM, y[1 + j] = its log
+ * density at x[j] (noutputs = 1 + d); status DFLE_EVAL_OUTSIDE for a
+ * custom density that is zero there, any other failure (no steady state,
+ * a profile the likelihood cannot use, an error) as in evaluator.h: a
+ * proposal that failed has zero posterior and its walker stays.
+ *
+ * The chain file (one row per walker and step, the position after the
+ * step):
+ *
+ *     # dfle.invert v1 seed=1 walkers=32 a=2 params=U:log-uniform[0.0001,0.001];... <identity>
+ *     index,step,walker,U,...,log_post,log_like,proposal
+ *     1,0,1,0.00012645153376660576,...,-32.1,-46.8,initial
+ *
+ * index = step K + walker, so the ensemble file layer (ensemble.h)
+ * streams, cuts and sorts it.  Numbers carry 17 digits: a resumed chain
+ * continues bit for bit, and the chain is the same for any number of
+ * workers (the random numbers of walker k at step s come from their own
+ * stream, stream.h).
+ */
+#ifndef DFLE_INVERT_RUN_H
+#define DFLE_INVERT_RUN_H
+
+#include <signal.h>
+#include <stddef.h>
+#include <stdint.h>
+
+#include "dfle/error.h"
+#include "dfle/evaluator.h"
+#include "dfle/mcmc_diag.h"
+#include "dfle/prior.h"
+
+#ifdef __cplusplus
+extern "C" {
+#endif
+
+/* What became of a walker's proposal at a step (the `proposal` column). */
+enum dfle_proposal {
+    DFLE_PROPOSAL_INITIAL,       /* "initial": step 0, the starting ensemble */
+    DFLE_PROPOSAL_ACCEPTED,      /* "accepted"                               */
+    DFLE_PROPOSAL_REJECTED,      /* "rejected": evaluated, not accepted      */
+    DFLE_PROPOSAL_OUTSIDE,       /* "outside_prior": not run                 */
+    DFLE_PROPOSAL_NOT_CONVERGED, /* "not_converged"                          */
+    DFLE_PROPOSAL_INVALID,       /* "invalid_profile"                        */
+    DFLE_PROPOSAL_ERROR,         /* "error"                                  */
+    DFLE_PROPOSAL_N
+};
+const char *dfle_proposal_name(int proposal);
+
+/* A failure's message is kept up to this length (with its NUL). */
+#define DFLE_INVERT_MSG 200
+/* opts.burn when not given: steps / 4. */
+#define DFLE_INVERT_BURN_DEFAULT ((size_t)-1)
+
+typedef struct dfle_invert_opts {
+    size_t d;                  /* free parameters, >= 1                     */
+    const char *const *names;  /* d: the chain's columns                    */
+    const dfle_prior *priors;  /* d                                         */
+    size_t walkers;            /* K, even, >= 2 d; 0: 32, or 2 d if more    */
+    size_t steps;              /* N; 0: nothing to sample                   */
+    size_t burn;               /* steps discarded; DFLE_INVERT_BURN_DEFAULT */
+    unsigned long seed;        /* 0 .. 4294967295                           */
+    double a;                  /* the stretch scale, > 1 (2)                */
+    const char *out;           /* the chain file, or NULL: memory only      */
+    int resume;                /* continue a file of this chain (1)         */
+    int read_only;             /* only read the finished chain in `out`     */
+    /* Appended to the file's first line (from " sigma=" or " fixed="
+     * on): what else makes two inversions the same, the data, the model
+     * and the likelihood, so that a resume refuses another one's file. */
+    const char *identity;
+    int workers;               /* evaluators: the calling thread and
+                                * workers - 1 threads (0: 1)               */
+    const volatile sig_atomic_t *interrupt;
+    /* Optional: evaluations done/total of this call (failed among them),
+     * after each step, from the calling thread. */
+    void (*progress)(void *ud, size_t done, size_t total, size_t failed, double elapsed);
+    void *ud;
+} dfle_invert_opts;
+
+/* walkers 0 (the default), burn default, seed 1, a = 2, resume, 1 worker. */
+void dfle_invert_opts_default(dfle_invert_opts *o);
+
+/* The chain and what it says.  Arrays are (steps + 1) x walkers (x d),
+ * step by step, walker by walker. */
+typedef struct dfle_invert_result {
+    size_t d, walkers, steps, burn;
+    size_t have;               /* steps + 1 complete when the chain is     */
+    size_t ran;                /* steps run by this call                   */
+    double *x, *log_post, *log_like;
+    unsigned char *proposal;   /* enum dfle_proposal                       */
+    size_t evaluations;        /* proposals evaluated by this call         */
+    double forward_seconds;    /* their evaluators' CPU time [s]           */
+    size_t init_failed;        /* starting draws with zero posterior       */
+    char failure[DFLE_PROPOSAL_N][DFLE_INVERT_MSG]; /* the first message of
+                                * each kind of failure (this call), or ""  */
+    int interrupted;           /* stopped at a whole step by an interrupt  */
+    /* --- the samples after burn-in (when complete and steps >= 1) ---   */
+    int complete;
+    size_t nsamples;           /* walkers x (steps - burn)                 */
+    dfle_summary *summary;     /* d                                        */
+    double *tau;               /* d: autocorrelation times [steps], NaN
+                                * for a parameter no walker moved in       */
+    double tau_max;
+    size_t ess;
+    int converged;             /* steps - burn >= 50 tau_max               */
+    double acceptance;         /* over steps 1 .. steps                    */
+    double *acceptance_walkers;/* walkers                                  */
+    size_t tally[DFLE_PROPOSAL_N]; /* proposals by outcome, steps 1 .. steps */
+    size_t best;               /* row of the largest log_post              */
+    size_t nwarnings;
+    char **warnings;           /* what to be careful of, sentences         */
+} dfle_invert_result;
+
+/* The options checked (and defaults resolved) as dfle_invert_new does,
+ * without running; a message naming what is wrong. */
+int dfle_invert_check(const dfle_invert_opts *o, dfle_error *err);
+
+/* The first line and the header of the chain file, malloc'd. */
+int dfle_invert_identity(const dfle_invert_opts *o, char **meta, char **header,
+                         dfle_error *err);
+
+/* An inversion: its options, its chain, its file. */
+typedef struct dfle_invert dfle_invert;
+
+/* Check the options, make room for the chain, and open its file: a new
+ * one, or one of this inversion to resume or extend (another
+ * inversion's is refused, naming the first difference); with
+ * opts->read_only, read a finished chain and summarise it.  opts is
+ * copied, its arrays and texts must outlive the object. */
+int dfle_invert_new(const dfle_invert_opts *opts, dfle_invert **out, dfle_error *err);
+
+/* Run the chain from where it is to opts->steps on opts->workers
+ * evaluators of ev, close the file (sorted), and summarise it.
+ * DFLE_OK (at once when the chain is complete); DFLE_ECANCELED when
+ * interrupted (the chain, and the file, hold the whole steps done;
+ * running again resumes); or the error, the rows written kept. */
+int dfle_invert_run(dfle_invert *inv, const dfle_evaluator *ev, dfle_error *err);
+
+/* The chain and its summaries as they are now.  Valid until the next
+ * dfle_invert_run or dfle_invert_free. */
+const dfle_invert_result *dfle_invert_result_of(const dfle_invert *inv);
+
+void dfle_invert_free(dfle_invert *inv); /* closes the file; accepts NULL */
+
+#ifdef __cplusplus
+}
+#endif
+#endif

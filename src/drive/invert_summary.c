@@ -1,0 +1,137 @@
+/*
+ * invert_summary.c - what a finished chain says and how far to trust
+ * it: the samples after burn-in summarised (medians, intervals), their
+ * autocorrelation times and effective size, acceptance, the tally of
+ * failed proposals, the best sample, and warnings in sentences a user
+ * reads beside the numbers (doc/inversion.md, "Diagnostics").
+ */
+#include "drive/invert_internal.h"
+
+#include <math.h>
+#include <stdio.h>
+#include <stdlib.h>
+#include <string.h>
+
+static int warn(dfle_invert_result *r, const char *fmt, ...)
+#if defined(__GNUC__)
+    __attribute__((format(printf, 2, 3)))
+#endif
+    ;
+
+static int warn(dfle_invert_result *r, const char *fmt, ...)
+{
+    char buf[600], **w, *s;
+    va_list ap;
+    va_start(ap, fmt);
+    vsnprintf(buf, sizeof buf, fmt, ap);
+    va_end(ap);
+    w = realloc(r->warnings, (r->nwarnings + 1) * sizeof *w);
+    if (w == NULL)
+        return -1;
+    r->warnings = w;
+    if ((s = malloc(strlen(buf) + 1)) == NULL)
+        return -1;
+    strcpy(s, buf);
+    r->warnings[r->nwarnings++] = s;
+    return 0;
+}
+
+/* The diagnostics' warnings, in the order a user should read them. */
+static int warnings(dfle_invert_result *r, int windowed, double tau_use)
+{
+    const size_t N = r->steps, K = r->walkers, npost = N - r->burn;
+    const double tau_max = r->tau_max;
+    size_t acc = 0, fails;
+    int bad = 0;
+
+    for (size_t i = K; i < (N + 1) * K; i++)
+        acc += r->proposal[i] == DFLE_PROPOSAL_ACCEPTED;
+    if (!windowed || !isfinite(tau_max))
+        bad |= warn(r, "the chain is too short to estimate the autocorrelation time (%zu steps "
+                       "after burn-in); the intervals are unreliable: run many more steps",
+                    npost);
+    else if ((double)npost < 50 * tau_use && npost < 100)
+        bad |= warn(r, "the chain is too short: %zu steps after burn-in are fewer than 50 "
+                       "autocorrelation times (tau = %.1f steps, itself underestimated on so "
+                       "short a chain); the intervals are rough: run many more steps",
+                    npost, tau_max);
+    else if ((double)npost < 50 * tau_use)
+        bad |= warn(r, "the chain is too short: %zu steps after burn-in are fewer than 50 "
+                       "autocorrelation times (tau = %.1f steps); the intervals are rough, run "
+                       "at least %.0f steps",
+                    npost, tau_max, ceil(50 * tau_use + (double)r->burn));
+    if (isfinite(tau_max) && (double)r->burn < 2 * tau_max)
+        bad |= warn(r, "burn-in (%zu steps) is shorter than 2 autocorrelation times (tau = %.1f): "
+                       "the start may still show in the samples",
+                    r->burn, tau_max);
+    if ((double)acc < 0.1 * (double)(N * K))
+        bad |= warn(r, "low acceptance (%.3f): the walkers rarely move; see the failures and the "
+                       "priors",
+                    (double)acc / (double)(N * K));
+    fails = r->tally[DFLE_PROPOSAL_NOT_CONVERGED] + r->tally[DFLE_PROPOSAL_INVALID] +
+            r->tally[DFLE_PROPOSAL_ERROR];
+    if ((double)fails > 0.05 * (double)(N * K))
+        bad |= warn(r, "%.1f %% of the proposals failed in the forward model (%zu not converged, "
+                       "%zu invalid profiles, %zu errors); they count as zero likelihood",
+                    100.0 * (double)fails / (double)(N * K), r->tally[DFLE_PROPOSAL_NOT_CONVERGED],
+                    r->tally[DFLE_PROPOSAL_INVALID], r->tally[DFLE_PROPOSAL_ERROR]);
+    return bad;
+}
+
+int inv_summarize(dfle_invert_result *r)
+{
+    const size_t K = r->walkers, d = r->d, N = r->steps, burn = r->burn;
+    size_t npost, m, acc = 0;
+    const double *post;
+    double tau_use;
+    int windowed = 1;
+
+    r->complete = N >= 1 && r->have == N + 1;
+    if (!r->complete)
+        return N >= 1 ? warn(r, "the chain is not complete") : 0;
+    npost = N - burn;
+    m = npost * K;
+    post = r->x + (burn + 1) * K * d;
+    r->nsamples = m;
+    r->summary = calloc(d, sizeof *r->summary);
+    r->tau = calloc(d, sizeof *r->tau);
+    r->acceptance_walkers = calloc(K, sizeof *r->acceptance_walkers);
+    if (r->summary == NULL || r->tau == NULL || r->acceptance_walkers == NULL)
+        return -1;
+    for (size_t j = 0; j < d; j++)
+        dfle_summarize(post + j, m, d, &r->summary[j], NULL);
+    /* autocorrelation times of the samples after burn-in */
+    for (size_t j = 0; j < d; j++)
+        r->tau[j] = NAN;
+    if (npost >= 2)
+        dfle_mcmc_autocorr(post, npost, K, d, 5.0, r->tau, &windowed, NULL);
+    r->tau_max = 0;
+    for (size_t j = 0; j < d; j++)
+        if (isnan(r->tau[j]) || r->tau[j] > r->tau_max)
+            r->tau_max = isnan(r->tau[j]) ? INFINITY : r->tau[j];
+    /* An estimate below 1 step (a few steps after burn-in give tau = 0 by
+     * chance: the lag-1 correlation of two values is -1/2) counts as 1,
+     * so that a short chain is never "converged" with more effective
+     * samples than samples. */
+    tau_use = fmax(r->tau_max, 1.0);
+    r->ess = isfinite(tau_use) ? (size_t)((double)m / tau_use) : 0;
+    /* acceptance and failures over steps 1 .. N */
+    for (size_t k = 0; k < K; k++) {
+        size_t a = 0;
+        for (size_t s = 1; s <= N; s++)
+            a += r->proposal[s * K + k] == DFLE_PROPOSAL_ACCEPTED;
+        acc += a;
+        r->acceptance_walkers[k] = (double)a / (double)N;
+    }
+    r->acceptance = (double)acc / (double)(N * K);
+    memset(r->tally, 0, sizeof r->tally);
+    for (size_t i = K; i < (N + 1) * K; i++)
+        r->tally[r->proposal[i]]++;
+    r->best = 0;
+    for (size_t i = 0; i < (N + 1) * K; i++)
+        if (r->log_post[i] > r->log_post[r->best])
+            r->best = i;
+    /* what to trust: emcee's rule of thumb, N > 50 tau */
+    r->converged = windowed && isfinite(tau_use) && (double)npost >= 50 * tau_use;
+    return warnings(r, windowed, tau_use);
+}
