@@ -197,6 +197,26 @@ typedef struct dfle_gp_panel {
 void dfle_gp_page_label(FILE *f, int tag, const char *text, double x, double y, double rot,
                         int plain, const dfle_gp_frame *fr);
 
+/* A figure's part of the page [pt from the bottom left]: figures side
+ * by side share one page and one gnuplot run. */
+typedef struct dfle_gp_box {
+    double x0, y0, x1, y1;
+} dfle_gp_box;
+
+/* A figure laid out (ranges, ticks, margins, legends) before gnuplot
+ * starts: np panels over one x axis in `box` (NULL: the whole page), as
+ * dfle_gp_figure draws them.  P and opts must outlive the plan. */
+typedef struct dfle_gp_plan dfle_gp_plan;
+int dfle_gp_plan_new(const char *path, const dfle_gp_frame *fr, const dfle_gp_box *box,
+                     const dfle_plot_opts *opts, int xlog, const char *xlabel, dfle_gp_panel *P,
+                     size_t np, dfle_gp_plan **out, dfle_error *err);
+/* Write the plan's script to a run; `cell` names its data blocks (each
+ * figure on a page its own), in_multiplot: the caller set multiplot. */
+void dfle_gp_plan_put(FILE *f, const dfle_gp_plan *pl, int cell, int in_multiplot);
+/* Panel p's frame on the page: left, bottom, right, top [pt]. */
+void dfle_gp_plan_frame(const dfle_gp_plan *pl, size_t p, double frame[4]);
+void dfle_gp_plan_free(dfle_gp_plan *pl);
+
 /* A whole figure: np panels over one x axis (opts->x; xlog and xlabel
  * when it says nothing), a colour box for layers coloured by value,
  * title, legend (opts->legend, in the first panel with legend
