@@ -6,7 +6,8 @@
  *   plot_axes.c   ranges, ticks whose labels do not touch, numbers;
  *   plot_frame.c  layers of data, the legend's place, colour box, the
  *                 single- and multi-panel figures;
- *   plot.c        the figures: x-y, panels, slope-area, profile, map;
+ *   plot.c        the figures: x-y, panels, slope-area, profile;
+ *   plot_map.c    maps (plot_crs.c names their CRS through GDAL);
  *   plot_corner.c the corner plot; plot_sheet.c the contact sheet.
  *
  * A figure is one gnuplot run: dfle_gp_begin_frame starts gnuplot
@@ -160,6 +161,14 @@ const char *dfle_gp_axis_label(const dfle_gp_axis *a, const char *label, char *b
  * ticks for axis `name` ("x", "y", "cb"). */
 void dfle_gp_axis_put(FILE *f, const char *name, const dfle_gp_axis *a, int labels);
 
+
+/* --- plot_crs.c --- */
+
+/* The EPSG code ("EPSG:32611", or "" when there is none) and name of a
+ * map's CRS (NULL or "": none, both ""); DFLE_EINVAL for a CRS GDAL
+ * cannot read or one not projected in metres. */
+int dfle_gp_crs_names(const char *crs, char *code, size_t ccap, char *name, size_t ncap,
+                      dfle_error *err);
 
 /* --- plot_frame.c --- */
 
