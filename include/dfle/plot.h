@@ -185,6 +185,33 @@ int dfle_plot_slope_area(const char *path, const dfle_plot_opts *opts, size_t n,
                          const dfle_bins *bins, const dfle_eq2_fit *fit,
                          dfle_error *err);
 
+/* A chi plot (Perron and Royden 2013): each cell's elevation against
+ * its chi, coloured by k_sn (or black), cells below A_min in light grey
+ * (left out of the line), and the line z = z_b + M_chi chi in vermillion
+ * with its k_sn = M_chi A0^theta_ref and R^2 in the legend.  The colour
+ * range defaults to the 2nd to 98th percentile of k_sn (opts->c sets
+ * it).  16 x 11 cm. */
+typedef struct dfle_plot_chi_data {
+    size_t n;
+    const double *chi;      /* [m]                                             */
+    const double *z;        /* elevation [m] (or height above base level)      */
+    const double *k_sn;     /* colour, or NULL                                  */
+    const double *A;        /* drainage area [m^2], or NULL (all fitted)        */
+    double A_min;           /* [m^2]                                            */
+    double theta_ref, A0;   /* [-], [m^2]: named in the axis label              */
+    double M_chi, z_b, r2;  /* the line; M_chi NaN: none                        */
+} dfle_plot_chi_data;
+
+int dfle_plot_chi(const char *path, const dfle_plot_opts *opts, const dfle_plot_chi_data *chi,
+                  dfle_error *err);
+
+/* The slope-area figure (as dfle_plot_slope_area) and the chi plot side
+ * by side, (a) and (b), on one page: 25 x 10.5 cm. */
+int dfle_plot_slope_area_chi(const char *path, const dfle_plot_opts *opts, size_t n,
+                             const double *A, const double *S, const dfle_bins *bins,
+                             const dfle_eq2_fit *fit, const dfle_plot_chi_data *chi,
+                             dfle_error *err);
+
 /* Long profile z(x) [m], with a second panel of slope S(x) (S may be
  * NULL).  opts->y applies to the elevation panel.  16 x 13 cm. */
 int dfle_plot_profile(const char *path, const dfle_plot_opts *opts, size_t n,

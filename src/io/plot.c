@@ -17,7 +17,6 @@
 #include <stdlib.h>
 #include <string.h>
 
-enum { FIT_SAMPLES = 200 };
 
 /* Layers of series, coloured from the palette in order except where a
  * series names its colour (so an explicit grey does not use up blue). */
@@ -113,14 +112,13 @@ static void layer_set(dfle_gp_layer *l, size_t n, const double *x, const double 
     dfle_gp_look_set(&l->look, kind, rgb, lw, 1, pt, ps, 0);
 }
 
-int dfle_plot_slope_area(const char *path, const dfle_plot_opts *opts, size_t n,
-                         const double *A, const double *S,
-                         const dfle_bins *bins, const dfle_eq2_fit *fit,
-                         dfle_error *err)
+int dfle_gp_slope_area_panel(dfle_gp_sa_panel *sp, const dfle_gp_frame *fr, const char *path,
+                             size_t n, const double *A, const double *S, const dfle_bins *bins,
+                             const dfle_eq2_fit *fit, const dfle_plot_axis *y, dfle_error *err)
 {
-    dfle_gp_frame fr;
-    int rc = dfle_gp_frame_of(path, opts, 16, 11, &fr, err);
-    if (rc < 0) return rc;
+    dfle_gp_layer *L = sp->L;
+    size_t nl = 0;
+    memset(sp, 0, sizeof *sp);
     if (n == 0 || A == NULL || S == NULL)
         return dfle_error_set(err, DFLE_EINVAL, "plot: slope-area data "
                               "missing (n = %zu, A or S NULL)", n);
@@ -143,28 +141,24 @@ int dfle_plot_slope_area(const char *path, const dfle_plot_opts *opts, size_t n,
         return dfle_error_set(err, DFLE_EINVAL, "plot: no slope-area pair "
                               "with finite A > 0 and S > 0 for '%s'", path);
 
-    dfle_gp_layer L[4];
-    size_t nl = 0;
     /* Thousands of DEM cells: small dots, grey, under everything. */
     layer_set(&L[nl++], n, A, S, "Data", DFLE_GP_POINTS, DFLE_GP_GREY, 1, 7,
-              dfle_gp_ps(&fr, n > 2000 ? 1.8 : 2.6));
+              dfle_gp_ps(fr, n > 2000 ? 1.8 : 2.6));
     if (bins != NULL && bins->n > 0) {
         int bars = bins->S_q25 != NULL && bins->S_q75 != NULL;
         layer_set(&L[nl], bins->n, bins->A, bins->S_mean,
                   bars ? "Binned mean (quartiles)" : "Binned mean",
-                  bars ? DFLE_GP_BARS : DFLE_GP_POINTS, "#000000", 2, 7, dfle_gp_ps(&fr, 4.2));
+                  bars ? DFLE_GP_BARS : DFLE_GP_POINTS, "#000000", 2, 7, dfle_gp_ps(fr, 4.2));
         if (bars)
             L[nl].lo = bins->S_q25, L[nl].hi = bins->S_q75;
         nl++;
     }
     /* The curve spans the data's areas; A_df is marked only inside it. */
-    double fa[FIT_SAMPLES], fs[FIT_SAMPLES], mark_a = 0, mark_s = 0;
-    char ftitle[320] = "", mtitle[96] = "", extra[200] = "";
     if (fit != NULL) {
         char sdf[40], adf[40], a2[40], r2[32] = "";
-        for (int i = 0; i < FIT_SAMPLES; i++) {
-            fa[i] = amin * pow(amax / amin, i / (FIT_SAMPLES - 1.0));
-            fs[i] = eq2(fit, fa[i]);
+        for (int i = 0; i < DFLE_GP_FIT_SAMPLES; i++) {
+            sp->fa[i] = amin * pow(amax / amin, i / (DFLE_GP_FIT_SAMPLES - 1.0));
+            sp->fs[i] = eq2(fit, sp->fa[i]);
         }
         dfle_plot_number(sdf, sizeof sdf, fit->S_df);
         dfle_plot_number(adf, sizeof adf, fit->A_df);
@@ -172,32 +166,45 @@ int dfle_plot_slope_area(const char *path, const dfle_plot_opts *opts, size_t n,
         if (isfinite(fit->r2))
             snprintf(r2, sizeof r2, ", {/:Italic R}^2 = %.3f", fit->r2);
         int mark = fit->A_df >= amin && fit->A_df <= amax;
-        snprintf(ftitle, sizeof ftitle, "Eq. (2): {/:Italic S}_{df} = %s, "
+        snprintf(sp->ftitle, sizeof sp->ftitle, "Eq. (2): {/:Italic S}_{df} = %s, "
                  "{/:Italic a}_2 = %s%s%s%s%s", sdf, a2, r2,
                  mark ? "" : ", {/:Italic A}_{df} = ", mark ? "" : adf,
                  mark ? "" : " m^2");
-        layer_set(&L[nl++], FIT_SAMPLES, fa, fs, ftitle, DFLE_GP_LINES, DFLE_GP_FIT, 2.5, 0, 0);
+        layer_set(&L[nl++], DFLE_GP_FIT_SAMPLES, sp->fa, sp->fs, sp->ftitle, DFLE_GP_LINES,
+                  DFLE_GP_FIT, 2.5, 0, 0);
         if (mark) { /* as in the paper's Fig. 1: open circle at (A_df,
                      * S_df/2) on the curve and a dashed line at A_df */
-            mark_a = fit->A_df;
-            mark_s = eq2(fit, fit->A_df);
-            snprintf(mtitle, sizeof mtitle, "{/:Italic A}_{df} = %s m^2", adf);
-            layer_set(&L[nl++], 1, &mark_a, &mark_s, mtitle, DFLE_GP_POINTS, DFLE_GP_FIT, 3, 6,
-                      dfle_gp_ps(&fr, 10));
-            snprintf(extra, sizeof extra, "set arrow from %.17g, graph 0 to "
+            sp->mark_a = fit->A_df;
+            sp->mark_s = eq2(fit, fit->A_df);
+            snprintf(sp->mtitle, sizeof sp->mtitle, "{/:Italic A}_{df} = %s m^2", adf);
+            layer_set(&L[nl++], 1, &sp->mark_a, &sp->mark_s, sp->mtitle, DFLE_GP_POINTS,
+                      DFLE_GP_FIT, 3, 6, dfle_gp_ps(fr, 10));
+            snprintf(sp->extra, sizeof sp->extra, "set arrow from %.17g, graph 0 to "
                      "%.17g, graph 1 nohead dt 2 lw 1.5 lc rgb '%s' back\n",
-                     mark_a, mark_a, DFLE_GP_FIT);
+                     sp->mark_a, sp->mark_a, DFLE_GP_FIT);
         }
     }
-    dfle_gp_panel panel;
-    memset(&panel, 0, sizeof panel);
-    panel.layers = L;
-    panel.nl = nl;
-    panel.y = opts != NULL ? &opts->y : NULL;
-    panel.ylog = 1;
-    panel.ylabel = dfle_plot_label("S", NULL);
-    panel.extra = extra[0] != '\0' ? extra : NULL;
-    return dfle_gp_figure(path, &fr, opts, 1, dfle_plot_label("A", NULL), &panel, 1, err);
+    sp->panel.layers = L;
+    sp->panel.nl = nl;
+    sp->panel.y = y;
+    sp->panel.ylog = 1;
+    sp->panel.ylabel = dfle_plot_label("S", NULL);
+    sp->panel.extra = sp->extra[0] != '\0' ? sp->extra : NULL;
+    return DFLE_OK;
+}
+
+int dfle_plot_slope_area(const char *path, const dfle_plot_opts *opts, size_t n,
+                         const double *A, const double *S,
+                         const dfle_bins *bins, const dfle_eq2_fit *fit,
+                         dfle_error *err)
+{
+    dfle_gp_frame fr;
+    dfle_gp_sa_panel sp;
+    int rc = dfle_gp_frame_of(path, opts, 16, 11, &fr, err);
+    if (rc < 0 || (rc = dfle_gp_slope_area_panel(&sp, &fr, path, n, A, S, bins, fit,
+                                                 opts != NULL ? &opts->y : NULL, err)) < 0)
+        return rc;
+    return dfle_gp_figure(path, &fr, opts, 1, dfle_plot_label("A", NULL), &sp.panel, 1, err);
 }
 
 int dfle_plot_profile(const char *path, const dfle_plot_opts *opts, size_t n,

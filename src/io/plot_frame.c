@@ -425,6 +425,33 @@ void dfle_gp_plan_free(dfle_gp_plan *pl)
     free(pl);
 }
 
+/* The x ticks for the frame's width; the last label, centred on the
+ * frame's edge, must fit on the page. */
+static void x_ticks(dfle_gp_plan *pl)
+{
+    layout *lay = &pl->lay;
+    const double fs = pl->fr->font_pt;
+    dfle_gp_axis_ticks(pl->xa, lay->fx1 - lay->fx0, fs, 0, &pl->o->x);
+    if (pl->xa->n > 0 && !pl->any_c)
+        lay->fx1 = fmin(lay->fx1, lay->box.x1 - lay->key_right -
+                        0.5 * dfle_gp_text_em(pl->xa->lab[pl->xa->n - 1]) * fs - 0.3 * fs);
+}
+
+double dfle_gp_plan_key_below(const dfle_gp_plan *pl)
+{
+    return pl->lay.key_below;
+}
+
+void dfle_gp_plan_set_key_below(dfle_gp_plan *pl, double key_below)
+{
+    if (!(key_below > pl->lay.key_below))
+        return;
+    pl->lay.key_below = key_below;
+    compute_layout(&pl->lay, pl->fr, pl->o, pl->xl, pl->P, pl->np, pl->ya, pl->ca, pl->any_c,
+                   pl->weights, pl->gap);
+    x_ticks(pl);
+}
+
 int dfle_gp_plan_new(const char *path, const dfle_gp_frame *fr, const dfle_gp_box *box,
                      const dfle_plot_opts *opts, int xlog, const char *xlabel, dfle_gp_panel *P,
                      size_t np, dfle_gp_plan **out, dfle_error *err)
@@ -555,13 +582,9 @@ int dfle_gp_plan_new(const char *path, const dfle_gp_frame *fr, const dfle_gp_bo
                             fr->h_pt / 72 * 2.54, fs);
         goto done;
     }
-    dfle_gp_axis_ticks(xa, lay->fx1 - lay->fx0, fs, 0, &o->x);
-    /* The last x label, centred on the frame's edge, must fit. */
-    if (xa->n > 0 && !any_c)
-        lay->fx1 = fmin(lay->fx1, lay->box.x1 - lay->key_right -
-                        0.5 * dfle_gp_text_em(xa->lab[xa->n - 1]) * fs - 0.3 * fs);
     pl->fr = fr, pl->o = o, pl->P = P, pl->np = np, pl->xlog = xlog, pl->logc = logc;
     pl->any_c = any_c, pl->xl = xl, pl->weights = weights, pl->gap = gap;
+    x_ticks(pl);
 done:
     if (rc < 0) {
         dfle_gp_plan_free(pl);

@@ -222,9 +222,28 @@ int dfle_gp_plan_new(const char *path, const dfle_gp_frame *fr, const dfle_gp_bo
 /* Write the plan's script to a run; `cell` names its data blocks (each
  * figure on a page its own), in_multiplot: the caller set multiplot. */
 void dfle_gp_plan_put(FILE *f, const dfle_gp_plan *pl, int cell, int in_multiplot);
+/* The room below the frame a plan keeps for its legend [pt], and more
+ * of it (figures side by side with frames of one height). */
+double dfle_gp_plan_key_below(const dfle_gp_plan *pl);
+void dfle_gp_plan_set_key_below(dfle_gp_plan *pl, double key_below);
 /* Panel p's frame on the page: left, bottom, right, top [pt]. */
 void dfle_gp_plan_frame(const dfle_gp_plan *pl, size_t p, double frame[4]);
 void dfle_gp_plan_free(dfle_gp_plan *pl);
+
+/* --- plot.c --- */
+
+/* The slope-area panel of dfle_plot_slope_area (data, bins, Eq. 2 and
+ * A_df), built in sp, which holds what its layers point at. */
+enum { DFLE_GP_FIT_SAMPLES = 200 };
+typedef struct dfle_gp_sa_panel {
+    dfle_gp_panel panel;
+    dfle_gp_layer L[4];
+    double fa[DFLE_GP_FIT_SAMPLES], fs[DFLE_GP_FIT_SAMPLES], mark_a, mark_s;
+    char ftitle[320], mtitle[96], extra[200];
+} dfle_gp_sa_panel;
+int dfle_gp_slope_area_panel(dfle_gp_sa_panel *sp, const dfle_gp_frame *fr, const char *path,
+                             size_t n, const double *A, const double *S, const dfle_bins *bins,
+                             const dfle_eq2_fit *fit, const dfle_plot_axis *y, dfle_error *err);
 
 /* A whole figure: np panels over one x axis (opts->x; xlog and xlabel
  * when it says nothing), a colour box for layers coloured by value,

@@ -410,6 +410,7 @@ int dfle_lua_law_compiled(lua_State *L, dfle_law *law);
 void dfle_lua_open_model(lua_State *L);
 void dfle_lua_open_analysis(lua_State *L);
 void dfle_lua_open_plot(lua_State *L);
+void dfle_lua_open_chi(lua_State *L); /* after plot: dfle.chi, dfle.concavity, their plots */
 void dfle_lua_open_sampling(lua_State *L);
 void dfle_lua_open_args(lua_State *L); /* dfle.args, dfle.mkdir (lua_args.c) */
 /* Whether msg is the error dfle.args raised last for a mistake on the
