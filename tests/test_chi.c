@@ -2,12 +2,16 @@
  * test_chi.c - chi, k_sn and concavity (chi.h) against analytical cases.
  *
  * A steady channel of the stream-power law U = K A^m S^n has slope
- * S = k_s A^-theta, k_s = (U/K)^(1/n), theta = m/n.  Along a channel with
- * Hack's law A = c s^h (s the distance from the divide) its elevation is
- * the integral of S, in closed form; so are its tributaries' and a trunk
- * whose area grows linearly downstream.  On these, with theta_ref =
- * theta and A0 = 1 m^2, chi-z must be one line of slope k_s, k_sn = k_s
- * at every cell, and both concavity methods must find theta.
+ * S = k_s A^-theta, k_s = (U/K)^(1/n), theta = m/n.  Discretised as dfle's
+ * models and landscapes are (each cell's slope to its receiver, with the
+ * cell's own area) its elevations are z_i = z_r + L_i k_s A_i^-theta,
+ * summed from base level; on such a channel, or a network of them, with
+ * theta_ref = theta and A0 = 1 m^2, chi-z must be one line of slope k_s
+ * and k_sn = k_s at every cell, exactly, and both concavity methods must
+ * find theta.  Along a continuous channel with Hack's law A = c s^h (s
+ * the distance from the divide) the elevation is an integral in closed
+ * form, which the link sums of chi approach at first order in the cell
+ * size.
  */
 #include <string.h>
 
@@ -29,22 +33,34 @@ static double hack_integral(double c, double h, double theta, double s, double L
     return pow(c, -theta) * (pow(L, p) - pow(s, p)) / p;
 }
 
-/* A chain from s = s0 to s = L (the outlet, base level at z_b) every ds
- * m, cells head first starting at index `at`; returns the next free
- * index.  Elevations exact for slope ks A^-theta. */
-static size_t chain(size_t at, double c, double h, double s0, double L, double ds, double z_b,
-                    double ks, double theta)
+/* A chain with Hack's law from s = s0 to s = L (the outlet, base level at
+ * z_b) every ds m, cells head first from index `at`; returns the next
+ * free index.  continuous: elevations of the continuous channel (the
+ * integral); else the discrete steady state z_i = z_r + ds ks A_i^-theta. */
+static size_t chain_of(size_t at, double c, double h, double s0, double L, double ds, double z_b,
+                       double ks, double theta, int continuous)
 {
     size_t m = (size_t)llround((L - s0) / ds) + 1;
     for (size_t k = 0; k < m; k++) {
         double s = s0 + (double)k * ds;
         size_t i = at + k;
         area[i] = c * pow(s, h);
-        elev[i] = z_b + ks * hack_integral(c, h, theta, s, L);
         rcv[i] = k + 1 < m ? i + 1 : i;
         len[i] = ds;
     }
+    elev[at + m - 1] = z_b;
+    for (size_t k = m - 1; k-- > 0;) {
+        size_t i = at + k;
+        elev[i] = continuous ? z_b + ks * hack_integral(c, h, theta, s0 + (double)k * ds, L)
+                             : elev[i + 1] + ds * ks * pow(area[i], -theta);
+    }
     return at + m;
+}
+
+static size_t chain(size_t at, double c, double h, double s0, double L, double ds, double z_b,
+                    double ks, double theta)
+{
+    return chain_of(at, c, h, s0, L, ds, z_b, ks, theta, 0);
 }
 
 static dfle_tree tree_of(size_t n)
@@ -55,28 +71,29 @@ static dfle_tree tree_of(size_t n)
 static void test_steady_profile_is_one_line(void **state)
 {
     (void)state;
-    /* 10 km, 1 m cells, Hack c = 6.7, h = 1.67, from 100 m below the divide */
-    size_t n = chain(0, 6.7, 1.67, 100, 10000, 1, 500, KS, THETA);
+    /* 10 km, 5 m cells, Hack c = 6.7, h = 1.67, from 100 m below the divide */
+    size_t n = chain(0, 6.7, 1.67, 100, 10000, 5, 500, KS, THETA);
     dfle_tree t = tree_of(n);
     dfle_chi_opts o;
     dfle_chi c;
     dfle_error err = {0};
+    double chi_head = 0;
 
     dfle_chi_opts_default(&o);
     o.theta_ref = THETA;
     assert_ok(dfle_chi_compute(&t, &o, &c, &err), &err);
     assert_int_equal(c.n_base, 1);
     assert_int_equal(c.n_fit, n - 1);
-    assert_close(c.M_chi, KS, 1e-6, 0);
-    assert_close(c.k_sn_fit, KS, 1e-6, 0);
-    assert_true(c.r2 > 1 - 1e-10);
+    assert_close(c.M_chi, KS, 1e-12, 0);
+    assert_close(c.k_sn_fit, KS, 1e-12, 0);
+    assert_true(c.r2 > 1 - 1e-12);
     assert_close(c.chi[n - 1], 0, 0, 0);
     assert_close(c.d[0], 10000 - 100, 1e-12, 0);
-    /* chi itself: the integral of A^-theta from the outlet, to the head */
-    assert_close(c.chi[0], hack_integral(6.7, 1.67, THETA, 100, 10000), 1e-6, 0);
-    /* per link, the trapezoid's error: largest at the head (1e-5 there) */
-    for (size_t i = 0; i + 1 < n; i += 97)
-        assert_close(c.k_sn[i], KS, 3e-5, 0);
+    for (size_t i = 0; i + 1 < n; i++)
+        chi_head += 5 * pow(area[i], -THETA);
+    assert_close(c.chi[0], chi_head, 1e-12, 0);
+    for (size_t i = 0; i + 1 < n; i += 97) /* over one link: S A^theta */
+        assert_close(c.k_sn[i], KS, 1e-12, 0);
     assert_true(isnan(c.k_sn[n - 1])); /* base level: no link */
     dfle_chi_release(&c);
 
@@ -84,11 +101,11 @@ static void test_steady_profile_is_one_line(void **state)
     o.A0 = 1e6;
     o.window = 250;
     assert_ok(dfle_chi_compute(&t, &o, &c, &err), &err);
-    assert_close(c.M_chi, KS * pow(1e6, -THETA), 1e-6, 0);
-    assert_close(c.k_sn_fit, KS, 1e-6, 0);
+    assert_close(c.M_chi, KS * pow(1e6, -THETA), 1e-12, 0);
+    assert_close(c.k_sn_fit, KS, 1e-12, 0);
     for (size_t i = 0; i < n; i += 89)
-        assert_close(c.k_sn[i], KS, 1e-5, 0);
-    assert_close(c.k_sn[n - 1], KS, 1e-5, 0); /* the window's upper half */
+        assert_close(c.k_sn[i], KS, 1e-12, 0);
+    assert_close(c.k_sn[n - 1], KS, 1e-12, 0); /* the window's upper half */
     dfle_chi_release(&c);
 
     /* another theta_ref bends the line: k_sn varies, R^2 drops */
@@ -98,6 +115,31 @@ static void test_steady_profile_is_one_line(void **state)
     assert_true(c.r2 < 0.999);
     assert_true(c.k_sn[0] > 2 * c.k_sn[n - 2]);
     dfle_chi_release(&c);
+}
+
+/* The continuous channel: chi-z's slope tends to k_s as the cells shrink,
+ * the error halving with the cell size (first order). */
+static void test_continuous_profile_converges(void **state)
+{
+    (void)state;
+    double e[3];
+    const double ds[3] = {4, 2, 1};
+    for (int k = 0; k < 3; k++) {
+        size_t n = chain_of(0, 6.7, 1.67, 100, 10000, ds[k], 0, KS, THETA, 1);
+        dfle_tree t = tree_of(n);
+        dfle_chi_opts o;
+        dfle_chi c;
+        dfle_error err = {0};
+        dfle_chi_opts_default(&o);
+        o.theta_ref = THETA;
+        assert_ok(dfle_chi_compute(&t, &o, &c, &err), &err);
+        e[k] = c.M_chi / KS - 1;
+        assert_true(c.r2 > 1 - 1e-5);
+        dfle_chi_release(&c);
+    }
+    assert_true(fabs(e[2]) < 2e-3);
+    assert_close(e[0] / e[1], 2, 0.05, 0);
+    assert_close(e[1] / e[2], 2, 0.05, 0);
 }
 
 /* n = 2: m = 1, U/K = 100, so k_s = 10 and theta = 0.5. */
@@ -126,35 +168,30 @@ static void test_nonlinear_stream_power(void **state)
 }
 
 /* Two tributaries of different size join a trunk whose area grows
- * linearly: all three steady at k_s, theta, so one chi-z line. */
+ * linearly downstream: all three steady at k_s, theta, so one chi-z line. */
 static size_t branching(double ks, double theta)
 {
     const double L1 = 4000, L2 = 2500, ds = 1, Lt = 3000, q = 200; /* q: m^2 per m */
     const double c1 = 6.7, c2 = 3.1, h = 1.67;
-    double A_conf = c1 * pow(L1, h) + c2 * pow(L2, h), p = 1 - theta;
-    size_t mt = (size_t)llround(Lt / ds), trunk0, n;
-    /* the trunk, from just below the confluence (u = ds) to the outlet (u = Lt) */
-    trunk0 = 0;
+    double A_conf = c1 * pow(L1, h) + c2 * pow(L2, h);
+    size_t mt = (size_t)llround(Lt / ds), a, b;
+    /* the trunk, from just below the confluence to the outlet */
     for (size_t k = 0; k < mt; k++) {
-        double u = ds * (double)(k + 1);
-        area[k] = A_conf + q * u;
-        /* z(u) = ks int_u^Lt (A_conf + q u')^-theta du' */
-        elev[k] = ks * (pow(A_conf + q * Lt, p) - pow(area[k], p)) / (q * p);
+        area[k] = A_conf + q * ds * (double)(k + 1);
         rcv[k] = k + 1 < mt ? k + 1 : k;
         len[k] = ds;
     }
-    {
-        double z_conf = ks * (pow(A_conf + q * Lt, p) - pow(A_conf, p)) / (q * p);
-        /* each tributary ends at s = L at the confluence's elevation
-         * (the trunk's z at u = 0) and drains one ds to the trunk's
-         * first cell, at u = ds */
-        size_t a = chain(mt, c1, h, 50, L1, ds, z_conf, ks, theta);
-        size_t b = chain(a, c2, h, 80, L2, ds, z_conf, ks, theta);
-        rcv[a - 1] = trunk0;
-        rcv[b - 1] = trunk0;
-        n = b;
-    }
-    return n;
+    elev[mt - 1] = 0;
+    for (size_t k = mt - 1; k-- > 0;)
+        elev[k] = elev[k + 1] + ds * ks * pow(area[k], -theta);
+    /* each tributary's last cell drains one ds to the trunk's first */
+    a = chain(mt, c1, h, 50, L1, ds, elev[0] + ds * ks * pow(c1 * pow(L1, h), -theta), ks,
+              theta);
+    b = chain(a, c2, h, 80, L2, ds, elev[0] + ds * ks * pow(c2 * pow(L2, h), -theta), ks,
+              theta);
+    rcv[a - 1] = 0;
+    rcv[b - 1] = 0;
+    return b;
 }
 
 static void test_network_is_collinear(void **state)
@@ -172,16 +209,14 @@ static void test_network_is_collinear(void **state)
     o.theta_ref = THETA;
     assert_ok(dfle_chi_compute(&t, &o, &c, &err), &err);
     assert_int_equal(c.n_base, 1);
-    /* the tributaries' confluence links are one cell of the trunk's
-     * change of area: a first-order error of a few 1e-5 */
-    assert_close(c.k_sn_fit, KS, 1e-4, 0);
-    assert_true(c.r2 > 1 - 1e-7);
+    assert_close(c.k_sn_fit, KS, 1e-12, 0);
+    assert_true(c.r2 > 1 - 1e-12);
     dfle_chi_release(&c);
 
     dfle_concavity_opts_default(&co);
     assert_ok(dfle_concavity_chi(&t, &co, &cc, &err), &err);
-    assert_close(cc.theta, THETA, 0, 2e-3);
-    assert_close(cc.k_s, KS, 2e-2, 0);
+    assert_close(cc.theta, THETA, 0, 2e-4);
+    assert_close(cc.k_s, KS, 2e-3, 0);
     assert_false(cc.at_bound);
     assert_int_equal(cc.ncurve, 30); /* 0.05, 0.10, ..., 1.50 */
     assert_close(cc.curve_theta[0], 0.05, 0, 1e-12);
@@ -330,6 +365,7 @@ int main(void)
 {
     const struct CMUnitTest tests[] = {
         cmocka_unit_test(test_steady_profile_is_one_line),
+        cmocka_unit_test(test_continuous_profile_converges),
         cmocka_unit_test(test_nonlinear_stream_power),
         cmocka_unit_test(test_network_is_collinear),
         cmocka_unit_test(test_slope_area_concavity),

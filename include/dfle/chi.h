@@ -17,6 +17,10 @@
  * the theta_ref that makes the network most collinear in chi-z, or the
  * slope of log S against log A.
  *
+ * chi is summed over the links with the area of each link's upper cell,
+ * chi_i = chi_r + L_i (A0/A_i)^theta_ref: the rule of the slope to the
+ * receiver, so over one link the chi-z slope is k_sn = S A^theta_ref.
+ *
  * Everything works on a drainage tree: cells that each drain to one
  * receiver over a flow length, the base-level cells (outlets) draining to
  * themselves.  A DEM profile or network, a model's nodes and a

@@ -2,10 +2,17 @@
  * chi.c - the chi transform of Perron and Royden (2013) and normalised
  * channel steepness on a drainage tree (chi.h).
  *
- * chi is integrated upstream from each base-level cell by the trapezoid
- * rule over each link, chi_i = chi_r + L_i ((A0/A_i)^theta + (A0/A_r)^theta) / 2,
- * the rule that TopoToolbox's chitransform uses along its flow paths; it
- * converges on the integral at second order in the cell size.
+ * chi is summed upstream from each base-level cell over the links, each
+ * with the area of its upper cell: chi_i = chi_r + L_i (A0/A_i)^theta.
+ * That is the rule of the slope a cell has to its receiver, S_i = (z_i -
+ * z_r) / L_i, with which a model or landscape cell erodes (U = K A_i^m
+ * S_i^n at steady state), so a steady state of dfle's lies on its chi-z
+ * line exactly, and over one link the chi-z slope is S A^theta itself.
+ * On a profile sampled from a continuous one it converges on the
+ * integral at first order in the cell size.  (On the 30 m Big Tujunga
+ * DEM its chi and the trapezoid rule's differ by under 1 % where A >=
+ * 1 km^2; near channel heads, where area doubles from cell to cell, by
+ * up to a factor of two: chi there says little either way.)
  *
  * k_sn of a cell is A0^theta times the chi-z slope over a window of flow
  * distance centred on it, rather than S A^theta: over the same window the
@@ -154,8 +161,7 @@ static void integrate(const dfle_tree *t, const size_t *order, double theta, dou
                 base[i] = i;
             continue;
         }
-        chi[i] = chi[r] + 0.5 * t->length[i] * (pow(A0 / t->A[i], theta) +
-                                                 pow(A0 / t->A[r], theta));
+        chi[i] = chi[r] + t->length[i] * pow(A0 / t->A[i], theta);
         if (d != NULL)
             d[i] = d[r] + t->length[i];
         if (base != NULL)
