@@ -16,6 +16,7 @@
 #include "lua/analysis/lua_chi.h"
 
 #include <math.h>
+#include <stdio.h>
 #include <stdlib.h>
 #include <string.h>
 
@@ -341,7 +342,11 @@ static int l_chi(lua_State *L)
     dfle_record_param_number(rec, "A0", o.A0, "m^2");
     dfle_record_param_number(rec, "A_min", o.A_min, "m^2");
     dfle_record_param_number(rec, "window", o.window, "m");
-    dfle_record_number(rec, "k_sn", c->c.k_sn_fit, NULL);
+    {
+        char unit[24];
+        snprintf(unit, sizeof unit, "m^%.6g", 2 * o.theta_ref);
+        dfle_record_number(rec, "k_sn", c->c.k_sn_fit, unit);
+    }
     dfle_record_number(rec, "r2", c->c.r2, "-");
     dfle_record_number(rec, "cells_fitted", (double)c->c.n_fit, NULL);
     return 1;
