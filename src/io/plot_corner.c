@@ -58,11 +58,19 @@ static void fmt_interval(char *buf, size_t cap, double med, double lo, double hi
         dec = 0;
     if (dec > 5)
         dec = 5;
-    if (e != 0)
-        snprintf(buf, cap, "%.*f@^{/*0.8 +%.*f}_{/*0.8 −%.*f} ×10^{%d}", dec, med * s, dec, up,
-                 dec, dn, e);
-    else
-        snprintf(buf, cap, "%.*f@^{/*0.8 +%.*f}_{/*0.8 −%.*f}", dec, med * s, dec, up, dec, dn);
+    {
+        /* @ stacks the scripts, and what follows starts after the
+         * second: the wider goes second, so nothing runs into it */
+        char us[32], ds[32];
+        snprintf(us, sizeof us, "+%.*f", dec, up);
+        snprintf(ds, sizeof ds, "−%.*f", dec, dn);
+        if (strlen(us) + 2 > strlen(ds)) /* "−" is 3 bytes, one glyph */
+            snprintf(buf, cap, "%.*f@_{/*0.8 %s}^{/*0.8 %s}", dec, med * s, ds, us);
+        else
+            snprintf(buf, cap, "%.*f@^{/*0.8 %s}_{/*0.8 %s}", dec, med * s, us, ds);
+        if (e != 0)
+            snprintf(buf + strlen(buf), cap - strlen(buf), " ×10^{%d}", e);
+    }
 }
 
 /* A label "symbol (unit)" split in two (unit "" when it has none). */
