@@ -62,18 +62,6 @@ static int l_plot_chi(lua_State *L)
     return 0;
 }
 
-static double fit_field(lua_State *L, int idx, const char *key)
-{
-    double v;
-    lua_pushstring(L, key);
-    if (lua_rawget(L, idx) != LUA_TNUMBER)
-        luaL_error(L, "dfle.plot.slope_area_chi: the fit lacks number '%s' (a "
-                      "dfle.fit_slope_area result has it)", key);
-    v = lua_tonumber(L, -1);
-    lua_pop(L, 1);
-    return v;
-}
-
 /* dfle.plot.slope_area_chi(data, c, path [, fit [, {nbins = 100, ...}]]) */
 static int l_plot_slope_area_chi(lua_State *L)
 {
@@ -84,7 +72,8 @@ static int l_plot_slope_area_chi(lua_State *L)
     const char *path = dfle_lua_check_string(L, 3, "plot.slope_area_chi", "the path"), *ylabel;
     dfle_plot_chi_data d;
     dfle_plot_opts o;
-    dfle_eq2_fit fit, *fitp = NULL;
+    dfle_eq2_fit fit;
+    const dfle_eq2_fit *fitp;
     dfle_bins bins;
     dfle_error err;
     size_t n;
@@ -93,26 +82,10 @@ static int l_plot_slope_area_chi(lua_State *L)
     lua_settop(L, 5);
     dfle_lua_plot_opts(L, 5, "plot.slope_area_chi", DFLE_LUA_PLOT_PAGE, params, 1, NULL, &o);
     dfle_lua_check_whole(L, nbins, "plot.slope_area_chi", "nbins", 1, 1e6);
-    memset(&fit, 0, sizeof fit);
-    if (lua_istable(L, 4)) {
-        fit.S_df = fit_field(L, 4, "S_df");
-        fit.A_df = fit_field(L, 4, "A_df");
-        fit.a2 = fit_field(L, 4, "a2");
-        fit.r2 = fit_field(L, 4, "r2");
-        fitp = &fit;
-    } else if (!lua_isnil(L, 4) && !(lua_isboolean(L, 4) && !lua_toboolean(L, 4))) {
-        luaL_argerror(L, 4, "expected a fit table from dfle.fit_slope_area, nil or false");
-    }
-    n = dfle_lua_slope_area(L, 1, "plot.slope_area_chi", &A, &S);
-    chi_data(L, c, &d, &ylabel);
-    memset(&bins, 0, sizeof bins);
-    if (dfle_bins_compute(n, A, S, (size_t)nbins, &bins, &err) != DFLE_OK)
-        return luaL_error(L, "dfle.plot.slope_area_chi: %s", err.msg);
-    if (fitp == NULL && lua_isnil(L, 4)) { /* fit now; a failed fit leaves the curve out */
-        dfle_error fit_err;
-        if (dfle_slope_area_fit(n, A, S, (size_t)nbins, NULL, &fit, &fit_err) == DFLE_OK)
-            fitp = &fit;
-    }
+    chi_data(L, c, &d, &ylabel); /* (may allocate: before the bins) */
+    (void)ylabel;                /* panel (b) keeps the house label */
+    fitp = dfle_lua_plot_slope_area_data(L, 1, 4, "plot.slope_area_chi", (size_t)nbins, &n, &A,
+                                         &S, &bins, &fit);
     st = dfle_plot_slope_area_chi(path, &o, n, A, S, &bins, fitp, &d, &err);
     dfle_bins_release(&bins);
     if (st != DFLE_OK)
