@@ -79,9 +79,6 @@ void dfle_gp_str(FILE *f, const char *s);
 /* Start gnuplot on the page fr. */
 int dfle_gp_begin_frame(dfle_gp_run *r, const char *path, const dfle_gp_frame *fr,
                         dfle_error *err);
-/* The same for a page of w x h pixels (a map sized to its grid), drawn
- * at 96 dpi with a 12 pt font. */
-int dfle_gp_begin(dfle_gp_run *r, const char *path, int fmt, int w, int h, dfle_error *err);
 int dfle_gp_end(dfle_gp_run *r, dfle_error *err);
 
 /* --- plot_opts.c --- */
