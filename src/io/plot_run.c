@@ -196,14 +196,6 @@ int dfle_gp_begin_frame(dfle_gp_run *r, const char *path, const dfle_gp_frame *f
     return begin(r, path, fr, 1.0, err);
 }
 
-int dfle_gp_begin(dfle_gp_run *r, const char *path, int fmt, int w, int h, dfle_error *err)
-{
-    /* 96 dpi and a 12 pt font: the look these pages were designed in
-     * (lines 1.8 times the house width, as they were). */
-    dfle_gp_frame fr = {fmt, w * 0.75, h * 0.75, 96.0, "sans", 12.0};
-    return begin(r, path, &fr, 1.8, err);
-}
-
 /* Up to two meaningful lines of what gnuplot (or sh) said, on one line:
  * echoed commands and caret lines only repeat the script. */
 static void err_text(int fd, char *out, size_t cap)

@@ -300,6 +300,7 @@ static int l_plot(lua_State *L)
     m.ny = dfle_landscape_ny(u->ls);
     m.x0 = u->x0, m.y0 = u->y0;
     m.dx = dfle_landscape_dx(u->ls), m.dy = dfle_landscape_dy(u->ls);
+    m.crs = u->crs; /* named in the axis labels */
     m.z = get_field(L, DFLE_LS_Z, "dfle.landscape:plot");
     if (channels)
         m.channel = get_field(L, DFLE_LS_CHANNEL, "dfle.landscape:plot");
