@@ -599,6 +599,13 @@ static void finish_stepping(ls_run *run, const dfle_stepping_tally *tally)
                  "reached (steps of %g to %g yr)", tally->time, o->years, o->max_steps,
                  tally->dt_min, tally->dt_max);
         warn(run, "%s", words);
+    } else if (run->verify_why[0] != '\0' && ls_rates_met(&run->judge, &run->st) &&
+               run->st.stable >= o->stable_steps) {
+        /* What failed is the check, not the criterion. */
+        snprintf(words, sizeof words, "not steady: no fixed point: the state meets the "
+                 "criterion (%.3g%% of the channel cells above tol U, volume balance %.3g), "
+                 "but %s%s", 100 * run->st.channel_frac_above, run->st.volume_balance,
+                 run->verify_why, net);
     } else {
         size_t used;
         ls_explain(&run->judge, &run->st, o->stable_steps, ls->rcv_tol, words, sizeof words);

@@ -280,7 +280,8 @@ static int landscape_run(lua_State *L, int steady)
     stable = (double)o.stable_steps;
     verify_steps = (double)o.verify_steps;
     {
-        int rcv_tol_given = lua_istable(L, 2) && lua_getfield(L, 2, "rcv_tol") != LUA_TNIL;
+        int rcv_tol_given = lua_istable(L, 2) && lua_getfield(L, 2, "rcv_tol") != LUA_TNIL &&
+                            lua_getfield(L, 2, "rcv_tol_cycle") == LUA_TNIL;
         const dfle_lua_param sp[] = {{"tol", &o.tol}, {"channel_quantile", &o.channel_quantile},
                                      {"hillslope_quantile", &o.hillslope_quantile},
                                      {"stable_steps", &stable}, {"max_time", &o.max_time},
@@ -295,8 +296,8 @@ static int landscape_run(lua_State *L, int steady)
             dfle_lua_read_params(L, 2, fn, sp, sizeof sp / sizeof sp[0], other);
         else
             dfle_lua_read_params(L, 2, fn, tp, sizeof tp / sizeof tp[0], other);
-        /* A looser rcv_tol given alone is the rule throughout (the
-         * cycle rule cannot be stricter than it). */
+        /* A looser rcv_tol given without rcv_tol_cycle is the rule
+         * throughout (the cycle rule cannot be stricter than it). */
         if (rcv_tol_given && o.rcv_tol_cycle < o.rcv_tol)
             o.rcv_tol_cycle = o.rcv_tol;
     }

@@ -181,16 +181,18 @@ static void check_raster_grid(lua_State *L, const lua_ls *u, const dfle_dem *d, 
                               size_t nx, size_t ny)
 {
     double e[4], rdx = dfle_dem_dx(d), rdy = dfle_dem_dy(d);
+    char msg[600];
     dfle_dem_extent(d, e);
     if (dfle_dem_nx(d) != nx || dfle_dem_ny(d) != ny || fabs(rdx - u->dx) > 1e-9 * u->dx ||
         fabs(rdy - u->dy) > 1e-9 * u->dy || fabs(e[0] - u->x0) > 1e-6 * u->dx ||
-        fabs(e[3] - u->y0) > 1e-6 * u->dy)
-        luaL_error(L, "dfle.landscape: raster '%s' is %d x %d cells of %f x %f m with its "
-                      "north-west corner at (%f, %f), the grid %d x %d cells of %f x %f m at "
-                      "(%f, %f): it must lie on the grid (resample it first, e.g. with "
-                      "gdalwarp; or give the grid's x0, y0)", key, (int)dfle_dem_nx(d),
-                   (int)dfle_dem_ny(d), rdx, rdy, e[0], e[3], (int)nx, (int)ny, u->dx, u->dy,
-                   u->x0, u->y0);
+        fabs(e[3] - u->y0) > 1e-6 * u->dy) {
+        snprintf(msg, sizeof msg, "raster '%s' is %zu x %zu cells of %g x %g m with its "
+                 "north-west corner at (%.10g, %.10g), the grid %zu x %zu cells of %g x %g m at "
+                 "(%.10g, %.10g): it must lie on the grid (resample it first, e.g. with "
+                 "gdalwarp, or give the grid's x0 and y0)", key, dfle_dem_nx(d), dfle_dem_ny(d),
+                 rdx, rdy, e[0], e[3], nx, ny, u->dx, u->dy, u->x0, u->y0);
+        luaL_error(L, "dfle.landscape: %s", msg);
+    }
 }
 
 /* A field option: a number, an array of nx * ny, a dfle.dem on the grid,
