@@ -153,7 +153,9 @@ size_t dfle_landscape_memory(const dfle_landscape *ls);
 /* Bytes a landscape of these options with n_data data cells needs at
  * most: what dfle_landscape_memory reports after a run plus what a run
  * holds while it goes (the direct rounds' scratch, the state kept for
- * its checks).  opts->z is not read. */
+ * its checks).  opts->z is not read, nor are the components: only
+ * whether there is a router (debris flows) and which fields are grids
+ * or functions. */
 size_t dfle_landscape_memory_estimate(const dfle_landscape_opts *opts, size_t n_data);
 /* The grid of opts checked before anything is allocated (opts->z is
  * not read): its size and cell size, its corner (cell centres must be

@@ -440,9 +440,19 @@ int dfle_lua_landscape_new(lua_State *L)
     o.x0 = u->x0;
     o.y0 = u->y0;
     /* The corner and the memory before anything of the grid's size is
-     * allocated (its elevations here: 8 bytes a cell). */
-    if (dfle_landscape_check_grid(&o, n * sizeof(double), &err) != DFLE_OK)
-        return dfle_lua_raise(L, &err);
+     * allocated (its elevations here: 8 bytes a cell).  The estimate
+     * asks only whether there will be debris flows (a router: the
+     * default, unless router = false); the router is read below. */
+    {
+        static char router_to_come;
+        dfle_landscape_opts pre = o;
+        int t = lua_getfield(L, 1, "router");
+        pre.router = t == LUA_TBOOLEAN && !lua_toboolean(L, -1)
+                         ? NULL : (dfle_router *)(void *)&router_to_come;
+        lua_pop(L, 1);
+        if (dfle_landscape_check_grid(&pre, n * sizeof(double), &err) != DFLE_OK)
+            return dfle_lua_raise(L, &err);
+    }
 
     /* Initial elevations. */
     zbuf = lua_newuserdatauv(L, n * sizeof *zbuf, 0);
