@@ -437,6 +437,11 @@ static int step_advance(void *self, double dt_limit, double *dt, dfle_error *err
                                err)) != DFLE_OK)
             return s;
     } else {
+        /* Elevations grow as the run goes, and resolve less: checked at
+         * every step but those that land on a record or the end. */
+        if (want == o->dt &&
+            (s = ls_check_step(ls, want, run->transient ? 0.0 : o->tol, "dt", err)) != DFLE_OK)
+            return s;
         if ((s = ls_implicit_step(ls, want, &run->judge, &run->st, err)) != DFLE_OK)
             return s;
         *dt = want;
@@ -543,7 +548,7 @@ static int direct_then(ls_run *run, int *done, dfle_error *err)
             snprintf(held, sizeof held, "no receiver changed in the last %zu routings",
                      o->stable_steps);
         snprintf(res->note, sizeof res->note, "steady: the network settled after %zu direct "
-                 "rounds (%s); %s%s", run->st.steps, held, words, net);
+                 "rounds (%.120s); %.300s%.200s", run->st.steps, held, words, net);
         *done = 1;
         return DFLE_OK;
     }
@@ -604,8 +609,8 @@ static void finish_stepping(ls_run *run, const dfle_stepping_tally *tally)
         /* What failed is the check, not the criterion. */
         snprintf(words, sizeof words, "not steady: no fixed point: the state meets the "
                  "criterion (%.3g%% of the channel cells above tol U, volume balance %.3g), "
-                 "but %s%s", 100 * run->st.channel_frac_above, run->st.volume_balance,
-                 run->verify_why, net);
+                 "but %.300s%.200s", 100 * run->st.channel_frac_above,
+                 run->st.volume_balance, run->verify_why, net);
     } else {
         size_t used;
         ls_explain(&run->judge, &run->st, o->stable_steps, ls->rcv_tol, words, sizeof words);
