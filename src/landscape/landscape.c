@@ -390,17 +390,8 @@ size_t dfle_landscape_memory(const dfle_landscape *ls)
     b += (ls->U.grid != NULL) * ls->n * sizeof(double);
     b += (ls->K_scale.grid != NULL) * ls->n * sizeof(double);
     b += (ls->df_scale.grid != NULL) * ls->n * sizeof(double);
-    if (ls->model != NULL) {
-        const size_t nd = ls->n_data;
-        /* The model's arrays (13 doubles, 2 indices, two flows, its
-         * gathered views: model.c) and the network's (7 indices, 4
-         * doubles, 2 bytes), and the shape scratch here. */
-        b += nd * (13 * sizeof(double) + 2 * sizeof(size_t) + 2 * DFLE_FLOW_ARRAYS * sizeof(double)
-                   + (5 + DFLE_FLOW_ARRAYS) * sizeof(double));
-        b += nd * (7 * sizeof(size_t) + 4 * sizeof(double) + 2);
-        b += ls->n * sizeof *ls->node_of + nd * (sizeof *ls->cell_of + 2 * sizeof(size_t) +
-                                                 5 * sizeof(double) + 2);
-    }
+    if (ls->model != NULL)
+        b += (size_t)ls_model_bytes(ls->n, ls->n_data);
     return b;
 }
 

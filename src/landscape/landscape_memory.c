@@ -37,23 +37,32 @@
  * receivers 4, dz/dt 4, directions 1). */
 #define RUN_BYTES (8.0 + 17.0)
 
+double ls_model_bytes(size_t n, size_t n_data)
+{
+    const double nd = (double)n_data;
+    /* The model's arrays (13 doubles, 2 indices, two flows, its gathered
+     * views: model.c) and the network's (7 indices, 4 doubles, 2 bytes),
+     * and the shape scratch of the landscape (cell <-> node, receivers,
+     * stack, 5 doubles, 2 bytes). */
+    double b = nd * (13 * sizeof(double) + 2 * sizeof(size_t) +
+                     2 * DFLE_FLOW_ARRAYS * sizeof(double) + (5 + DFLE_FLOW_ARRAYS) * sizeof(double));
+    b += nd * (7 * sizeof(size_t) + 4 * sizeof(double) + 2);
+    b += (double)n * sizeof(uint32_t) +
+         nd * (sizeof(uint32_t) + 2 * sizeof(size_t) + 5 * sizeof(double) + 2);
+    return b;
+}
+
 size_t dfle_landscape_memory_estimate(const dfle_landscape_opts *o, size_t n_data)
 {
-    const double n = (double)o->nx * (double)o->ny, nd = (double)n_data;
+    const double n = (double)o->nx * (double)o->ny;
     double b = (double)sizeof(struct dfle_landscape) + ROUTING_BYTES * n;
     b += n * (sizeof(double) + sizeof(uint32_t) + sizeof(float)); /* z, rcv_prev, dzdt */
     b += n * sizeof(double);                                      /* z_undo */
     b += (o->U.grid != NULL || o->U.fn != NULL) * n * sizeof(double);
     b += (o->K_scale.grid != NULL || o->K_scale.fn != NULL) * n * sizeof(double);
     b += (o->df_scale.grid != NULL || o->df_scale.fn != NULL) * n * sizeof(double);
-    if (o->router != NULL) {
-        /* As dfle_landscape_memory counts the model and its network. */
-        b += nd * (13 * sizeof(double) + 2 * sizeof(size_t) + 2 * DFLE_FLOW_ARRAYS * sizeof(double)
-                   + (5 + DFLE_FLOW_ARRAYS) * sizeof(double));
-        b += nd * (7 * sizeof(size_t) + 4 * sizeof(double) + 2);
-        b += n * sizeof(uint32_t) + nd * (sizeof(uint32_t) + 2 * sizeof(size_t) +
-                                          5 * sizeof(double) + 2);
-    }
+    if (o->router != NULL)
+        b += ls_model_bytes(o->nx * o->ny, n_data);
     b += RUN_BYTES * n;
     return b < (double)SIZE_MAX ? (size_t)b : SIZE_MAX;
 }
