@@ -380,10 +380,12 @@ int dfle_gp_end(dfle_gp_run *r, dfle_error *err)
         rc = dfle_error_set(err, DFLE_EEXTERNAL, "plot: could not wait for "
                             "gnuplot ('%s'): %s", r->prog, strerror(perr));
     else if (WIFEXITED(st) && (WEXITSTATUS(st) == 126 || WEXITSTATUS(st) == 127))
+        /* (also a spawn whose exec failed in the child, as under
+         * valgrind, which reports it by status 127) */
         rc = dfle_error_set(err, DFLE_EEXTERNAL, "plot: gnuplot could not be "
-                            "run (%s); install it (apt-get install "
+                            "run ('%s': %s); install it (apt-get install "
                             "gnuplot-nox) or set DFLE_GNUPLOT to the gnuplot "
-                            "program", msg);
+                            "program", r->prog, msg);
     else if (WIFSIGNALED(st) || (WIFEXITED(st) && WEXITSTATUS(st) > 128))
         rc = dfle_error_set(err, DFLE_EEXTERNAL, "plot: gnuplot ('%s') was "
                             "killed by signal %d (%s) making '%s'", r->prog,
