@@ -81,10 +81,11 @@ local t0 = os.clock()
 local run = ls:run_to_steady{ max_time = 5e7, dt = 2e3, max_steps = 100000 }
 local reached = 0
 for _, v in ipairs(ls:get("reach")) do reached = reached + (v > 0 and 1 or 0) end
-print(("steady state: %s (%s, %d steps, %.2f s); 95%% of |dz/dt|/U <= %.3g, mean %.3g; "
-       .. "%d channel heads, %d cells reached by debris flows"):format(
-       run.converged and "reached" or "NOT reached", run.method, run.steps, os.clock() - t0,
-       run.q_ratio, run.mean_ratio, run.heads, reached))
+print(("steady state: %s (%s, %d steps, %.2f s); %.2f%% of the %d channel cells above tol U "
+       .. "(max |dz/dt|/U %.3g), volume balance %.2g; %d channel heads, %d cells reached by "
+       .. "debris flows"):format(run.converged and "reached" or "NOT reached", run.method,
+       run.steps, os.clock() - t0, 100 * run.channel_frac_above, run.channel_cells,
+       run.channel_max_ratio, run.volume_balance, run.heads, reached))
 print("  " .. run.note)
 
 local model_dem = ls:dem()

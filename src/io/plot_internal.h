@@ -26,6 +26,7 @@
 #include <signal.h>
 #include <stdio.h>
 #include <stdlib.h>
+#include <sys/types.h>
 
 #include "dfle/error.h"
 #include "dfle/file.h"
@@ -58,7 +59,8 @@ typedef struct dfle_gp_frame {
 /* One gnuplot run.  SIGPIPE is blocked for this thread while we write, so
  * a gnuplot that is missing or dies early gives EPIPE, not a dead caller. */
 typedef struct dfle_gp_run {
-    FILE *f;
+    FILE *f;              /* the script, to gnuplot's standard input */
+    pid_t pid;            /* gnuplot's process */
     const char *prog, *out;
     const char *write_to; /* where gnuplot writes: a temporary file beside out */
     dfle_file file;       /* renamed over out once the image is checked */
