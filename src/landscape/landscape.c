@@ -473,13 +473,20 @@ int ls_route(dfle_landscape *ls, dfle_error *err)
     rcv = dfle_drainage_receivers(ls->dr);
     {
         /* The receivers' hash, to tell a network that returns to an
-         * earlier routing (it cycles) from one still settling. */
+         * earlier routing (it cycles) from one still settling; without a
+         * model the channel cells are counted in the same pass. */
+        const double *A = dfle_drainage_area(ls->dr), A0 = ls->o.A0;
+        const int count = ls->model == NULL;
         uint64_t h = 0xcbf29ce484222325ull;
+        size_t chan = 0;
         for (size_t c = 0; c < ls->n; c++) {
             changes += rcv[c] != ls->rcv_prev[c];
             ls->rcv_prev[c] = rcv[c];
             h = (h ^ rcv[c]) * 0x100000001b3ull;
+            chan += count && A[c] >= A0; /* NaN on NoData: not counted */
         }
+        if (count)
+            ls->channel_cells = chan;
         ls->rcv_repeat = 0;
         for (size_t k = 0; changes > 0 && k < ls->rcv_hashes; k++)
             ls->rcv_repeat |= ls->rcv_hash[k] == h;
@@ -491,16 +498,8 @@ int ls_route(dfle_landscape *ls, dfle_error *err)
     ls->stable = (double)changes <= floor(ls->rcv_tol * (double)ls->n_data) ? ls->stable + 1 : 0;
     ls->routings++;
     ls->routed = 1;
-    if (ls->model != NULL) {
-        if ((st = shape_network(ls, err)) != DFLE_OK)
-            return st;
-    } else {
-        const double *A = dfle_drainage_area(ls->dr);
-        size_t chan = 0;
-        for (size_t c = 0; c < ls->n; c++)
-            chan += A[c] >= ls->o.A0; /* NaN on NoData: not counted */
-        ls->channel_cells = chan;
-    }
+    if (ls->model != NULL && (st = shape_network(ls, err)) != DFLE_OK)
+        return st;
     return DFLE_OK;
 }
 

@@ -119,11 +119,17 @@ void ls_ratios(const dfle_landscape *ls, const ls_judge *j, dfle_landscape_statu
         U = uniform ? ls->U.value : ls->U.grid[c];
         r = fabs((double)ls->dzdt[c]) / U;
         r = r <= DBL_MAX ? r : DBL_MAX;
-        part_add(all, r, j->tol);
         part_add(A[c] >= ls->o.A0 ? chan : hill, r, j->tol);
+        all->sum += r; /* in cell order, as its own sum */
         uplift += U;
         change += (double)ls->dzdt[c];
     }
+    /* The whole is the two parts: counts and bins add exactly. */
+    all->count = chan->count + hill->count;
+    all->above = chan->above + hill->above;
+    all->max = chan->max > hill->max ? chan->max : hill->max;
+    for (unsigned b = 0; b < Q_BINS; b++)
+        all->hist[b] = chan->hist[b] + hill->hist[b];
     st->max_ratio = all->max;
     st->mean_ratio = all->count > 0 ? fmin(all->sum, DBL_MAX) / (double)all->count : 0.0;
     st->frac_above = part_fraction(all);

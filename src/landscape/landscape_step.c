@@ -460,12 +460,18 @@ int ls_check_step(const dfle_landscape *ls, double dt, double tol, const char *w
                   dfle_error *err)
 {
     double zmax = 1.0, Umin = INFINITY, ulp, need;
+    const double *U = ls->U.grid;
+    /* Plain comparisons (NaN, NoData, fails both; U is checked finite at
+     * every data cell), and U read only where it varies in space. */
     for (size_t c = 0; c < ls->n; c++) {
-        if (isnan(ls->z[c]))
-            continue;
-        zmax = fmax(zmax, fabs(ls->z[c]));
-        Umin = fmin(Umin, ls_value(&ls->U, c));
+        const double a = fabs(ls->z[c]);
+        if (a > zmax)
+            zmax = a;
+        if (U != NULL && a == a && U[c] < Umin)
+            Umin = U[c];
     }
+    if (U == NULL && ls->n_data > 0)
+        Umin = ls->U.value;
     /* z is resolved to about ulp; a step's uplift must be well above it
      * (a transient: 64 ulp, so that it carries more than a digit or
      * two), and for a steady run |dz/dt| = change / dt must resolve
