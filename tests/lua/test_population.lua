@@ -178,4 +178,50 @@ tests["population: a Lua sampler gives equal-weight draws"] = function()
     end
 end
 
+-- 2D: the same population API on a landscape (per head: volume scaling
+-- with the head's area as for one flow, the spread on top).
+local z34 = { 100, 120, 100, 80, 90, 80, 70, 60, 70, 50, 40, 50 }
+local edges34 = { south = "base_level", north = "closed", east = "closed", west = "closed" }
+
+tests["landscape: zero width is the characteristic flow bit for bit"] = function()
+    local rt = dfle.router.empirical{}
+    local pop = dfle.router.population{ router = rt, volume = { kind = "lognormal", sigma = 0 } }
+    local function grid(r)
+        return dfle.landscape{ nx = 24, ny = 20, dx = 20, U = 1e-3, A0 = 3 * 400, router = r,
+                               noise = { seed = 2, amplitude = 5 } }
+    end
+    local a, b = grid(rt), grid(pop)
+    for step = 1, 5 do
+        local sa, sb = a:step(500), b:step(500)
+        T.eq(sb.V_df, sa.V_df, "V_df at step " .. step)
+    end
+    T.ok(a:get("E_df")[1] >= 0, "evaluated")
+    T.bits_equal(b:get("z"), a:get("z"), "z")
+    T.bits_equal(b:get("E_df"), a:get("E_df"), "E_df")
+    T.bits_equal(b:get("reach"), a:get("reach"), "reach")
+end
+
+tests["landscape: Theta = 1, joined flows counted: lambda E[f^kappa] times each cell's rate"] = function()
+    local rt = dfle.router.empirical{ tau_y = 0 }
+    local volume = { kind = "power_law", b = 1.8, f_min = 0.05, f_max = 50 }
+    local pop = dfle.router.population{ router = rt, volume = volume, order = 32, frequency = 2 }
+    local function grid(r)
+        return dfle.landscape{ nx = 3, ny = 4, dx = 100, z = z34, edges = edges34, A0 = 2e4,
+                               router = r, combine = "count" }
+    end
+    local a, b = grid(rt), grid(pop)
+    local Ea, Eb, Ra, Rb = a:get("E_df"), b:get("E_df"), a:get("reach"), b:get("reach")
+    local factor = 2 * dfle.router.moment(volume, kappa(0.78, 1))
+    local eroded = 0
+    for i = 1, 12 do
+        T.close(Eb[i], factor * Ea[i], 1e-10, 0, "E_df, cell " .. i)
+        -- Every flow of the population goes on where the one flow does:
+        -- lambda flows a year for each head upstream.
+        T.close(Rb[i], 2 * Ra[i], 1e-14, 0, "reach, cell " .. i)
+        if Ea[i] > 0 then eroded = eroded + 1 end
+    end
+    T.eq(Ra[8], 3, "three heads join at (2,1)")
+    T.ok(eroded >= 4, "the heads and the join eroded: " .. eroded)
+end
+
 return tests
