@@ -108,6 +108,11 @@ const dfle_population_opts *dfle_population_get_opts(const dfle_population *p);
  * (cleared by the caller for j = 0): reach gains rate_j * mf->reach, the
  * other fields become rate-weighted means over the members going on;
  * runout_end is the largest.  Call for j = 0 .. size-1 in turn. */
+/* A router for one flow of the population with volume factor f (> 0):
+ * the base router with M0 times f.  The caller frees it. */
+int dfle_population_new_flow(const dfle_population *p, double f, dfle_router **out,
+                             dfle_error *err);
+
 void dfle_population_accumulate(const dfle_population *p, size_t j, const dfle_flow *mf,
                                 dfle_flow *sum);
 

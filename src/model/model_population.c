@@ -22,6 +22,7 @@
 #include <stdlib.h>
 #include <string.h>
 
+#include "dfle/model_events.h"
 #include "dfle/router_population.h"
 #include "model/model_internal.h"
 
@@ -202,4 +203,45 @@ int dfle_model_pop_node_erosion(dfle_model *m, size_t i, double S, double lnS, d
     if (dE != NULL)
         *dE = de;
     return DFLE_OK;
+}
+
+int dfle_model_event_erosion(dfle_model *m, double f, double *E, dfle_error *err)
+{
+    model_population *mp = m->pop;
+    dfle_router *rt;
+    reached_set *mr;
+    int st;
+
+    if (mp == NULL)
+        return dfle_error_set(err, DFLE_EINVAL, "model: debris-flow events need a population "
+                              "router (dfle.router.population)");
+    if (!m->evaluated && (st = dfle_model_evaluate(m, err)) != DFLE_OK)
+        return st;
+    if ((st = dfle_population_new_flow(mp->pop, f, &rt, err)) != DFLE_OK)
+        return st;
+    mp->flow.integrand = dfle_law_get_ops(m->law)->integrand;
+    mp->flow.integrand_state = dfle_law_state(m->law);
+    mr = &mp->reached;
+    st = dfle_router_route(rt, m->net, m->S, &mp->flow, err);
+    dfle_router_free(rt);
+    if (st != DFLE_OK)
+        return st;
+    dfle_model_find_reached(m, &mp->flow, mr);
+    if ((st = dfle_model_law_on_reached(m, m->S, &mp->flow, mr, mp->F, mp->E, 1, err)) != DFLE_OK)
+        return st;
+    for (size_t i = 0; i < m->n; i++)
+        E[i] = 0.0;
+    for (size_t k = 0; k < mr->n; k++) {
+        const size_t i = mr->node[k];
+        /* One event erodes what the rate of one flow a year erodes in a year. */
+        E[i] = mp->E[i] * dfle_model_combine_factor(m, mp->flow.reach[i],
+                                                    dfle_network_A(m->net)[i]) *
+               dfle_model_df_scale(m, i);
+    }
+    return DFLE_OK;
+}
+
+const dfle_population *dfle_model_population(const dfle_model *m)
+{
+    return m->pop != NULL ? m->pop->pop : NULL;
 }

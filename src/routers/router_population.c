@@ -240,6 +240,18 @@ const dfle_population *dfle_router_get_population(const dfle_router *rt)
     return ops->population(dfle_router_state(rt));
 }
 
+int dfle_population_new_flow(const dfle_population *p, double f, dfle_router **out,
+                             dfle_error *err)
+{
+    dfle_empirical_opts mo = *dfle_router_empirical_opts(p->member[0]);
+    *out = NULL;
+    if (!(isfinite(f) && f > 0))
+        return dfle_error_set(err, DFLE_EINVAL, "router.population: a flow's volume factor must "
+                              "be > 0 (got %g)", f);
+    mo.M0 = p->M0 * f;
+    return dfle_router_new_empirical(&mo, out, err);
+}
+
 size_t dfle_population_size(const dfle_population *p) { return p->q; }
 dfle_router *dfle_population_member(const dfle_population *p, size_t j) { return p->member[j]; }
 double dfle_population_rate(const dfle_population *p, size_t j) { return p->rate[j]; }

@@ -224,4 +224,53 @@ tests["landscape: Theta = 1, joined flows counted: lambda E[f^kappa] times each 
     T.ok(eroded >= 4, "the heads and the join eroded: " .. eroded)
 end
 
+tests["events: the long-run mean erosion is the expected rate, within its reported error"] = function()
+    local rt = dfle.router.empirical{}
+    local volume = { kind = "lognormal", sigma = 1 }
+    local pop = dfle.router.population{ router = rt, volume = volume, order = 16, frequency = 2 }
+    local m = model(pop, dfle.law.power{})
+    m:run_to_steady{}
+    local E, z0, t0 = m:get("E_df"), m:get("z"), m.time
+    local r = m:run_events{ years = 2e4, dt = 1, seed = 11, hold = true }
+    T.eq(r.years, 2e4)
+    T.ok(r.events > 3.8e4 and r.events < 4.2e4, "Poisson(lambda T) events: " .. r.events)
+    local checked = 0
+    for i = 1, m.n - 1 do
+        if E[i] > 1e-6 * U then
+            T.ok(math.abs(r.mean[i] - E[i]) <= 4 * r.se[i],
+                 ("node %d: mean %.6g, expected %.6g, se %.3g"):format(i, r.mean[i], E[i], r.se[i]))
+            T.ok(r.se[i] < 0.02 * E[i], "the error is small: " .. r.se[i] / E[i])
+            checked = checked + 1
+        end
+    end
+    T.ok(checked > 10, "nodes checked: " .. checked)
+    -- Held: the state and the time did not move.
+    T.bits_equal(m:get("z"), z0, "held z")
+    T.eq(m.time, t0)
+end
+
+tests["events: a transient is fixed by its seed"] = function()
+    local rt = dfle.router.empirical{}
+    local pop = dfle.router.population{ router = rt, order = 4,
+                                        volume = { kind = "power_law", b = 1.5, f_min = 0.1, f_max = 10 } }
+    local function run(seed)
+        local m = model(pop, dfle.law.power{})
+        local r = m:run_events{ years = 500, dt = 2, seed = seed }
+        return m:get("z"), r
+    end
+    local za, ra = run(3)
+    local zb, rb = run(3)
+    local zc = run(4)
+    T.bits_equal(zb, za, "same seed")
+    T.eq(rb.events, ra.events)
+    T.ok(ra.events > 400 and ra.events < 600, "events: " .. ra.events)
+    local differ = false
+    for i = 1, #za do differ = differ or za[i] ~= zc[i] end
+    T.ok(differ, "another seed, another history")
+    T.raises_here(function() return model(rt, dfle.law.power{}):run_events{ years = 10 } end,
+                  "population")
+    T.raises_here(function() return model(pop, dfle.law.power{}):run_events{ years = -1 } end,
+                  "years must be > 0")
+end
+
 return tests

@@ -20,6 +20,7 @@
 #include <math.h>
 #include <string.h>
 
+#include "dfle/model_events.h"
 #include "dfle/router_population.h"
 
 #define FN "router.population"
@@ -186,4 +187,55 @@ void dfle_lua_open_router_population(lua_State *L)
     lua_setfield(L, -2, "moment");
     lua_pushcfunction(L, l_population_quadrature);
     lua_setfield(L, -2, "quadrature");
+}
+
+/* m:run_events{years =, dt =, seed =, hold = false}: debris flows of
+ * the model's population as events in time (model_events.h).  Returns
+ * {events, steps, years, mean = {rate per node [m/yr]}, se = {its
+ * standard error}}. */
+int dfle_lua_model_run_events(lua_State *L)
+{
+    dfle_model *m = dfle_lua_check_model(L, 1);
+    static const char *const other[] = {"hold", NULL};
+    dfle_events_opts o = {.years = NAN, .dt = 1.0, .seed = 1, .hold = 0};
+    double seed = 1;
+    const dfle_lua_param params[] = {{"years", &o.years}, {"dt", &o.dt}, {"seed", &seed}};
+    const size_t n = dfle_model_size(m);
+    dfle_events_result res;
+    dfle_error err;
+    double *sum;
+    int st;
+
+    luaL_checktype(L, 2, LUA_TTABLE);
+    dfle_lua_read_params(L, 2, "model:run_events", params, 3, other);
+    if (isnan(o.years))
+        luaL_error(L, "dfle.model:run_events: parameter 'years' is required");
+    o.seed = (unsigned long)dfle_lua_check_whole(L, seed, "model:run_events", "seed", 0,
+                                                 4294967295.0);
+    if (lua_getfield(L, 2, "hold") != LUA_TNIL) {
+        if (!lua_isboolean(L, -1))
+            luaL_error(L, "dfle.model:run_events: parameter 'hold' must be a boolean, got %s",
+                       dfle_lua_typename(L, -1));
+        o.hold = lua_toboolean(L, -1);
+    }
+    lua_pop(L, 1);
+    sum = lua_newuserdatauv(L, 2 * n * sizeof *sum, 0);
+    dfle_lua_begin_use(L, 1, "dfle.model:run_events");
+    st = dfle_run_events(m, &o, &res, sum, sum + n, &err);
+    dfle_lua_end_use(L, 1);
+    if (st != DFLE_OK)
+        return dfle_lua_raise(L, &err);
+    lua_createtable(L, 0, 5);
+    lua_pushinteger(L, (lua_Integer)res.events), lua_setfield(L, -2, "events");
+    lua_pushinteger(L, (lua_Integer)res.steps), lua_setfield(L, -2, "steps");
+    lua_pushnumber(L, res.years), lua_setfield(L, -2, "years");
+    lua_createtable(L, (int)n, 0);
+    for (size_t i = 0; i < n; i++)
+        lua_pushnumber(L, sum[i] / res.years), lua_rawseti(L, -2, (lua_Integer)i + 1);
+    lua_setfield(L, -2, "mean");
+    lua_createtable(L, (int)n, 0);
+    for (size_t i = 0; i < n; i++)
+        lua_pushnumber(L, sqrt(sum[n + i]) / res.years), lua_rawseti(L, -2, (lua_Integer)i + 1);
+    lua_setfield(L, -2, "se");
+    return 1;
 }
