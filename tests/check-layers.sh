@@ -36,6 +36,7 @@ header_layer() {
     error.h | param.h | file.h | plausible.h | record.h) echo base ;; channel.h | network.h) echo domain ;;
     flow.h | flow1d.h | router*.h) echo routers ;; drainage.h) echo drainage ;;
     lua.h) echo lua ;; fluvial.h | law*.h) echo laws ;; model.h) echo model ;;
+    model_events.h) echo model ;;
     solver.h) echo solvers ;; dem.h | crs.h) echo dem ;; landscape.h) echo landscape ;;
     analysis.h | analytical.h | sampling.h | sensitivity.h | chi.h) echo analysis ;;
     stream.h | prior.h | mcmc.h | mcmc_diag.h | lsq.h | likelihood.h) echo analysis ;;

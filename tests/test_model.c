@@ -252,7 +252,7 @@ static void ops_tables_say_their_version(void **state)
     ops.destroy = count_destroy;
     destroyed = 0;
     assert_int_equal(dfle_router_new(&ops, NULL, &rt, &err), DFLE_EINVAL);
-    assert_string_equal(err.msg, "router mock-cached: ops version 0, this library knows 1 to 1 "
+    assert_string_equal(err.msg, "router mock-cached: ops version 0, this library knows 1 to 2 "
                                  "(set .version = DFLE_ROUTER_OPS_VERSION)");
     assert_null(rt);
     assert_int_equal(destroyed, 1);

@@ -30,7 +30,9 @@ extern "C" {
 /* The version of dfle_router_ops this header describes: set .version
  * to it.  Later versions only append members; the library reads those a
  * table's version says it has (SQLite's iVersion). */
-#define DFLE_ROUTER_OPS_VERSION 1
+#define DFLE_ROUTER_OPS_VERSION 2
+
+struct dfle_population; /* router_population.h */
 
 typedef struct dfle_router_ops {
     int version;      /* DFLE_ROUTER_OPS_VERSION */
@@ -70,6 +72,10 @@ typedef struct dfle_router_ops {
      * exp, not a pow or a cbrt (half the cost of a steady state). */
     int (*node_flow_dlnS)(void *state, const dfle_network *net, size_t i, double S, double lnS,
                           dfle_flow *node, dfle_flow_dlnS *d, int *goes_on, dfle_error *err);
+    /* Version 2.  Optional.  The population of flows the router stands
+     * for (router_population.h): the model then evaluates the erosion
+     * law for every member flow and weighs them by their rates. */
+    const struct dfle_population *(*population)(const void *state);
 } dfle_router_ops;
 
 typedef struct dfle_router dfle_router;

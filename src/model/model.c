@@ -153,6 +153,7 @@ void dfle_model_free(dfle_model *m)
         return;
     dfle_flow_release(&m->flow);
     dfle_flow_release(&m->flow_pert);
+    dfle_model_pop_free(m);
     free(m->z); /* the field block starts at z */
     free(m->reached.node);
     free(m->g_block);
@@ -206,6 +207,8 @@ int dfle_model_new(const dfle_model_opts *o, dfle_model **out, dfle_error *err)
         assert(m->n >= 2);
         st = model_alloc(m, err);
     }
+    if (st == DFLE_OK)
+        st = dfle_model_pop_new(m, err);
     if (st == DFLE_OK) {
         dfle_model_sync_domain(m);
         assert(topology_ok(m));

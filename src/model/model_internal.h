@@ -23,12 +23,15 @@ typedef struct reached_set {
     int prefix;   /* node[k] == k for all k */
 } reached_set;
 
+typedef struct model_population model_population; /* model_population.c */
+
 struct dfle_model {
     const dfle_channel *ch;   /* NULL when the model was given a network */
     const dfle_network *net;  /* the domain                               */
     dfle_network *own_net;    /* the chain made from ch, else NULL        */
     const dfle_fluvial *fl;   /* NULL: no fluvial erosion  */
     dfle_router *rt;          /* NULL: no debris flows     */
+    model_population *pop;    /* rt's population of flows, or NULL */
     dfle_law *law;
     double U, cfl, dt_max;
     size_t n;
@@ -64,6 +67,26 @@ struct dfle_model {
     size_t node_evaluations; /* one-node erosions since creation  */
     size_t nonpositive;  /* non-base nodes with S <= 0 at the last evaluation */
 };
+
+/* The steps of a debris-flow erosion (model_rates.c), for one member
+ * flow of a population. */
+void dfle_model_find_reached(const dfle_model *m, const dfle_flow *flow, reached_set *r);
+int dfle_model_law_on_reached(dfle_model *m, const double *S, const dfle_flow *flow,
+                              const reached_set *r, double *F, double *E, int route,
+                              dfle_error *err);
+double dfle_model_combine_factor(const dfle_model *m, double count, double A);
+double dfle_model_df_scale(const dfle_model *m, size_t i);
+
+/* A population of flows (model_population.c).  pop_new sets m->pop when
+ * the router has a population; pop_erosion is debris_flow_erosion for
+ * it (commit: remember which members go on where, for the node
+ * solvers); pop_node_erosion the E_df part of a one-node erosion. */
+int dfle_model_pop_new(dfle_model *m, dfle_error *err);
+void dfle_model_pop_free(dfle_model *m);
+int dfle_model_pop_erosion(dfle_model *m, const double *S, dfle_flow *sum, reached_set *r,
+                           double *F, double *E, int commit, dfle_error *err);
+int dfle_model_pop_node_erosion(dfle_model *m, size_t i, double S, double lnS, double *E,
+                                double *dE, int *goes_on, dfle_error *err);
 
 /* Renew what derives from the network's shape if it changed (model.c). */
 void dfle_model_sync_domain(dfle_model *m);

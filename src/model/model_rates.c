@@ -243,7 +243,9 @@ int dfle_model_evaluate(dfle_model *m, dfle_error *err)
         if (m->flow_valid &&
             (st = dfle_router_needs_reroute(m->rt, n, m->S_routed, m->S, &route, err)) != DFLE_OK)
             return st;
-        st = debris_flow_erosion(m, m->S, &m->flow, &m->reached, m->F, m->E_df, route, err);
+        st = m->pop != NULL
+                 ? dfle_model_pop_erosion(m, m->S, &m->flow, &m->reached, m->F, m->E_df, 1, err)
+                 : debris_flow_erosion(m, m->S, &m->flow, &m->reached, m->F, m->E_df, route, err);
         if (st != DFLE_OK)
             return st;
         if (route) {
@@ -313,7 +315,10 @@ int dfle_model_celerity(dfle_model *m, const double **c_out, dfle_error *err)
 
         for (size_t i = 0; i < n; i++)
             m->S_pert[i] = m->S[i] > 0 ? m->S[i] * (1.0 + CELERITY_EPS) : m->S[i];
-        if (local) {
+        if (m->pop != NULL) {
+            st = dfle_model_pop_erosion(m, m->S_pert, &m->flow_pert, &m->reached_pert, m->F_pert,
+                                        m->E_pert, 0, err);
+        } else if (local) {
             st = debris_flow_erosion(m, m->S_pert, &m->flow_pert, &m->reached_pert, m->F_pert,
                                      m->E_pert, 1, err);
         } else {
@@ -378,7 +383,15 @@ static int node_erosion(dfle_model *m, size_t i, double S, double lnS, double fl
         e = m->KAm[i] * (dE != NULL ? exp(n_s * lnS) : pow(S, n_s));
         de = n_s * e; /* E_f = K A^m S^n_s */
     }
-    if (flows > 0 && m->rt != NULL) {
+    if (flows > 0 && m->pop != NULL) {
+        double Edf, dEdf = 0.0;
+        int st = dfle_model_pop_node_erosion(m, i, S, lnS, &Edf, dE != NULL ? &dEdf : NULL,
+                                             goes_on, err);
+        if (st != DFLE_OK)
+            return st;
+        e += Edf;
+        de += dEdf;
+    } else if (flows > 0 && m->rt != NULL) {
         dfle_law_ctx ctx = {.n = 1, .S = &S, .A = dfle_network_A(m->net) + i,
                             .w = dfle_network_w(m->net) + i};
         dfle_flow view; /* lives as long as ctx: rate may read the flow */
@@ -453,7 +466,8 @@ int dfle_model_node_erosion(dfle_model *m, size_t i, double S, double flows, dou
 int dfle_model_node_dlnS(const dfle_model *m)
 {
     return m->rt == NULL || (dfle_law_has_rate_dlnS(m->law) &&
-                             (!dfle_router_is_local(m->rt) || dfle_router_has_node_flow_dlnS(m->rt)));
+                             (!dfle_router_is_local(m->rt) || m->pop != NULL ||
+                                              dfle_router_has_node_flow_dlnS(m->rt)));
 }
 
 int dfle_model_node_erosion_dlnS(dfle_model *m, size_t i, double S, double lnS, double flows,
@@ -467,3 +481,23 @@ int dfle_model_node_erosion_dlnS(dfle_model *m, size_t i, double S, double lnS, 
 }
 
 size_t dfle_model_node_evaluations(const dfle_model *m) { return m->node_evaluations; }
+
+/* For model_population.c: the steps above, for one member flow. */
+void dfle_model_find_reached(const dfle_model *m, const dfle_flow *flow, reached_set *r)
+{
+    find_reached(m, flow, r);
+}
+
+int dfle_model_law_on_reached(dfle_model *m, const double *S, const dfle_flow *flow,
+                              const reached_set *r, double *F, double *E, int route,
+                              dfle_error *err)
+{
+    return law_on_reached(m, S, flow, r, F, E, route, err);
+}
+
+double dfle_model_combine_factor(const dfle_model *m, double count, double A)
+{
+    return m->combine != DFLE_DF_ANY ? combine_factor(m, count, A) : 1.0;
+}
+
+double dfle_model_df_scale(const dfle_model *m, size_t i) { return node_df_scale(m, i); }

@@ -418,7 +418,12 @@ int dfle_lua_cores(void);
 void dfle_lua_open_channel(lua_State *L);
 void dfle_lua_open_fluvial(lua_State *L);
 void dfle_lua_open_router(lua_State *L);
-void dfle_lua_open_router_define(lua_State *L); /* dfle.router.define, into the router table */
+void dfle_lua_open_router_define(lua_State *L);
+/* dfle.router.population, .moment, .quadrature (lua_population.c), into
+ * the table on the top of the stack. */
+void dfle_lua_open_router_population(lua_State *L);
+/* m:run_events{...} (lua_population.c). */
+int dfle_lua_model_run_events(lua_State *L); /* dfle.router.define, into the router table */
 void dfle_lua_open_law(lua_State *L);
 void dfle_lua_open_law_define(lua_State *L); /* dfle.law.define, into the law table */
 /* law:compiled() of a dfle.law.define law: push { factor =, rate =,

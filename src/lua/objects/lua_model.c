@@ -710,6 +710,7 @@ void dfle_lua_open_model(lua_State *L)
         {"set_U", l_model_set_U},
         {"run_to_steady", l_model_run_to_steady},
         {"run", l_model_run},
+        {"run_events", dfle_lua_model_run_events},
         {"get", l_model_get},
         {"fields", l_model_fields},
         {"write_csv", l_model_write_csv},

@@ -135,6 +135,7 @@ static int l_router_route(lua_State *L)
     set_array(L, "t_p", flow.t_p, n);
     set_array(L, "tau", flow.tau, n);
     set_array(L, "Theta", flow.Theta, n);
+    set_array(L, "reach", flow.reach, n);
     lua_pushinteger(L, (lua_Integer)flow.runout_end), lua_setfield(L, -2, "runout_end");
     if (st == DFLE_OK && rep != NULL) {
         lua_getfield(L, -1, "h"), lua_setfield(L, -2, "h_peak");
@@ -202,5 +203,6 @@ void dfle_lua_open_router(lua_State *L)
     lua_pushcfunction(L, l_router_process);
     lua_setfield(L, -2, "process");
     dfle_lua_open_router_define(L); /* dfle.router.define (lua_router_define.c) */
+    dfle_lua_open_router_population(L); /* dfle.router.population (lua_population.c) */
     lua_setfield(L, -2, "router");
 }

@@ -1,0 +1,67 @@
+build-clang/obj/src/dem/dem.o: src/dem/dem.c src/dem/dem_internal.h \
+  include/dfle/dem.h include/dfle/channel.h include/dfle/error.h \
+  include/dfle/param.h include/dfle/record.h include/dfle/drainage.h \
+  src/base/gdal_lib.h /usr/include/gdal/cpl_conv.h \
+  /usr/include/gdal/cpl_port.h /usr/include/gdal/cpl_config.h \
+  /usr/include/gdal/cpl_vsi.h /usr/include/gdal/cpl_progress.h \
+  /usr/include/gdal/cpl_error.h /usr/include/gdal/gdal.h \
+  /usr/include/gdal/gdal_version.h /usr/include/gdal/cpl_virtualmem.h \
+  /usr/include/gdal/cpl_minixml.h /usr/include/gdal/ogr_api.h \
+  /usr/include/gdal/ogr_core.h /usr/include/gdal/gdal_alg.h \
+  /usr/include/gdal/gdal_utils.h /usr/include/gdal/ogr_srs_api.h \
+  include/dfle/crs.h src/dem/dem_crs.h src/dem/dem_gdal.h \
+  src/dem/dem_tiff.h
+
+src/dem/dem_internal.h:
+
+include/dfle/dem.h:
+
+include/dfle/channel.h:
+
+include/dfle/error.h:
+
+include/dfle/param.h:
+
+include/dfle/record.h:
+
+include/dfle/drainage.h:
+
+src/base/gdal_lib.h:
+
+/usr/include/gdal/cpl_conv.h:
+
+/usr/include/gdal/cpl_port.h:
+
+/usr/include/gdal/cpl_config.h:
+
+/usr/include/gdal/cpl_vsi.h:
+
+/usr/include/gdal/cpl_progress.h:
+
+/usr/include/gdal/cpl_error.h:
+
+/usr/include/gdal/gdal.h:
+
+/usr/include/gdal/gdal_version.h:
+
+/usr/include/gdal/cpl_virtualmem.h:
+
+/usr/include/gdal/cpl_minixml.h:
+
+/usr/include/gdal/ogr_api.h:
+
+/usr/include/gdal/ogr_core.h:
+
+/usr/include/gdal/gdal_alg.h:
+
+/usr/include/gdal/gdal_utils.h:
+
+/usr/include/gdal/ogr_srs_api.h:
+
+include/dfle/crs.h:
+
+src/dem/dem_crs.h:
+
+src/dem/dem_gdal.h:
+
+src/dem/dem_tiff.h:

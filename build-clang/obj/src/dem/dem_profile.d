@@ -1,0 +1,20 @@
+build-clang/obj/src/dem/dem_profile.o: src/dem/dem_profile.c \
+  src/dem/dem_internal.h include/dfle/dem.h include/dfle/channel.h \
+  include/dfle/error.h include/dfle/param.h include/dfle/record.h \
+  include/dfle/drainage.h include/dfle/file.h
+
+src/dem/dem_internal.h:
+
+include/dfle/dem.h:
+
+include/dfle/channel.h:
+
+include/dfle/error.h:
+
+include/dfle/param.h:
+
+include/dfle/record.h:
+
+include/dfle/drainage.h:
+
+include/dfle/file.h:

@@ -1,0 +1,57 @@
+build-clang/obj/src/io/netcdf_cf.o: src/io/netcdf_cf.c \
+  src/io/netcdf_internal.h src/base/netcdf_lib.h include/dfle/error.h \
+  include/dfle/netcdf.h include/dfle/raster.h include/dfle/record.h \
+  include/dfle/param.h src/base/gdal_lib.h /usr/include/gdal/cpl_conv.h \
+  /usr/include/gdal/cpl_port.h /usr/include/gdal/cpl_config.h \
+  /usr/include/gdal/cpl_vsi.h /usr/include/gdal/cpl_progress.h \
+  /usr/include/gdal/cpl_error.h /usr/include/gdal/gdal.h \
+  /usr/include/gdal/gdal_version.h /usr/include/gdal/cpl_virtualmem.h \
+  /usr/include/gdal/cpl_minixml.h /usr/include/gdal/ogr_api.h \
+  /usr/include/gdal/ogr_core.h /usr/include/gdal/gdal_alg.h \
+  /usr/include/gdal/gdal_utils.h /usr/include/gdal/ogr_srs_api.h
+
+src/io/netcdf_internal.h:
+
+src/base/netcdf_lib.h:
+
+include/dfle/error.h:
+
+include/dfle/netcdf.h:
+
+include/dfle/raster.h:
+
+include/dfle/record.h:
+
+include/dfle/param.h:
+
+src/base/gdal_lib.h:
+
+/usr/include/gdal/cpl_conv.h:
+
+/usr/include/gdal/cpl_port.h:
+
+/usr/include/gdal/cpl_config.h:
+
+/usr/include/gdal/cpl_vsi.h:
+
+/usr/include/gdal/cpl_progress.h:
+
+/usr/include/gdal/cpl_error.h:
+
+/usr/include/gdal/gdal.h:
+
+/usr/include/gdal/gdal_version.h:
+
+/usr/include/gdal/cpl_virtualmem.h:
+
+/usr/include/gdal/cpl_minixml.h:
+
+/usr/include/gdal/ogr_api.h:
+
+/usr/include/gdal/ogr_core.h:
+
+/usr/include/gdal/gdal_alg.h:
+
+/usr/include/gdal/gdal_utils.h:
+
+/usr/include/gdal/ogr_srs_api.h:

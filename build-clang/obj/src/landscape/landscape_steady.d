@@ -1,0 +1,35 @@
+build-clang/obj/src/landscape/landscape_steady.o: \
+  src/landscape/landscape_steady.c src/landscape/landscape_internal.h \
+  include/dfle/landscape.h include/dfle/drainage.h include/dfle/error.h \
+  include/dfle/fluvial.h include/dfle/param.h include/dfle/law.h \
+  include/dfle/flow.h include/dfle/model.h include/dfle/channel.h \
+  include/dfle/network.h include/dfle/record.h include/dfle/router.h \
+  include/dfle/solver.h
+
+src/landscape/landscape_internal.h:
+
+include/dfle/landscape.h:
+
+include/dfle/drainage.h:
+
+include/dfle/error.h:
+
+include/dfle/fluvial.h:
+
+include/dfle/param.h:
+
+include/dfle/law.h:
+
+include/dfle/flow.h:
+
+include/dfle/model.h:
+
+include/dfle/channel.h:
+
+include/dfle/network.h:
+
+include/dfle/record.h:
+
+include/dfle/router.h:
+
+include/dfle/solver.h:

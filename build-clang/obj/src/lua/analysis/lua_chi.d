@@ -1,0 +1,58 @@
+build-clang/obj/src/lua/analysis/lua_chi.o: src/lua/analysis/lua_chi.c \
+  src/lua/analysis/lua_chi.h src/lua/core/dfle_lua.h \
+  /usr/include/lua5.4/lauxlib.h /usr/include/lua5.4/luaconf.h \
+  /usr/include/lua5.4/lua.h include/dfle/channel.h include/dfle/error.h \
+  include/dfle/param.h include/dfle/fluvial.h include/dfle/law.h \
+  include/dfle/flow.h include/dfle/model.h include/dfle/network.h \
+  include/dfle/record.h include/dfle/router.h include/dfle/plot.h \
+  include/dfle/analysis.h include/dfle/solver.h include/dfle/chi.h \
+  include/dfle/dem.h include/dfle/drainage.h include/dfle/landscape.h \
+  src/lua/objects/lua_landscape.h include/dfle/raster.h
+
+src/lua/analysis/lua_chi.h:
+
+src/lua/core/dfle_lua.h:
+
+/usr/include/lua5.4/lauxlib.h:
+
+/usr/include/lua5.4/luaconf.h:
+
+/usr/include/lua5.4/lua.h:
+
+include/dfle/channel.h:
+
+include/dfle/error.h:
+
+include/dfle/param.h:
+
+include/dfle/fluvial.h:
+
+include/dfle/law.h:
+
+include/dfle/flow.h:
+
+include/dfle/model.h:
+
+include/dfle/network.h:
+
+include/dfle/record.h:
+
+include/dfle/router.h:
+
+include/dfle/plot.h:
+
+include/dfle/analysis.h:
+
+include/dfle/solver.h:
+
+include/dfle/chi.h:
+
+include/dfle/dem.h:
+
+include/dfle/drainage.h:
+
+include/dfle/landscape.h:
+
+src/lua/objects/lua_landscape.h:
+
+include/dfle/raster.h:

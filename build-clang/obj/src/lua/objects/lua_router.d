@@ -1,0 +1,50 @@
+build-clang/obj/src/lua/objects/lua_router.o: \
+  src/lua/objects/lua_router.c src/lua/core/dfle_lua.h \
+  /usr/include/lua5.4/lauxlib.h /usr/include/lua5.4/luaconf.h \
+  /usr/include/lua5.4/lua.h include/dfle/channel.h include/dfle/error.h \
+  include/dfle/param.h include/dfle/fluvial.h include/dfle/law.h \
+  include/dfle/flow.h include/dfle/model.h include/dfle/network.h \
+  include/dfle/record.h include/dfle/router.h include/dfle/plot.h \
+  include/dfle/analysis.h include/dfle/solver.h \
+  include/dfle/router_empirical.h include/dfle/router_process.h \
+  include/dfle/flow1d.h
+
+src/lua/core/dfle_lua.h:
+
+/usr/include/lua5.4/lauxlib.h:
+
+/usr/include/lua5.4/luaconf.h:
+
+/usr/include/lua5.4/lua.h:
+
+include/dfle/channel.h:
+
+include/dfle/error.h:
+
+include/dfle/param.h:
+
+include/dfle/fluvial.h:
+
+include/dfle/law.h:
+
+include/dfle/flow.h:
+
+include/dfle/model.h:
+
+include/dfle/network.h:
+
+include/dfle/record.h:
+
+include/dfle/router.h:
+
+include/dfle/plot.h:
+
+include/dfle/analysis.h:
+
+include/dfle/solver.h:
+
+include/dfle/router_empirical.h:
+
+include/dfle/router_process.h:
+
+include/dfle/flow1d.h:

@@ -1,0 +1,12 @@
+build-clang/obj/src/lua/trace/lua_trace_eval.o: \
+  src/lua/trace/lua_trace_eval.c src/lua/trace/lua_trace_internal.h \
+  src/lua/trace/lua_trace.h /usr/include/lua5.4/lua.h \
+  /usr/include/lua5.4/luaconf.h
+
+src/lua/trace/lua_trace_internal.h:
+
+src/lua/trace/lua_trace.h:
+
+/usr/include/lua5.4/lua.h:
+
+/usr/include/lua5.4/luaconf.h:

@@ -1,0 +1,17 @@
+build-clang/obj/src/lua/trace/lua_trace_node.o: \
+  src/lua/trace/lua_trace_node.c src/lua/trace/lua_trace_internal.h \
+  src/lua/trace/lua_trace.h /usr/include/lua5.4/lua.h \
+  /usr/include/lua5.4/luaconf.h /usr/include/lua5.4/lauxlib.h \
+  /usr/include/lua5.4/lualib.h
+
+src/lua/trace/lua_trace_internal.h:
+
+src/lua/trace/lua_trace.h:
+
+/usr/include/lua5.4/lua.h:
+
+/usr/include/lua5.4/luaconf.h:
+
+/usr/include/lua5.4/lauxlib.h:
+
+/usr/include/lua5.4/lualib.h:

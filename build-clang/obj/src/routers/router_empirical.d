@@ -1,0 +1,18 @@
+build-clang/obj/src/routers/router_empirical.o: \
+  src/routers/router_empirical.c include/dfle/router_empirical.h \
+  include/dfle/router.h include/dfle/error.h include/dfle/flow.h \
+  include/dfle/network.h include/dfle/channel.h include/dfle/param.h
+
+include/dfle/router_empirical.h:
+
+include/dfle/router.h:
+
+include/dfle/error.h:
+
+include/dfle/flow.h:
+
+include/dfle/network.h:
+
+include/dfle/channel.h:
+
+include/dfle/param.h:
