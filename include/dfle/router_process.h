@@ -101,6 +101,7 @@ typedef struct dfle_process_report {
 
 const dfle_process_report *dfle_router_process_report(const dfle_router *rt);
 
+
 /* Ask the next routings to record the depth along the channel at these
  * flow times [s] (ascending; k <= 1000).  k = 0 clears the request. */
 int dfle_router_process_set_snapshots(dfle_router *rt, size_t k, const double *times,

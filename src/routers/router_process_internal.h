@@ -54,7 +54,5 @@ int dfle_process_route_network(process_network **cache, const dfle_process_opts 
                                const dfle_network *net, const double *S, dfle_flow *flow,
                                dfle_process_report *rep, dfle_error *err);
 void dfle_process_network_free(process_network *cache);
-/* Forget every head's routing: the next routes them all afresh. */
-void dfle_process_network_forget(process_network *cache);
 
 #endif

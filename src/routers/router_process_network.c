@@ -86,12 +86,6 @@ void dfle_process_network_free(process_network *c)
     free(c);
 }
 
-void dfle_process_network_forget(process_network *c)
-{
-    if (c != NULL)
-        c->net_id = 0; /* no network has id 0: the next routing starts afresh */
-}
-
 static int grow(void **a, size_t *cap, size_t want, size_t size)
 {
     void *b;
