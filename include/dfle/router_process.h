@@ -95,6 +95,8 @@ typedef struct dfle_process_report {
     size_t heads_routed; /* of them routed again by it (the others kept
                           * their last routing: the re-routing rule)  */
     size_t head_routings; /* heads routed since the router was made   */
+    size_t route_calls;  /* routings asked for since it was made (a
+                          * call may route no head: the rule kept all) */
     double volume_error; /* max over the flows routed of
                           * |in - out - left| / in [-]: round-off     */
 } dfle_process_report;

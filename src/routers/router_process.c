@@ -129,6 +129,7 @@ static int process_route(void *state, const dfle_network *net, const double *S, 
         .arrival = pr->arrival, .n_snapshots = pr->n_snap, .snapshot_t = pr->snap_t,
         .snapshot_h = pr->snap_h, .heads = 1, .heads_routed = 1,
         .head_routings = pr->report.head_routings + 1,
+        .route_calls = pr->report.route_calls + 1,
         .volume_error = fabs(r.volume_in - r.volume_out - r.volume_left) / r.volume_in,
     };
     return DFLE_OK;

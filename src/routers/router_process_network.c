@@ -312,7 +312,7 @@ int dfle_process_route_network(process_network **cache, const dfle_process_opts 
 {
     const size_t n = dfle_network_size(net);
     process_network *c = *cache;
-    size_t routed = 0, head_routings = rep->head_routings;
+    size_t routed = 0, head_routings = rep->head_routings, calls = rep->route_calls + 1;
     double vin = 0, vout = 0, vleft = 0, dur = 0, verr = 0;
     size_t steps = 0, cell_steps = 0;
     int end = DFLE_PROCESS_LEFT, st;
@@ -371,7 +371,8 @@ int dfle_process_route_network(process_network **cache, const dfle_process_opts 
         .routed = 1, .end = end, .volume_in = vin, .volume_out = vout, .volume_left = vleft,
         .duration = dur, .steps = steps, .cell_steps = cell_steps, .n = n,
         .arrival = c->arrival, .heads_network = 1, .heads = c->cur.n_heads,
-        .heads_routed = routed, .head_routings = head_routings, .volume_error = verr,
+        .heads_routed = routed, .head_routings = head_routings, .route_calls = calls,
+        .volume_error = verr,
     };
     return DFLE_OK;
 }

@@ -173,7 +173,8 @@ static int l_router_route(lua_State *L)
 
 /* r:routings() -> { total = flows routed since the router was made,
  * heads = flows of the last routing, routed = of them routed again by
- * it }, for a process-based router (nil for another kind). */
+ * it, calls = routings asked for }, for a process-based router (nil for
+ * another kind). */
 static int l_router_routings(lua_State *L)
 {
     const dfle_process_report *rep = dfle_router_process_report(dfle_lua_check_router(L, 1));
@@ -185,6 +186,7 @@ static int l_router_routings(lua_State *L)
     lua_pushinteger(L, (lua_Integer)rep->head_routings), lua_setfield(L, -2, "total");
     lua_pushinteger(L, (lua_Integer)rep->heads), lua_setfield(L, -2, "heads");
     lua_pushinteger(L, (lua_Integer)rep->heads_routed), lua_setfield(L, -2, "routed");
+    lua_pushinteger(L, (lua_Integer)rep->route_calls), lua_setfield(L, -2, "calls");
     return 1;
 }
 
