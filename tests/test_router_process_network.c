@@ -338,6 +338,37 @@ static void reroute_per_head(void **state)
     dfle_network_free(y.net);
 }
 
+static int refuses(void *s, double h, double v, double lambda, double *g, dfle_error *err)
+{
+    (void)s, (void)h, (void)v, (void)lambda, (void)g;
+    return dfle_error_set(err, DFLE_ENUMERIC, "integrand refused");
+}
+
+/* A routing that fails names the head whose flow failed, keeps nothing
+ * of that routing, and the next one routes every head afresh. */
+static void failing_integrand_names_the_head(void **state)
+{
+    ynet y;
+    dfle_process_opts o;
+    dfle_router *rt;
+    dfle_flow flow;
+    dfle_error err;
+    (void)state;
+    y_build(&y, 5.0, 0);
+    dfle_process_opts_default(&o);
+    assert_ok(dfle_router_new_process(&o, &rt, &err), &err);
+    assert_int_equal(dfle_flow_init(&flow, NN, NULL), DFLE_OK);
+    flow.integrand = refuses;
+    assert_int_equal(dfle_router_route(rt, y.net, y.S, &flow, &err), DFLE_ENUMERIC);
+    assert_msg_contains(err.msg, "integrand refused");
+    assert_msg_contains(err.msg, "head node 1");
+    route_y(&y, rt, &flow);
+    assert_int_equal(dfle_router_process_report(rt)->heads_routed, 2);
+    dfle_flow_release(&flow);
+    dfle_router_free(rt);
+    dfle_network_free(y.net);
+}
+
 int main(void)
 {
     const struct CMUnitTest tests[] = {
@@ -345,6 +376,7 @@ int main(void)
         cmocka_unit_test(combine_rules_on_the_model),
         cmocka_unit_test(unequal_cells_keep_volume),
         cmocka_unit_test(reroute_per_head),
+        cmocka_unit_test(failing_integrand_names_the_head),
     };
     return cmocka_run_group_tests(tests, NULL, NULL);
 }
