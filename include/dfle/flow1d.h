@@ -78,6 +78,13 @@ typedef struct dfle_flow1d dfle_flow1d;
 int dfle_flow1d_new(size_t ncell, double dx, const double *w, const double *S,
                     const dfle_flow1d_params *p, dfle_flow1d **out,
                     dfle_error *err);
+/* The same with a length per cell: dx[k] [m] (> 0) for cell k, copied
+ * (NULL: every cell dx0).  A path down a drainage network has cells of
+ * its links' lengths (a grid's diagonals are sqrt 2 longer); the finite
+ * volumes hold w dx[k] h and the CFL step takes the shortest cell. */
+int dfle_flow1d_new_cells(size_t ncell, const double *dx, double dx0, const double *w,
+                          const double *S, const dfle_flow1d_params *p, dfle_flow1d **out,
+                          dfle_error *err);
 void dfle_flow1d_free(dfle_flow1d *f);
 
 /* The state, writable: depth h [m] and unit discharge q [m^2/s].

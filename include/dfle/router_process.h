@@ -86,9 +86,23 @@ typedef struct dfle_process_report {
     size_t n_snapshots;  /* snapshots requested                   */
     const double *snapshot_t; /* time each was taken [s]; NaN if the flow ended first */
     const double *snapshot_h; /* n_snapshots x n depths [m], row-major */
+    /* One flow per channel head.  On a single channel 1 head; on a
+     * network (heads_network = 1) every source's, the volumes, steps and
+     * durations above summed (duration: the longest) over the heads
+     * routed by the last routing, arrival the first of any flow. */
+    int heads_network;   /* 1: the last routing was on a network      */
+    size_t heads;        /* heads (flows) of the last routing         */
+    size_t heads_routed; /* of them routed again by it (the others kept
+                          * their last routing: the re-routing rule)  */
+    size_t head_routings; /* heads routed since the router was made   */
+    size_t route_calls;  /* routings asked for since it was made (a
+                          * call may route no head: the rule kept all) */
+    double volume_error; /* max over the flows routed of
+                          * |in - out - left| / in [-]: round-off     */
 } dfle_process_report;
 
 const dfle_process_report *dfle_router_process_report(const dfle_router *rt);
+
 
 /* Ask the next routings to record the depth along the channel at these
  * flow times [s] (ascending; k <= 1000).  k = 0 clears the request. */

@@ -148,6 +148,20 @@ static int channel_slopes(dfle_landscape *ls, double *S, double *flows, dfle_err
         const unsigned char *src = dfle_network_sources(ls->net);
         for (size_t k = 0; k < ls->n_data; k++)
             flows[k] = src[k];
+        /* A router routed rarely (process-based) routed this surface: its
+         * flows reach where they reach, each down its own path, and the
+         * cells count them (the counts below would add a tributary's
+         * flow that stopped above the junction). */
+        if (!dfle_router_is_local(dfle_model_router(ls->model))) {
+            /* Each head's flow as the re-routing rule keeps it: routed
+             * again where a slope on its path moved by reroute_dS since
+             * its last routing (flows routed afresh at every round do
+             * not settle: doc/landscape.md). */
+            if ((st = ls_model_evaluate(ls, err)) != DFLE_OK)
+                return st;
+            for (size_t k = 0; k < ls->n_data; k++)
+                flows[k] = dfle_model_flow_reaches(ls->model, k);
+        }
     }
     const int cap = ls->o.hillslope == DFLE_HILLSLOPE_THRESHOLD && ls->o.cap_channels;
     for (size_t k = n_stack; k-- > 0;) {
@@ -184,7 +198,7 @@ static int channel_slopes(dfle_landscape *ls, double *S, double *flows, dfle_err
                 if (st != DFLE_OK)
                     return st;
             }
-            if (goes_on)
+            if (goes_on && dfle_router_is_local(dfle_model_router(ls->model)))
                 flows[ls->node_of[r]] += flows[node];
         } else {
             const double Kc = ls->K * ls_value(&ls->K_scale, c);
@@ -199,6 +213,40 @@ static int channel_slopes(dfle_landscape *ls, double *S, double *flows, dfle_err
         }
     }
     return DFLE_OK;
+}
+
+/* With a router routed rarely each round solves the slopes for the
+ * flows routed over the last round's surface, which moved them: as in
+ * 1D (solver_direct.c) a round that moved the slopes more than the last
+ * is overshooting, and the updates of the reached cells are damped. */
+static void damp_rounds(dfle_landscape *ls, double *S, const double *flows, const uint32_t *rcv,
+                        const unsigned char *dir, const uint32_t *stack, size_t n_stack)
+{
+    double change = 0.0;
+    if (ls->df_omega == 0.0) {
+        ls->df_omega = 1.0;
+        ls->df_change_prev = INFINITY;
+    }
+    for (size_t k = 0; k < n_stack; k++) {
+        const size_t c = stack[k], r = rcv[c];
+        double S_now;
+        if (r == c || !(flows[ls->node_of[c]] > 0))
+            continue;
+        S_now = (ls->z[c] - ls->z[r]) / ls->len[dir[c]];
+        change = fmax(change, fabs(S[c] - S_now) / fmax(fabs(S_now), 1e-12));
+    }
+    if (change > ls->df_change_prev && ls->df_omega > 0.125)
+        ls->df_omega *= 0.5;
+    ls->df_change_prev = change;
+    if (ls->df_omega == 1.0)
+        return;
+    for (size_t k = 0; k < n_stack; k++) {
+        const size_t c = stack[k], r = rcv[c];
+        if (r == c || !(flows[ls->node_of[c]] > 0))
+            continue;
+        const double S_now = (ls->z[c] - ls->z[r]) / ls->len[dir[c]];
+        S[c] = S_now + ls->df_omega * (S[c] - S_now);
+    }
 }
 
 int ls_direct_round(dfle_landscape *ls, dfle_error *err)
@@ -229,6 +277,8 @@ int ls_direct_round(dfle_landscape *ls, dfle_error *err)
     dir = dfle_drainage_dir(ls->dr);
     A = dfle_drainage_area(ls->dr);
     stack = dfle_drainage_stack(ls->dr, &n_stack);
+    if (ls->model != NULL && !dfle_router_is_local(dfle_model_router(ls->model)))
+        damp_rounds(ls, S, flows, rcv, dir, stack, n_stack);
     if (threshold)
         for (size_t c = 0; c < ls->n; c++)
             free_[c] = 0;

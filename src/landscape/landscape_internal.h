@@ -137,6 +137,10 @@ struct dfle_landscape {
     int routed;                /* the routing matches z                 */
     uint32_t *rcv_prev;        /* receivers of the previous routing     */
     size_t rcv_changes, stable, routings;
+    /* Direct rounds with a router routed rarely (landscape_direct.c):
+     * the damping of the slopes' update (0: the rounds begin) and the
+     * last round's largest relative change. */
+    double df_omega, df_change_prev;
     double rcv_tol;            /* the run's: changes a stable routing allows */
     uint64_t rcv_hash[LS_RCV_HISTORY]; /* of the last routings' receivers */
     size_t rcv_hashes;         /* how many of them are set               */

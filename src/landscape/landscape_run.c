@@ -304,6 +304,7 @@ static int run_direct(ls_run *run, int *stalled, dfle_error *err)
 
     *stalled = 0;
     ls->stable = 0;
+    ls->df_omega = 0.0; /* undamped rounds first (landscape_direct.c) */
     ls->routed = 0; /* count from a routing of this state */
     for (;;) {
         if ((s = ls_route(ls, err)) != DFLE_OK)

@@ -38,7 +38,7 @@
 
 struct dfle_flow1d {
     size_t n;
-    double dx;
+    double dx_min; /* the shortest cell [m]: the CFL step's length */
     dfle_flow1d_params p;
     /* The wet window: cells [lo, hi) the last step worked on, and faces
      * lo..hi its fluxes.  Outside, h = q = u = c = 0 and every face array
@@ -64,7 +64,7 @@ struct dfle_flow1d {
      * cell, the state and what a step derives from it once: the velocity
      * u = q/h and wave speed c = sqrt(g_z h) of wet cells (0 in dry
      * ones), used by both faces, the CFL step and friction. */
-    double *w, *wdx, *rwdx, *gx, *gz, *hg, *wgx, *dwf; /* cells, geometry */
+    double *w, *dx, *wdx, *rwdx, *gx, *gz, *hg, *wgx, *dwf; /* cells, geometry */
     double *h, *q, *u, *c, *limit, *held;             /* cells, state    */
     double *wf, *Fh, *Fq, *face_vol;                  /* faces           */
 };
@@ -120,11 +120,18 @@ int dfle_flow1d_params_check(const dfle_flow1d_params *p, const char *who,
     return DFLE_OK;
 }
 
-enum { CELL_ARRAYS = 14, FACE_ARRAYS = 4 };
+enum { CELL_ARRAYS = 15, FACE_ARRAYS = 4 };
 
 int dfle_flow1d_new(size_t n, double dx, const double *w, const double *S,
                     const dfle_flow1d_params *p, dfle_flow1d **out,
                     dfle_error *err)
+{
+    return dfle_flow1d_new_cells(n, NULL, dx, w, S, p, out, err);
+}
+
+int dfle_flow1d_new_cells(size_t n, const double *dxs, double dx, const double *w,
+                          const double *S, const dfle_flow1d_params *p, dfle_flow1d **out,
+                          dfle_error *err)
 {
     dfle_flow1d *f;
     double *block, **cell[CELL_ARRAYS], **face[FACE_ARRAYS];
@@ -133,9 +140,13 @@ int dfle_flow1d_new(size_t n, double dx, const double *w, const double *S,
     *out = NULL;
     if ((st = dfle_flow1d_params_check(p, "flow1d", err)) != DFLE_OK)
         return st;
-    if (n < 1 || !(isfinite(dx) && dx > 0))
+    if (n < 1 || (dxs == NULL && !(isfinite(dx) && dx > 0)))
         return dfle_error_set(err, DFLE_EINVAL, "flow1d: need n >= 1 cells and dx > 0 (got %zu, %g)",
                               n, dx);
+    for (size_t k = 0; dxs != NULL && k < n; k++)
+        if (!(isfinite(dxs[k]) && dxs[k] > 0))
+            return dfle_error_set(err, DFLE_EINVAL, "flow1d: cell %zu needs dx > 0 (got %g)",
+                                  k + 1, dxs[k]);
     for (size_t k = 0; k < n; k++)
         if (!(isfinite(w[k]) && w[k] > 0 && isfinite(S[k])))
             return dfle_error_set(err, DFLE_EINVAL,
@@ -149,7 +160,6 @@ int dfle_flow1d_new(size_t n, double dx, const double *w, const double *S,
         return dfle_error_set(err, DFLE_ENOMEM, "flow1d: out of memory for %zu cells", n);
     }
     f->n = n;
-    f->dx = dx;
     f->p = *p;
     f->lo = 0;
     f->hi = n;
@@ -160,7 +170,7 @@ int dfle_flow1d_new(size_t n, double dx, const double *w, const double *S,
     cell[1] = &f->wdx, cell[2] = &f->gx, cell[3] = &f->gz, cell[4] = &f->hg;
     cell[5] = &f->rwdx, cell[6] = &f->wgx, cell[7] = &f->dwf, cell[8] = &f->h;
     cell[9] = &f->q, cell[10] = &f->u, cell[11] = &f->c, cell[12] = &f->limit;
-    cell[13] = &f->held;
+    cell[13] = &f->held, cell[14] = &f->dx;
     face[0] = &f->wf, face[1] = &f->Fh, face[2] = &f->Fq, face[3] = &f->face_vol;
     for (size_t a = 0; a < CELL_ARRAYS; a++)
         *cell[a] = block + a * n;
@@ -170,10 +180,13 @@ int dfle_flow1d_new(size_t n, double dx, const double *w, const double *S,
     f->wf[n] = w[n - 1];
     for (size_t k = 1; k < n; k++)
         f->wf[k] = 0.5 * (w[k - 1] + w[k]);
+    f->dx_min = INFINITY;
     for (size_t k = 0; k < n; k++) {
         double theta = atan(S[k]);
+        f->dx[k] = dxs != NULL ? dxs[k] : dx;
+        f->dx_min = f->dx[k] < f->dx_min ? f->dx[k] : f->dx_min;
         f->w[k] = w[k];
-        f->wdx[k] = w[k] * dx;
+        f->wdx[k] = w[k] * f->dx[k];
         f->gx[k] = p->g * sin(theta);
         f->gz[k] = p->g * cos(theta);
         f->hg[k] = 0.5 * f->gz[k];
@@ -298,7 +311,7 @@ double dfle_flow1d_stable_dt(const dfle_flow1d *f)
                 smax = s;
         }
     }
-    return smax > 0 ? f->p.cfl * f->dx / smax : INFINITY;
+    return smax > 0 ? f->p.cfl * f->dx_min / smax : INFINITY;
 }
 
 /* HLLC flux per unit width between states (h, q) with velocity u, wave
@@ -501,7 +514,7 @@ static void limit_outflow(dfle_flow1d *f, double dt, size_t lo, size_t hi)
         const double down = wf[k + 1] * Fh[k + 1], up = -wf[k] * Fh[k];
         /* max(0, .) inline: fmax is a library call (the same value here). */
         double out = dt * ((down > 0 ? down : 0.0) + (up > 0 ? up : 0.0));
-        double vol = w[k] * h[k] * f->dx;
+        double vol = w[k] * h[k] * f->dx[k];
         limit[k] = out > vol ? vol / out : 1.0;
     }
 }
@@ -533,7 +546,7 @@ static int update(dfle_flow1d *f, double dt, double L, size_t lo, size_t hi, int
                   dfle_error *err)
 {
     const dfle_flow1d_params p = f->p;
-    const double dx = f->dx, phi_k = f->phi_k;
+    const double *restrict dx = f->dx, phi_k = f->phi_k;
     /* Per step: the drag 2 eta v_f dt [kg/(m s)]; dt (1 - lambda0), the
      * first factor of every Coulomb bound at lambda0 (coulomb multiplies
      * left to right, so the bound is the same to the bit); and 6 L, the
@@ -558,7 +571,7 @@ static int update(dfle_flow1d *f, double dt, double L, size_t lo, size_t hi, int
         vol = wdx[k] * h0 - (fv1 - fv0);
         h = vol > 0 ? vol * rwdx[k] : 0.0; /* only round-off can make vol < 0 */
         hs[k] = h;
-        volume += w[k] * h * dx;
+        volume += w[k] * h * dx[k];
         if (!(h > p.h_dry)) {
             qa[k] = u[k] = c[k] = 0.0;
             continue;
@@ -702,7 +715,7 @@ double dfle_flow1d_volume(const dfle_flow1d *f, size_t k0, size_t k1)
             k1 = f->hi;
     }
     for (size_t k = k0; k < k1; k++)
-        v += f->w[k] * f->h[k] * f->dx;
+        v += f->w[k] * f->h[k] * f->dx[k];
     return v;
 }
 

@@ -10,7 +10,7 @@
  * slopes it last routed over and asks to be routed again only when one
  * has moved by reroute_dS (0.05 in the paper).
  */
-#include "dfle/router_process.h"
+#include "routers/router_process_internal.h"
 
 #include <math.h>
 #include <stdlib.h>
@@ -33,6 +33,8 @@ typedef struct process {
     /* Snapshot request and results. */
     size_t n_snap;
     double *snap_times, *snap_t, *snap_h;
+    /* On a network: each head's last routing (router_process_network.c). */
+    process_network *net;
 } process;
 
 void dfle_process_opts_default(dfle_process_opts *o)
@@ -80,35 +82,15 @@ static int process_reserve(process *pr, size_t n, dfle_error *err)
     return DFLE_OK;
 }
 
-static void record_snapshots(process *pr, size_t *next, double t, const double *h, size_t n)
-{
-    while (*next < pr->n_snap && t >= pr->snap_times[*next]) {
-        pr->snap_t[*next] = t;
-        memcpy(pr->snap_h + *next * n, h, n * sizeof *h);
-        (*next)++;
-    }
-}
-
 static int process_route(void *state, const dfle_network *net, const double *S, dfle_flow *flow,
                          dfle_error *err)
 {
     process *pr = state;
     const dfle_process_opts *o = &pr->opts;
-    const size_t n = dfle_network_size(net), G = (size_t)o->n_ghost, N = G + n;
-    const double dx = dfle_network_length(net)[0];
-    const double *w = dfle_network_w(net), *A = dfle_network_A(net);
-    double *cw = NULL, *cS = NULL, *pile, released, out_total = 0.0, t = 0.0, t_entry = -1.0;
-    const double *h, *q, *face_vol;
-    double phi_max;
-    dfle_flow1d *f = NULL;
-    size_t steps = 0, next_snap = 0, cell_steps = 0;
-    int st, end, moved = 0;
+    const size_t n = dfle_network_size(net);
+    process_path_result r;
+    int st;
 
-    /* Two-phase flow down one channel: the equations are 1D. */
-    if (!dfle_network_is_chain(net) || !dfle_network_uniform_length(net))
-        return dfle_error_set(err, DFLE_EINVAL,
-                              "router.process: routes down a single channel of even spacing (a 1D "
-                              "model); for a network or a landscape use router.empirical");
     if (flow->integrand == NULL)
         return dfle_error_set(err, DFLE_EINVAL,
                               "router.process: the erosion law has no Eq. (11) integrand, so it "
@@ -116,167 +98,41 @@ static int process_route(void *state, const dfle_network *net, const double *S, 
     if (flow->n != n)
         return dfle_error_set(err, DFLE_EINVAL, "router.process: flow has %zu nodes, network %zu",
                               flow->n, n);
+    if (!dfle_network_is_chain(net) || !dfle_network_uniform_length(net)) {
+        /* A network: every head's flow down its own path of receivers. */
+        if (pr->n_snap > 0)
+            return dfle_error_set(err, DFLE_EINVAL,
+                                  "router.process: depth snapshots are taken on a single channel "
+                                  "(this is a network of %zu nodes)", n);
+        pr->report.routed = 0;
+        if ((st = dfle_process_route_network(&pr->net, o, net, S, flow, &pr->report, err)) !=
+            DFLE_OK)
+            return st;
+        pr->report.routed = 1;
+        return DFLE_OK;
+    }
     if ((st = process_reserve(pr, n, err)) != DFLE_OK)
         return st;
-    cw = malloc(N * sizeof *cw);
-    cS = malloc(N * sizeof *cS);
-    if (cw == NULL || cS == NULL) {
-        st = dfle_error_set(err, DFLE_ENOMEM, "router.process: out of memory");
-        goto done;
+    {
+        const process_path path = {.n = n, .dx = NULL, .dx0 = dfle_network_length(net)[0],
+                                   .w = dfle_network_w(net), .S = S, .A = dfle_network_A(net)};
+        const process_snaps snaps = {.n_snap = pr->n_snap, .times = pr->snap_times,
+                                     .t = pr->snap_t, .h = pr->snap_h};
+        if ((st = dfle_process_route_path(o, &path, flow, pr->arrival, pr->cos_theta, &snaps, &r,
+                                          err)) != DFLE_OK)
+            return st;
     }
-    /* Ghost cells extend the head: its width, its slope. */
-    for (size_t k = 0; k < N; k++) {
-        cw[k] = k < G ? w[0] : w[k - G];
-        cS[k] = k < G ? S[0] : S[k - G];
-    }
-    if ((st = dfle_flow1d_new(N, dx, cw, cS, &o->flow, &f, err)) != DFLE_OK)
-        goto done;
-    pile = dfle_flow1d_h(f);
-    for (size_t k = 0; k < G; k++)
-        pile[k] = o->M0 / ((double)G * dx * w[0]); /* a static pile of volume M0 */
-    released = dfle_flow1d_volume(f, 0, N);
-    h = dfle_flow1d_depth(f);
-    q = dfle_flow1d_discharge(f);
-    face_vol = dfle_flow1d_face_volumes(f);
-    phi_max = dfle_flow1d_phi_max(f);
-
-    dfle_flow_clear(flow);
-    flow->time_resolved = 1;
-    for (size_t i = 0; i < n; i++)
-        pr->arrival[i] = NAN;
-    for (size_t j = 0; j < pr->n_snap; j++)
-        pr->snap_t[j] = NAN;
-    record_snapshots(pr, &next_snap, 0.0, h + G, n);
-
-    /* The loop's constants and record arrays as locals: the records'
-     * stores cannot then be taken to change them, so they stay in
-     * registers. */
-    const double q_erode = o->q_erode, rho = o->flow.rho, grav = o->flow.g;
-    double *const rec_h = flow->h, *const rec_M = flow->M, *const rec_tau = flow->tau,
-                 *const rec_integral = flow->integral, *const rec_t_p = flow->t_p,
-                 *const rec_v = flow->v, *const rec_Q = flow->Q, *const arrival = pr->arrival,
-                 *const cos_theta = pr->cos_theta;
-    for (;;) {
-        double dt = dfle_flow1d_stable_dt(f), outflow, left, qmax = 0.0, L;
-        size_t k0, k1;
-        if (isinf(dt)) { /* everything dry: nothing left to move */
-            end = DFLE_PROCESS_LEFT;
-            break;
-        }
-        if (dt > o->t_max - t)
-            dt = o->t_max - t;
-        if ((double)steps >= o->max_steps) {
-            st = dfle_error_set(err, DFLE_ENUMERIC,
-                                "router.process: the flow needed more than max_steps = %.0f time "
-                                "steps (stopped at t = %g s of t_max = %g s, step %g s, cfl = %g); "
-                                "raise cfl or max_steps",
-                                o->max_steps, t, o->t_max, dt, o->flow.cfl);
-            goto done;
-        }
-        if ((st = dfle_flow1d_step(f, dt, t_entry < 0 ? -1.0 : t - t_entry, &outflow, err)) != DFLE_OK)
-            goto done;
-        t += dt;
-        steps++;
-        out_total += outflow;
-        /* The flow enters the domain when it first crosses the head. */
-        if (t_entry < 0 && face_vol[G] > 0)
-            t_entry = t;
-        /* Only the cells the step worked on: outside its window the depth,
-         * discharge and face volumes are exactly 0, which would add
-         * nothing to any record below. */
-        dfle_flow1d_window(f, &k0, &k1);
-        cell_steps += k1 - k0;
-        L = dfle_flow1d_pore_length(f, t_entry < 0 ? -1.0 : t - t_entry);
-        for (size_t k = k0 > G ? k0 : G; k < k1; k++) {
-            const size_t i = k - G;
-            const double hk = h[k], qk = fabs(q[k]);
-            if (qk > qmax)
-                qmax = qk;
-            if (hk > rec_h[i])
-                rec_h[i] = hk;
-            rec_M[i] += face_vol[k + 1];
-            if (qk > q_erode) { /* Phi = 1 */
-                const double v = qk / hk;
-                const double lam = dfle_flow1d_lambda_at(f, hk, L);
-                double tau, g;
-                if (isnan(arrival[i])) { /* first erosion here */
-                    arrival[i] = t;
-                    cos_theta[i] = cos(atan(S[i]));
-                }
-                /* The peak Coulomb stress (1 - lambda) rho g_z h phi: phi
-                 * (a division and a root) only when its bound could beat
-                 * the peak so far. */
-                tau = (1.0 - lam) * rho * grav * cos_theta[i] * hk * phi_max;
-                if (tau > rec_tau[i])
-                    tau = (1.0 - lam) * rho * grav * cos_theta[i] * hk *
-                          dfle_flow1d_phi(f, k, hk, v);
-                if ((st = flow->integrand(flow->integrand_state, hk, v, lam, &g, err)) != DFLE_OK)
-                    goto done;
-                rec_integral[i] += g * dt;
-                rec_t_p[i] += dt;
-                if (v > rec_v[i])
-                    rec_v[i] = v;
-                if (qk * w[i] > rec_Q[i])
-                    rec_Q[i] = qk * w[i];
-                if (tau > rec_tau[i])
-                    rec_tau[i] = tau;
-            }
-        }
-        for (size_t k = k0; k < k1 && k < G; k++)
-            if (fabs(q[k]) > qmax)
-                qmax = fabs(q[k]);
-        record_snapshots(pr, &next_snap, t, h + G, n);
-        left = dfle_flow1d_volume(f, 0, N);
-        if (!isfinite(left) || !isfinite(qmax)) {
-            st = dfle_error_set(err, DFLE_ENUMERIC,
-                                "router.process: the flow became non-finite at t = %g s", t);
-            goto done;
-        }
-        if (left <= o->volume_tol * released) {
-            end = DFLE_PROCESS_LEFT;
-            break;
-        }
-        /* At rest: held still by friction (q = 0 everywhere), or moving
-         * once and slow everywhere now.  A pile only just released is
-         * slow too, because it has not had time to accelerate: after a
-         * first step of 1e-8 s (a tiny cfl) it must not count as at rest. */
-        moved = moved || qmax > o->q_rest;
-        if (qmax == 0.0 || (moved && qmax <= o->q_rest)) {
-            end = DFLE_PROCESS_REST;
-            break;
-        }
-        if (t >= o->t_max) {
-            end = DFLE_PROCESS_TIME;
-            break;
-        }
-    }
-
-    /* Results: reach, threshold factor, Appendix D scaling. */
-    flow->runout_end = 0;
-    for (size_t i = 0; i < n; i++) {
-        if (flow->t_p[i] > 0) {
-            flow->runout_end = i + 1;
-            flow->Theta[i] = 1.0;
-        }
-        if (o->frequency_scaling)
-            flow->integral[i] *= 1000.0 * pow(1e-6 * A[i], o->gamma) / o->M0;
-    }
-    /* The one flow reaches the channel down to its furthest wet node. */
-    for (size_t i = 0; i < n; i++)
-        flow->reach[i] = i < flow->runout_end;
     pr->report = (dfle_process_report){
-        .routed = 1, .end = end, .volume_in = released, .volume_out = out_total,
-        .volume_left = dfle_flow1d_volume(f, 0, N), .duration = t, .steps = steps,
-        .cell_steps = cell_steps, .n = n,
+        .routed = 1, .end = r.end, .volume_in = r.volume_in, .volume_out = r.volume_out,
+        .volume_left = r.volume_left, .duration = r.duration, .steps = r.steps,
+        .cell_steps = r.cell_steps, .n = n,
         .arrival = pr->arrival, .n_snapshots = pr->n_snap, .snapshot_t = pr->snap_t,
-        .snapshot_h = pr->snap_h,
+        .snapshot_h = pr->snap_h, .heads = 1, .heads_routed = 1,
+        .head_routings = pr->report.head_routings + 1,
+        .route_calls = pr->report.route_calls + 1,
+        .volume_error = fabs(r.volume_in - r.volume_out - r.volume_left) / r.volume_in,
     };
-    st = DFLE_OK;
-done:
-    dfle_flow1d_free(f);
-    free(cw);
-    free(cS);
-    return st;
+    return DFLE_OK;
 }
 
 static int process_needs_reroute(void *state, size_t n, const double *S_routed,
@@ -285,6 +141,13 @@ static int process_needs_reroute(void *state, size_t n, const double *S_routed,
     const process *pr = state;
     (void)err;
     *reroute = 0;
+    /* On a network the routing itself decides, head by head, against
+     * each head's own last routing: a slope that moved since the caller's
+     * last routing says nothing about a head routed before that. */
+    if (pr->report.routed && pr->report.heads_network) {
+        *reroute = 1;
+        return DFLE_OK;
+    }
     for (size_t i = 0; i < n; i++)
         if (fabs(S[i] - S_routed[i]) >= pr->opts.reroute_dS) {
             *reroute = 1;
@@ -324,6 +187,7 @@ static void process_destroy(void *state)
     free(pr->snap_times);
     free(pr->snap_t);
     free(pr->snap_h);
+    dfle_process_network_free(pr->net);
     free(pr);
 }
 

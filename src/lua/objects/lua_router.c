@@ -149,6 +149,9 @@ static int l_router_route(lua_State *L)
         lua_pushnumber(L, rep->duration), lua_setfield(L, -2, "duration");
         lua_pushinteger(L, (lua_Integer)rep->steps), lua_setfield(L, -2, "steps");
         lua_pushinteger(L, (lua_Integer)rep->cell_steps), lua_setfield(L, -2, "cell_steps");
+        lua_pushinteger(L, (lua_Integer)rep->heads), lua_setfield(L, -2, "heads");
+        lua_pushinteger(L, (lua_Integer)rep->heads_routed), lua_setfield(L, -2, "heads_routed");
+        lua_pushnumber(L, rep->volume_error), lua_setfield(L, -2, "volume_error");
         lua_pushstring(L, dfle_process_end_name(rep->end)), lua_setfield(L, -2, "ended");
         lua_createtable(L, (int)rep->n_snapshots, 0);
         for (size_t j = 0; j < rep->n_snapshots; j++) {
@@ -166,6 +169,25 @@ static int l_router_route(lua_State *L)
         dfle_model_invalidate_flow(m);
     if (st != DFLE_OK)
         return dfle_lua_raise(L, &err);
+    return 1;
+}
+
+/* r:routings() -> { total = flows routed since the router was made,
+ * heads = flows of the last routing, routed = of them routed again by
+ * it, calls = routings asked for }, for a process-based router (nil for
+ * another kind). */
+static int l_router_routings(lua_State *L)
+{
+    const dfle_process_report *rep = dfle_router_process_report(dfle_lua_check_router(L, 1));
+    if (rep == NULL) {
+        lua_pushnil(L);
+        return 1;
+    }
+    lua_createtable(L, 0, 3);
+    lua_pushinteger(L, (lua_Integer)rep->head_routings), lua_setfield(L, -2, "total");
+    lua_pushinteger(L, (lua_Integer)rep->heads), lua_setfield(L, -2, "heads");
+    lua_pushinteger(L, (lua_Integer)rep->heads_routed), lua_setfield(L, -2, "routed");
+    lua_pushinteger(L, (lua_Integer)rep->route_calls), lua_setfield(L, -2, "calls");
     return 1;
 }
 
@@ -191,7 +213,8 @@ static void router_free(void *obj) { dfle_router_free(obj); }
 void dfle_lua_open_router(lua_State *L)
 {
     static const luaL_Reg methods[] = {
-        {"params", l_router_params}, {"route", l_router_route}, {NULL, NULL}};
+        {"params", l_router_params}, {"route", l_router_route},
+        {"routings", l_router_routings}, {NULL, NULL}};
     static const dfle_lua_type type = {
         .name = DFLE_LUA_ROUTER, .free = router_free, .describe = router_describe,
         .methods = methods, .property = l_router_property,
