@@ -20,6 +20,17 @@
 --   fig1_<name>.csv          the main-stem profile (x, z, A, S, ...)
 --   fig1_<name>.png          binned slope-area, fit, A_df (dfle.plot)
 --   fig1_slope_area.png      all catchments on one plot, like Fig. 1
+--   fig1_<name>_chi.csv      chi and k_sn of the channels (A >= 0.1 km^2)
+--   fig1_<name>_chi.png      the binned slope-area and Eq. (2) beside chi-z
+--   fig1_<name>_ksn.png      a map of k_sn on the fluvial reach (A >= 1 km^2)
+--
+-- chi and k_sn (Perron and Royden 2013) with theta_ref = 0.45 and A0 =
+-- 1 m^2, on the channels of 0.1 km^2 and more; the chi-z line and both
+-- concavity estimates (chi-z collinearity, slope-area regression) on the
+-- fluvial reach only, A >= 1 km^2, well above A_df (about 0.2 km^2): below
+-- it debris flows set the slope (Eq. 2), and no power law of area holds.
+-- k_sn is each cell's chi-z slope over 300 m of flow path (10 cells), so
+-- that the map shows reaches rather than the 1 m steps of SRTM elevations.
 --
 --   dfle examples/fig1_slope_area.lua [--quick] [output-directory]
 --
@@ -89,6 +100,32 @@ for _, c in ipairs(catchments) do
     end
     print(("  paper's R^2 for this catchment: %.2f"):format(c.paper_r2))
 
+    -- chi and k_sn of the channels; concavity of the fluvial reach
+    local channels = dem:network{ A_min = 1e5, outlet = outlet }
+    local A_fluvial = 1e6
+    local chi = dfle.chi(channels, { theta_ref = 0.45, A_min = A_fluvial, window = 300 })
+    chi:write_csv(("%s/fig1_%s_chi.csv"):format(outdir, c.name))
+    print(("  chi (theta_ref = 0.45, A >= %.0f km^2): k_sn = %.1f m^0.9, R^2 = %.3f on %d cells")
+          :format(A_fluvial / 1e6, chi.k_sn, chi.r2, chi.n_fit))
+    for _, method in ipairs{ "chi", "slope_area" } do
+      local k, why = dfle.concavity(method == "chi" and channels or net,
+                                    { method = method, A_min = A_fluvial })
+      if k then
+        print(("  concavity by %-10s theta = %.2f (k_s = %.3g m^%.2f, R^2 = %.3f, %d %s)%s")
+              :format(method, k.theta, k.k_s, 2 * k.theta, k.r2, k.n,
+                      method == "chi" and "cells" or "bins", k.at_bound and " AT THE BOUND" or ""))
+      else
+        print("  concavity by " .. method .. ": " .. why)
+      end
+    end
+    local fit_net = fits[#fits - 1] and fits[#fits - 1][2] == "network" and fits[#fits - 1][4]
+    dfle.plot.slope_area_chi(net, chi, ("%s/fig1_%s_chi.png"):format(outdir, c.name), fit_net,
+      { title = ("Big Tujunga, %s outlet: slope-area of every cell, chi of the channels")
+                :format(c.name) })
+    dfle.plot.ksn_map(chi, ("%s/fig1_%s_ksn.png"):format(outdir, c.name), { dem = dem,
+      title = ("Big Tujunga, %s outlet: k_{sn} of the channels of 1 km^2 and more")
+              :format(c.name) })
+
     local fit = fits[#fits - 1] and fits[#fits - 1][2] == "network" and fits[#fits - 1][4]
     if fit then
       dfle.plot.slope_area(net, ("%s/fig1_%s.png"):format(outdir, c.name), fit,
@@ -142,4 +179,5 @@ if #series > 0 then
                 title = "Big Tujunga (SRTM 30 m): binned slope-area, Eq. (2) fits, A_{df}",
                 xlabel = dfle.plot.label("A"), ylabel = dfle.plot.label("S") }
 end
-print("wrote " .. csv .. ", " .. png .. ", fig1_<name>.png, fig1_<name>.csv")
+print("wrote " .. csv .. ", " .. png .. ", fig1_<name>.png, fig1_<name>.csv, " ..
+      "fig1_<name>_chi.csv, fig1_<name>_chi.png, fig1_<name>_ksn.png")

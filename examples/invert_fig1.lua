@@ -120,8 +120,9 @@ for _, run in ipairs(runs) do
       params = run.free_ke and { "U", "k_e", "k_df", "gamma", "sigma" }
                or { "U", "k_df", "gamma", "sigma" },
       scale = { U = 1e3 }, -- mm/yr
-      labels = { U = "{/:Italic U} (mm/yr)", k_df = "{/:Italic k}_{df}", k_e = "{/:Italic k}_e",
-                 gamma = "γ", sigma = "σ" },
+      -- k_df in m^{1-beta} s^-1 yr^-1: with beta = 1, s^-1 yr^-1 (Eq. 6, E_df in m/yr)
+      labels = { U = "{/:Italic U} (mm/yr)", k_df = "{/:Italic k}_{df} (s^{−1} yr^{−1})",
+                 k_e = "{/:Italic k}_e (m^{2.5} s^2 kg^{−1.5})", gamma = "γ", sigma = "σ" },
       title = ("Big Tujunga, %s outlet: posterior%s"):format(c.name,
                run.free_ke and " with k_e free" or " (k_e = 5×10^{-14})"),
     })

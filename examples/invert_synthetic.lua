@@ -106,7 +106,9 @@ local Ulabel, Ufactor = dfle.plot.label("U")
 dfle.plot.corner(res, outdir .. "/synthetic_corner.png", {
   truth = { U = truth.U, k_df = truth.k_df, gamma = truth.gamma, sigma = sigma },
   params = { "U", "k_df", "gamma", "sigma" }, scale = { U = Ufactor },
-  labels = { U = "{/:Italic U} (mm/yr)", k_df = "{/:Italic k}_{df}", gamma = "γ", sigma = "σ" },
+  -- k_df in m^{1-beta} s^-1 yr^-1: with beta = 1, s^-1 yr^-1 (Eq. 6, E_df in m/yr)
+  labels = { U = "{/:Italic U} (mm/yr)", k_df = "{/:Italic k}_{df} (s^{−1} yr^{−1})", gamma = "γ",
+             sigma = "σ" },
   title = "Synthetic profile: the posterior (truth in vermillion)",
 })
 dfle.plot.posterior_predictive(res, outdir .. "/synthetic_pp.png", {

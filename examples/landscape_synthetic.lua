@@ -41,9 +41,11 @@ for _, rule in ipairs{ "any", "count" } do
   end
   local t0 = os.clock()
   local run = ls:run_to_steady{ max_steps = quick and 40 or 100000, dt = 5e3 }
-  print(("combine = %-5s: %s in %.2f s (%s, %d rounds); %d heads, 95%% of |dz/dt|/U <= %.2g")
+  print(("combine = %-5s: %s in %.2f s (%s, %d rounds); %d heads; %.2f%% of the %d channel "
+         .. "cells above tol U (max |dz/dt|/U %.2g), volume balance %.2g")
         :format(rule, run.converged and "steady" or "NOT steady", os.clock() - t0, run.method,
-                run.steps, run.heads, run.q_ratio))
+                run.steps, run.heads, 100 * run.channel_frac_above, run.channel_cells,
+                run.channel_max_ratio, run.volume_balance))
   print("  " .. run.note)
   local fit = dfle.fit_slope_area(ls)
   if fit then

@@ -68,9 +68,11 @@ $MPIRUN -n 3 "$DFLE_MPI" -q sweep.lua fail.csv "error('no model here')" > outf.t
 check "3 ranks record failed samples as rows" $?
 
 # A rank whose replay of the script fails stops the ensemble with its
-# message; rows written are kept and the next run resumes.
+# message; rows written are kept and the next run resumes.  Each sample
+# takes 20 ms of CPU, so that rank 0 alone cannot finish all 40 before
+# rank 1's failure reaches it (a finished ensemble is a success).
 FAIL_REPLAY_ON=1 $MPIRUN -x FAIL_REPLAY_ON -n 2 "$DFLE_MPI" -q -j 1 sweep.lua replay.csv \
-    > outx.txt 2>&1
+    "local t = os.clock() while os.clock() - t < 0.02 do end" > outx.txt 2>&1
 s=$?
 [ $s -ne 0 ] && grep -q "dfle.ensemble: rank 1 (.*this rank cannot replay the script" outx.txt &&
     grep -q "rows written are kept; run again to resume" outx.txt &&

@@ -676,6 +676,22 @@ static void test_damaged_files(void **state)
     assert_int_equal(dfle_dem_read(p, NULL, &d, &err), DFLE_EINVAL);
     assert_msg_contains(err.msg, "far.asc' has cells of 1e+300 x 1e+300");
     assert_msg_contains(err.msg, "header damaged");
+    /* A tie point so far out that its cells cannot be told apart (every
+     * cell centre the same number: maps failed later, in gnuplot). */
+    p = write_tmp("tie.asc", "ncols 3\nnrows 3\nxllcorner 1e300\nyllcorner 0\ncellsize 30\n"
+                             "1 2 3\n4 5 6\n7 8 9\n");
+    assert_int_equal(dfle_dem_read(p, NULL, &d, &err), DFLE_EINVAL);
+    assert_msg_contains(err.msg, "its corner at (1e+300");
+    assert_msg_contains(err.msg, "header damaged");
+    {
+        const double z[4] = {1, 2, 3, 4};
+        dfle_dem_geo g = {1e300, 20, 10, 10};
+        assert_int_equal(dfle_dem_new(2, 2, z, &g, &d, &err), DFLE_EINVAL);
+        assert_msg_contains(err.msg, "cannot be told apart");
+        g.x0 = 6e5, g.y0 = 4.2e6; /* UTM */
+        assert_ok(dfle_dem_new(2, 2, z, &g, &d, &err), &err);
+        dfle_dem_free(d);
+    }
     p = write_tmp("infcell.asc", "ncols 3\nnrows 3\nxllcorner 0\nyllcorner 0\ncellsize inf\n"
                                  "1 2 3\n4 5 6\n7 8 9\n");
     assert_int_equal(dfle_dem_read(p, NULL, &d, &err), DFLE_EINVAL);

@@ -58,10 +58,26 @@ static void test_unit_mistakes(void **state)
 static void test_not_judged(void **state)
 {
     (void)state;
-    assert_int_equal(dfle_plausible_check("k_df", 1e9, msg, sizeof msg), 0);
+    assert_int_equal(dfle_plausible_check("alpha", 1e9, msg, sizeof msg), 0);
     assert_int_equal(dfle_plausible_check("U", -1, msg, sizeof msg), 0);
     assert_int_equal(dfle_plausible_check("U", INFINITY, msg, sizeof msg), 0);
     assert_int_equal(dfle_plausible_check("U", NAN, msg, sizeof msg), 0);
+}
+
+/* k_df: Tables G2-G5 (3e-5 to 1e-3) are plausible, 100 is not, and no
+ * unit converts it into the range. */
+static void test_debris_flow_erodibility(void **state)
+{
+    (void)state;
+    assert_int_equal(dfle_plausible_check("k_df", 1e-4, msg, sizeof msg), 0);
+    assert_int_equal(dfle_plausible_check("k_df", 3e-5, msg, sizeof msg), 0);
+    assert_int_equal(dfle_plausible_check("k_df", 1e-3, msg, sizeof msg), 0);
+    assert_int_equal(dfle_plausible_check("k_df", 100, msg, sizeof msg), 1);
+    assert_msg_contains(msg, "k_df = 100");
+    assert_msg_contains(msg, "far above debris-flow erodibilities");
+    assert_null(strstr(msg, "if you meant"));
+    assert_int_equal(dfle_plausible_check("k_df", 1e-9, msg, sizeof msg), 1);
+    assert_msg_contains(msg, "far below");
 }
 
 int main(void)
@@ -70,6 +86,7 @@ int main(void)
         cmocka_unit_test(test_uplift_in_mm),
         cmocka_unit_test(test_unit_mistakes),
         cmocka_unit_test(test_not_judged),
+        cmocka_unit_test(test_debris_flow_erodibility),
     };
     return cmocka_run_group_tests(tests, NULL, NULL);
 }

@@ -21,100 +21,10 @@
 
 #include "dfle/plot.h"
 #include "dfle_test.h"
+#include "plot_fixture.h"
 /* The axis module is tested directly: that tick labels never touch is a
  * property of plot_axes.c, checked over many ranges and lengths. */
 #include "io/plot_internal.h"
-
-typedef struct fixture {
-    char dir[64];
-    char path[512];
-} fixture;
-
-static int setup(void **state)
-{
-    fixture *fx = calloc(1, sizeof *fx);
-    if (fx == NULL) return -1;
-    strcpy(fx->dir, "/tmp/dfle-test-plot-XXXXXX");
-    if (mkdtemp(fx->dir) == NULL) {
-        free(fx);
-        return -1;
-    }
-    *state = fx;
-    return 0;
-}
-
-static int teardown(void **state)
-{
-    fixture *fx = *state;
-    DIR *d = opendir(fx->dir);
-    struct dirent *de;
-    char p[600];
-    while (d != NULL && (de = readdir(d)) != NULL) {
-        if (strcmp(de->d_name, ".") == 0 || strcmp(de->d_name, "..") == 0)
-            continue;
-        snprintf(p, sizeof p, "%s/%s", fx->dir, de->d_name);
-        unlink(p);
-    }
-    if (d != NULL) closedir(d);
-    int rc = rmdir(fx->dir);
-    free(fx);
-    return rc;
-}
-
-/* fx->path = <dir>/<name> */
-static const char *in_dir(fixture *fx, const char *name)
-{
-    snprintf(fx->path, sizeof fx->path, "%s/%s", fx->dir, name);
-    return fx->path;
-}
-
-static size_t dir_entries(const fixture *fx)
-{
-    DIR *d = opendir(fx->dir);
-    size_t k = 0;
-    struct dirent *de;
-    while (d != NULL && (de = readdir(d)) != NULL)
-        k += strcmp(de->d_name, ".") != 0 && strcmp(de->d_name, "..") != 0;
-    if (d != NULL) closedir(d);
-    return k;
-}
-
-/* First `cap` bytes of a file; returns how many were read (0 if none). */
-static size_t head(const char *path, char *buf, size_t cap)
-{
-    FILE *f = fopen(path, "rb");
-    if (f == NULL) return 0;
-    size_t k = fread(buf, 1, cap, f);
-    fclose(f);
-    return k;
-}
-
-static void assert_png(const char *path)
-{
-    static const unsigned char sig[8] = {0x89, 'P', 'N', 'G', '\r', '\n',
-                                         0x1a, '\n'};
-    char buf[8];
-    struct stat sb;
-    assert_int_equal(stat(path, &sb), 0);
-    assert_true(sb.st_size > 1000);
-    assert_int_equal(head(path, buf, sizeof buf), 8);
-    assert_memory_equal(buf, sig, 8);
-}
-
-static void assert_svg(const char *path)
-{
-    char buf[4096];
-    size_t k = head(path, buf, sizeof buf - 1);
-    buf[k] = '\0';
-    assert_true(k > 100);
-    assert_true(strncmp(buf, "<?xml", 5) == 0 || strstr(buf, "<svg") != NULL);
-}
-
-static void assert_missing(const char *path)
-{
-    struct stat sb;
-    assert_int_not_equal(stat(path, &sb), 0);
-}
 
 /* Slope-area data shaped like the paper's Fig. 1, with Eq. (2) bins. */
 enum { NPTS = 400, NBINS = 20 };
@@ -447,20 +357,6 @@ static void test_unwritable(void **state)
     rmdir(fx->path);
 }
 
-/* Run f with DFLE_GNUPLOT = prog, then put the old value back. */
-static int with_gnuplot(const char *prog, int (*f)(fixture *, dfle_error *),
-                        fixture *fx, dfle_error *err)
-{
-    const char *old = getenv("DFLE_GNUPLOT");
-    char *saved = old != NULL ? strdup(old) : NULL;
-    setenv("DFLE_GNUPLOT", prog, 1);
-    int rc = f(fx, err);
-    if (saved != NULL) setenv("DFLE_GNUPLOT", saved, 1);
-    else unsetenv("DFLE_GNUPLOT");
-    free(saved);
-    return rc;
-}
-
 /* Enough data that writing it to a gnuplot that is not there raises
  * SIGPIPE, which must not kill the caller. */
 static int plot_big(fixture *fx, dfle_error *err)
@@ -733,31 +629,6 @@ static void test_option_checks(void **state)
     assert_int_equal(dfle_plot_xy(in_dir(fx, "a.png"), &lg, &s, 1, &err), DFLE_EINVAL);
     assert_msg_contains(err.msg, "yrange must be > 0");
     assert_int_equal(dir_entries(fx), 0);
-}
-
-/* A gnuplot that keeps a copy of the script it is sent, then draws. */
-static const char *teeing_gnuplot(fixture *fx, char *prog, size_t cap)
-{
-    FILE *f;
-    snprintf(prog, cap, "%s/tee-gnuplot", fx->dir);
-    f = fopen(prog, "w");
-    assert_non_null(f);
-    fprintf(f, "#!/bin/sh\ntee '%s/script.gp' | gnuplot\n", fx->dir);
-    fclose(f);
-    assert_int_equal(chmod(prog, 0755), 0);
-    return prog;
-}
-
-/* The script gnuplot was last sent (NUL-terminated, static); leaves
- * fx->path as it was. */
-static const char *last_script(fixture *fx)
-{
-    static char buf[1 << 18];
-    char path[600];
-    snprintf(path, sizeof path, "%s/script.gp", fx->dir);
-    size_t k = head(path, buf, sizeof buf - 1);
-    buf[k] = '\0';
-    return buf;
 }
 
 static const dfle_plot_opts *script_opts;

@@ -529,6 +529,110 @@ static void newton_survives_a_bad_derivative(void **state)
     parts_free(&p);
 }
 
+/* --- The stepping loop (solver.h) with a stepper of its own: y' = -y,
+ * steps of at most 0.3, steady when y < y_stop. */
+typedef struct decay {
+    double y, y_stop, t;
+    int records[8];
+    double record_t[8];
+    size_t after;
+    volatile sig_atomic_t *flag; /* raised at step raise_at */
+    size_t raise_at;
+} decay;
+
+static int decay_prepare(void *self, const dfle_stepping_tally *so_far, int *steady,
+                         dfle_error *err)
+{
+    decay *d = self;
+    (void)so_far;
+    (void)err;
+    *steady = d->y < d->y_stop;
+    return DFLE_OK;
+}
+
+static int decay_advance(void *self, double limit, double *dt, dfle_error *err)
+{
+    decay *d = self;
+    (void)err;
+    *dt = limit < 0.3 ? limit : 0.3;
+    d->y *= exp(-*dt);
+    d->t += *dt;
+    return DFLE_OK;
+}
+
+static int decay_record(void *self, size_t k, double t, dfle_error *err)
+{
+    decay *d = self;
+    (void)err;
+    d->records[k]++;
+    d->record_t[k] = t;
+    return DFLE_OK;
+}
+
+static int decay_after(void *self, const dfle_stepping_tally *so_far, double dt, dfle_error *err)
+{
+    decay *d = self;
+    (void)dt;
+    d->after++;
+    if (d->flag != NULL && so_far->steps == d->raise_at)
+        *d->flag = 1;
+    if (so_far->steps == 1000)
+        return dfle_error_set(err, DFLE_ECANCELED, "stop");
+    return DFLE_OK;
+}
+
+static const dfle_stepping_ops decay_ops = {1, "decay", decay_prepare, decay_advance,
+                                            decay_record, decay_after};
+
+static void stepping_loop_stops_and_lands(void **state)
+{
+    const double times[3] = {0.0, 0.5, 1.0};
+    volatile sig_atomic_t flag = 0;
+    dfle_stepping_limits lim = {2.0, 100, NULL, 3, times};
+    dfle_stepping_tally t;
+    dfle_error err;
+    decay d = {1.0, 0.0, 0.0, {0}, {0}, 0, NULL, 0};
+    (void)state;
+    /* time: steps land on 0.5, 1.0 and the end 2.0 exactly */
+    assert_ok(dfle_stepping_loop(&decay_ops, &d, &lim, &t, &err), &err);
+    assert_int_equal(t.reason, DFLE_STOP_TIME);
+    assert_close(t.time, 2.0, 1e-15, 0);
+    assert_close(d.y, exp(-2.0), 1e-14, 0);
+    assert_int_equal(t.n_recorded, 3);
+    for (int k = 0; k < 3; k++) {
+        assert_int_equal(d.records[k], 1);
+        assert_close(d.record_t[k], times[k], 1e-15, 0);
+    }
+    /* 0.3, 0.2 (to 0.5), 0.3, 0.2 (to 1.0), 0.3 x 3, 0.1 */
+    assert_int_equal(t.steps, 8);
+    assert_int_equal(d.after, 8);
+    assert_close(t.dt_max, 0.3, 1e-15, 0);
+    assert_close(t.dt_min, 0.1, 1e-12, 0);
+    /* steady: stops before the step that would have come */
+    d = (decay){1.0, 0.5, 0.0, {0}, {0}, 0, NULL, 0};
+    lim.n_record = 0;
+    assert_ok(dfle_stepping_loop(&decay_ops, &d, &lim, &t, &err), &err);
+    assert_int_equal(t.reason, DFLE_STOP_STEADY);
+    assert_int_equal(t.steps, 3); /* e^-0.9 < 0.5 < e^-0.6 */
+    /* steps, then the interrupt */
+    d = (decay){1.0, 0.0, 0.0, {0}, {0}, 0, NULL, 0};
+    lim.max_steps = 2;
+    assert_ok(dfle_stepping_loop(&decay_ops, &d, &lim, &t, &err), &err);
+    assert_int_equal(t.reason, DFLE_STOP_STEPS);
+    assert_int_equal(t.steps, 2);
+    d = (decay){1.0, 0.0, 0.0, {0}, {0}, 0, &flag, 4};
+    lim.max_steps = 100;
+    lim.interrupt = &flag;
+    assert_ok(dfle_stepping_loop(&decay_ops, &d, &lim, &t, &err), &err);
+    assert_int_equal(t.reason, DFLE_STOP_INTERRUPTED);
+    assert_int_equal(t.steps, 4);
+    /* a callback's error ends the loop with it */
+    d = (decay){1.0, 0.0, 0.0, {0}, {0}, 0, NULL, 0};
+    lim = (dfle_stepping_limits){1e6, 100000, NULL, 0, NULL};
+    assert_int_equal(dfle_stepping_loop(&decay_ops, &d, &lim, &t, &err), DFLE_ECANCELED);
+    assert_string_equal(err.msg, "stop");
+}
+
 int main(void)
 {
     const struct CMUnitTest tests[] = {
@@ -542,6 +646,7 @@ int main(void)
         cmocka_unit_test(records_land_on_their_times),
         cmocka_unit_test(newton_and_difference_paths_agree),
         cmocka_unit_test(newton_survives_a_bad_derivative),
+        cmocka_unit_test(stepping_loop_stops_and_lands),
     };
     return cmocka_run_group_tests(tests, NULL, NULL);
 }

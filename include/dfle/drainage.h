@@ -153,6 +153,13 @@ int dfle_drainage_set_outlets(dfle_drainage *dr, const size_t *cells, size_t n,
  * and near ties would otherwise flip from one routing to the next.
  * DFLE_EINVAL unless 0 <= margin < 1. */
 int dfle_drainage_set_hysteresis(dfle_drainage *dr, double margin, dfle_error *err);
+/* The directions (dfle_drainage_dir's, n values) the next routing's
+ * hysteresis keeps, instead of the last routing's: for a caller that
+ * routed other surfaces since (steps taken to check a state) and goes
+ * back to a surface it routed with these, which the next routing then
+ * gives as it did.  The other outputs are stale until that routing.
+ * DFLE_ESTATE before the first routing. */
+int dfle_drainage_keep_directions(dfle_drainage *dr, const unsigned char *dir, dfle_error *err);
 
 /* Route nx * ny elevations [m] (NaN = NoData): directions, receivers,
  * donors, stack and area, replacing those of the last call.  z is read,

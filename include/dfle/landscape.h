@@ -32,11 +32,16 @@
  *    lowest pit of a region with no way out) is a base level, held at
  *    its elevation.
  *
- * Steady state (doc/landscape.md): in 2D divides migrate and a strict
- * max |dz/dt| criterion may never be met, so a landscape is steady when
- * a fraction `quantile` (0.95) of its cells has |dz/dt| <= tol U and
- * at most a fraction rcv_tol of the receivers changed at each of the
- * last `stable_steps` routings (the direct method: one a round).
+ * Steady state (doc/landscape.md, "What steady means"): judged on the
+ * cells that matter.  A landscape is steady when at most 1 % of its
+ * channel cells (1 - channel_quantile) and 5 % of its hillslope cells
+ * (1 - hillslope_quantile) have |dz/dt| > tol U, the volume it loses
+ * through its base levels balances uplift to tol, and the network holds
+ * (no receiver changed at each of the last `stable_steps` routings;
+ * a fraction rcv_tol_cycle where the network cycles).  A state that
+ * meets that is then checked as a fixed point: verify_steps implicit
+ * steps of verify_dt from it must leave the criterion met, or the run
+ * does not say converged.
  *
  * One object is used by one thread at a time; the library starts no
  * threads, so a run gives the same numbers wherever it runs.  Rates in
@@ -83,11 +88,24 @@ typedef struct dfle_landscape_field {
     dfle_landscape_field_fn fn;
     void *ud;
     int varies_in_time;
+    /* For messages: what the caller calls it (NULL: the C name, "U",
+     * "K_scale", "df_scale") and the factor from the values here to the
+     * caller's (0: 1), so a bad value is named as it was given. */
+    const char *name;
+    double show_scale;
 } dfle_landscape_field;
+
+/* Every value of a field (a grid, or what fn gives) is checked at every
+ * data cell: finite and in range (U > 0, the scales >= 0), or an error
+ * naming the cell by row, column and map coordinates. */
 
 typedef struct dfle_landscape_opts {
     size_t nx, ny;               /* columns, rows (>= 1; at least 2 data cells) */
     double dx, dy;               /* cell size [m]                         */
+    /* Map coordinates of the grid's north-west corner [m] (messages name
+     * cells by them): x0 (0) and y0 (NaN: ny dy, the south edge at 0).
+     * Cell centres must stay distinct: |x0|, |y0| below 1e11 cells. */
+    double x0, y0;
     const double *z;             /* nx * ny elevations [m], NaN = NoData;
                                   * copied; required                      */
     enum dfle_drainage_edge edge[4]; /* by dfle_drainage_side  (BASE_LEVEL) */
@@ -100,7 +118,8 @@ typedef struct dfle_landscape_opts {
     int df_combine;              /* model.h, enum dfle_df_combine (ANY)    */
     double (*df_frequency)(void *ud, double count, double A);
     void *df_frequency_ud;
-    double A0;                   /* channel-head area [m^2], >= 0 (1e4)    */
+    double A0;                   /* channel-head area [m^2], >= 0 and at
+                                  * most the area of the data cells (1e4) */
     double k_w, b;               /* channel width w = k_w A^b [m] (0.05, 0.3) */
     int hillslope;               /* enum dfle_hillslope          (THRESHOLD) */
     double S_c;                  /* THRESHOLD: critical slope [-] > 0 (0.8) */
@@ -129,8 +148,28 @@ int dfle_landscape_set_z(dfle_landscape *ls, const double *z, dfle_error *err);
 const dfle_drainage *dfle_landscape_drainage(const dfle_landscape *ls);
 /* The model on the network of the data cells (a router only), else NULL. */
 dfle_model *dfle_landscape_model(const dfle_landscape *ls);
-/* Bytes held (grid, routing, model and network, scratch). */
+/* Bytes held now (grid, routing, model and network, scratch: the
+ * elevations before a step once it has stepped, fields in space). */
 size_t dfle_landscape_memory(const dfle_landscape *ls);
+/* Bytes a landscape of these options with n_data data cells needs at
+ * most: what dfle_landscape_memory reports after a run plus what a run
+ * holds while it goes (the direct rounds' scratch, the state kept for
+ * its checks).  opts->z is not read, nor are the components: only
+ * whether there is a router (debris flows) and which fields are grids
+ * or functions. */
+size_t dfle_landscape_memory_estimate(const dfle_landscape_opts *opts, size_t n_data);
+/* The grid of opts checked before anything is allocated (opts->z is
+ * not read): its size and cell size, its corner (cell centres must be
+ * told apart: DFLE_EINVAL), and its memory: DFLE_ENOMEM, naming the
+ * estimate (with `extra` bytes the caller needs beside it, every cell
+ * taken as data) and the limit, when that is more than the memory
+ * available to this process (physical memory, a cgroup's limit,
+ * ulimit -v or -d, whichever is least).  dfle_landscape_new calls it
+ * first; a caller that builds z itself calls it before. */
+int dfle_landscape_check_grid(const dfle_landscape_opts *opts, size_t extra, dfle_error *err);
+/* 1 once the surface has moved by a step or a run, or was set by
+ * dfle_landscape_set_z; 0 while it is the start it was built with. */
+int dfle_landscape_has_run(const dfle_landscape *ls);
 
 /* Fields, nx * ny values written to out (NaN on NoData), for the
  * current elevations (routed first if they changed). */
@@ -169,10 +208,27 @@ typedef struct dfle_landscape_status {
     double max_time;
     size_t steps;       /* steps (direct: rounds) taken in this run       */
     double dt;          /* last step [yr]                                 */
-    double q_ratio;     /* quantile of |dz/dt|/U over non-base data cells */
-    double mean_ratio;  /* mean of |dz/dt|/U                              */
-    double max_ratio;   /* max of |dz/dt|/U                               */
-    double frac_above;  /* fraction of cells with |dz/dt| > tol U         */
+    /* |dz/dt| / U over the non-base data cells, for the state (the last
+     * step's change over its length, or rates evaluated on a fresh
+     * routing after a direct round).  The criterion reads the channel
+     * and hillslope parts; all cells are for comparison. */
+    double q_ratio;     /* all cells: the 0.95 quantile (9 % bins)        */
+    double mean_ratio;  /* all cells: mean                                */
+    double max_ratio;   /* all cells: max                                 */
+    double frac_above;  /* all cells: fraction with |dz/dt| > tol U       */
+    double channel_q_ratio;    /* channel cells (A >= A0): the
+                                * channel_quantile quantile (9 % bins)  */
+    double channel_max_ratio;  /* ... their max                          */
+    double channel_frac_above; /* ... fraction with |dz/dt| > tol U      */
+    size_t channel_above;      /* ... how many                           */
+    double hillslope_q_ratio;  /* hillslope cells: the hillslope_quantile quantile */
+    double hillslope_max_ratio;
+    double hillslope_frac_above;
+    /* The state's volume balance [m^3/yr]: what uplift adds over the
+     * non-base data cells, what erosion of every kind removes there (at
+     * steady state it all leaves through the base levels), and
+     * (outflux - uplift) / uplift. */
+    double uplift_flux, outflux, volume_balance;
     size_t rcv_changes; /* cells whose receiver changed at the last routing */
     size_t stable;      /* routings in a row with no receiver change      */
     size_t channel_cells, heads, reached; /* the network and its debris flows */
@@ -185,17 +241,36 @@ typedef struct dfle_landscape_status {
 } dfle_landscape_status;
 
 typedef struct dfle_landscape_run_opts {
-    int method;          /* solver.h: IMPLICIT (default), EXPLICIT, DIRECT */
+    int method;          /* solver.h: AUTO (default: DIRECT for steady
+                          * states, IMPLICIT for transients), ...      */
     double years;        /* > 0: a transient of this length (no steady stop) */
-    double tol;          /* steady: |dz/dt| <= tol U ...          (1e-3)   */
-    double quantile;     /* ... in this fraction of the cells     (0.95)   */
-    size_t stable_steps; /* ... and the network stable this long (5)       */
-    double rcv_tol;      /* a routing is stable when at most this fraction
-                          * of the cells changed receiver     (0.005)   */
+    /* Steady (doc/landscape.md): |dz/dt| <= tol U ...                 */
+    double tol;          /*                                       (1e-3)   */
+    double channel_quantile;   /* ... in this fraction of the channel
+                                * cells                           (0.99)   */
+    double hillslope_quantile; /* ... and of the hillslope cells  (0.95)   */
+    /* ... the volume balance within tol, and the network stable for
+     * stable_steps routings in a row (5): at most a fraction rcv_tol of
+     * the cells changed receiver (0), or rcv_tol_cycle (0.005) once the
+     * network is seen to cycle (no new fewest changes for max(30, the
+     * grid's width) rounds or steps; the note says so). */
+    size_t stable_steps;
+    double rcv_tol, rcv_tol_cycle;
+    /* The fixed-point check of a state that met the criterion:
+     * verify_steps (3; 0: none) implicit steps of verify_dt (1e4 yr)
+     * from it, each judged by the criterion but the network's; the run
+     * keeps the state it checked. */
+    size_t verify_steps;
+    double verify_dt;
     double max_time;     /* steady runs: give up after [yr]       (1e7)    */
     size_t max_steps;    /* hard cap on steps (direct: rounds)    (1e6)    */
     double dt;           /* IMPLICIT step [yr] (1000); EXPLICIT: the cap   */
     double cfl;          /* EXPLICIT Courant number               (0.5)    */
+    /* Optional: doubts in words (a run that cannot reach `years` in
+     * max_steps, a transient stopped short, a steady state without a
+     * channel), before the run where they can be known then. */
+    void (*warn)(void *ud, const char *msg);
+    void *warn_ud;
     /* Called after every step (and once at the start, steps = 0); return
      * nonzero to stop the run (DFLE_ECANCELED).  May read the landscape
      * (fields, z) but not run it. */
@@ -219,16 +294,23 @@ typedef struct dfle_landscape_run_opts {
 void dfle_landscape_run_opts_default(dfle_landscape_run_opts *o);
 
 typedef struct dfle_landscape_result {
-    int converged;       /* the steady-state criterion was met           */
+    int converged;       /* the steady-state criterion was met and the
+                          * state passed its fixed-point check         */
     int reason;          /* solver.h enum dfle_stop_reason               */
     int method;          /* the method that produced the result          */
     int fallback;        /* DIRECT did not settle: continued implicitly  */
     size_t direct_rounds; /* with fallback: the direct rounds before      */
-    dfle_landscape_status last;
+    dfle_landscape_status last; /* the state the run ended with        */
+    /* The fixed-point check: its steps taken (0: none), whether the last
+     * check passed, and the figures of its worst step by channel_frac_above. */
+    size_t verify_steps;
+    int verified;
+    dfle_landscape_status verify;
+    double rcv_tol;      /* the network rule the run ended judged by   */
     double dt_min, dt_max;
     size_t routings;
     size_t n_recorded;   /* record times reached                         */
-    char note[512];      /* why it stopped, in words                     */
+    char note[768];      /* why it stopped, in words                     */
 } dfle_landscape_result;
 
 /* Run from the current state: a transient of opts->years, or to steady
@@ -238,8 +320,8 @@ int dfle_landscape_run(dfle_landscape *ls, const dfle_landscape_run_opts *opts,
                        dfle_landscape_result *res, dfle_error *err);
 
 /* One backward-Euler step of dt [yr] (route, erode in stack order,
- * hillslopes); st (may be NULL) receives its figures (q_ratio: the 0.95
- * quantile, as the runs' default). */
+ * hillslopes); st (may be NULL) receives its figures (the quantiles of
+ * the runs' defaults). */
 int dfle_landscape_step(dfle_landscape *ls, double dt, double tol, dfle_landscape_status *st,
                         dfle_error *err);
 

@@ -185,6 +185,33 @@ int dfle_plot_slope_area(const char *path, const dfle_plot_opts *opts, size_t n,
                          const dfle_bins *bins, const dfle_eq2_fit *fit,
                          dfle_error *err);
 
+/* A chi plot (Perron and Royden 2013): each cell's elevation against
+ * its chi, coloured by k_sn (or black), cells below A_min in light grey
+ * (left out of the line), and the line z = z_b + M_chi chi in vermillion
+ * with its k_sn = M_chi A0^theta_ref and R^2 in the legend.  The colour
+ * range defaults to the 2nd to 98th percentile of k_sn (opts->c sets
+ * it).  16 x 11 cm. */
+typedef struct dfle_plot_chi_data {
+    size_t n;
+    const double *chi;      /* [m]                                             */
+    const double *z;        /* elevation [m] (or height above base level)      */
+    const double *k_sn;     /* colour, or NULL                                  */
+    const double *A;        /* drainage area [m^2], or NULL (all fitted)        */
+    double A_min;           /* [m^2]                                            */
+    double theta_ref, A0;   /* [-], [m^2]: named in the axis label              */
+    double M_chi, z_b, r2;  /* the line; M_chi NaN: none                        */
+} dfle_plot_chi_data;
+
+int dfle_plot_chi(const char *path, const dfle_plot_opts *opts, const dfle_plot_chi_data *chi,
+                  dfle_error *err);
+
+/* The slope-area figure (as dfle_plot_slope_area) and the chi plot side
+ * by side, (a) and (b), on one page: 25 x 10.5 cm. */
+int dfle_plot_slope_area_chi(const char *path, const dfle_plot_opts *opts, size_t n,
+                             const double *A, const double *S, const dfle_bins *bins,
+                             const dfle_eq2_fit *fit, const dfle_plot_chi_data *chi,
+                             dfle_error *err);
+
 /* Long profile z(x) [m], with a second panel of slope S(x) (S may be
  * NULL).  opts->y applies to the elevation panel.  16 x 13 cm. */
 int dfle_plot_profile(const char *path, const dfle_plot_opts *opts, size_t n,
@@ -198,22 +225,51 @@ int dfle_plot_profile(const char *path, const dfle_plot_opts *opts, size_t n,
 int dfle_plot_sheet(const char *path, const dfle_plot_opts *opts, const char *const *paths,
                     const char *const *titles, size_t n, size_t columns, dfle_error *err);
 
+/* Points drawn on a map, coloured by a value on the figure's colour
+ * scale (opts->c: label, range, log; the default range spans the 2nd to
+ * 98th percentile of the values, so that a few extreme cells do not wash
+ * out the rest), e.g. the k_sn of a channel network's cells.  Each is a
+ * filled circle, larger where `size` (e.g. drainage area) is larger on a
+ * log scale; those of non-finite value are not drawn. */
+typedef struct dfle_plot_map_points {
+    size_t n;
+    const double *x, *y;      /* map coordinates [m]                     */
+    const double *value;      /* the colour                              */
+    const double *size;       /* > 0, or NULL: all one size              */
+} dfle_plot_map_points;
+
 /* A map: shaded relief of z (Horn's slope and aspect, light from the
  * north-west at 45 degrees) over a hypsometric tint with its colour
  * box, the channel cells in blue and the cells debris flows reach in
  * vermillion on top (the legend names a colour only where the map shows
- * it: no channel entry when every channel cell is reached), axes in km of map coordinates, equal scales.  Grids
- * of more than 1.5e6 cells are drawn every k-th cell. */
+ * it: no channel entry when every channel cell is reached).  With
+ * points, the relief is grey and the colour box is the points' scale.
+ * Axes in km of the map's coordinates at equal scales, labelled with the
+ * CRS's EPSG code ("Easting (km, EPSG:32611)"; "x (km)" without a CRS),
+ * the frame fitted to the cells with data, the page to the frame (no
+ * empty bands); a scale bar with the CRS's name, a north arrow (grid
+ * north: the top of the grid) and the legend inside the frame where they
+ * cover least data (the legend below the frame when every corner would
+ * hide data).  Grids of more than 1.5e6 cells are drawn every k-th cell. */
 typedef struct dfle_plot_map {
     size_t nx, ny;            /* columns, rows (row 0 at the north)      */
     double x0, y0, dx, dy;    /* north-west corner and cell size [m]     */
     const double *z;          /* elevation [m], NaN = NoData (white)     */
     const double *channel;    /* > 0: a channel cell, or NULL            */
     const double *reach;      /* > 0: debris flows reach it, or NULL     */
-    const char *title;        /* may be NULL                             */
+    const char *title;        /* may be NULL (opts->title wins)          */
     const char *channel_label, *reach_label; /* legend; NULL: defaults   */
+    const char *crs;          /* the CRS: WKT, "EPSG:32611" or any string
+                               * GDAL reads; NULL: none.  Must be
+                               * projected, in metres                    */
+    const dfle_plot_map_points *points; /* or NULL                       */
 } dfle_plot_map;
 
+/* The map on a page of the options' width (16 cm), its height set by
+ * the map's proportions unless the options give it too. */
+int dfle_plot_map_draw(const char *path, const dfle_plot_opts *opts, const dfle_plot_map *map,
+                       dfle_error *err);
+/* The same with the default options. */
 int dfle_plot_hillshade(const char *path, const dfle_plot_map *map, dfle_error *err);
 
 /* Corner plot of posterior samples: the marginal of each parameter on

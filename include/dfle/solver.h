@@ -39,6 +39,8 @@ typedef struct dfle_run_status {
     double rate_ratio; /* max |dz/dt| / U                      */
     double tol;        /* steady-state target for rate_ratio   */
     double fraction;   /* rough completion estimate in [0, 1]  */
+    const char *ratio_name; /* what rate_ratio is, for a display
+                             * (NULL: "max|dz/dt|/U")           */
 } dfle_run_status;
 typedef int (*dfle_progress_fn)(void *ud, const dfle_run_status *st);
 
@@ -173,6 +175,64 @@ int dfle_solver_run(dfle_model *m, const dfle_run_opts *opts, dfle_run_result *r
  * flow goes on at the root.  DFLE_EFIT when no slope balances U_eff. */
 int dfle_solver_node_slope(dfle_model *m, size_t i, double U_eff, double c, double flows,
                            double guess, double *S, int *goes_on, dfle_error *err);
+
+/* --- The stepping loop ------------------------------------------------
+ *
+ * Every time-stepping run in dfle goes through this one loop, so that
+ * "steady", "max_time", "max_steps" and an interrupt mean the same
+ * everywhere: the 1D methods above (explicit, implicit) and a
+ * landscape's implicit and explicit steps (landscape.h).  A stepper says
+ * how its state is judged and how it moves; the loop owns the time, the
+ * step count, the stop checks in one order, and where steps land:
+ *
+ *   records at t = 0
+ *   loop: prepare (bring the state up to date, judge it)
+ *         stop if steady, t >= max_time, steps >= max_steps, interrupted
+ *         advance by at most the time to the next record or max_time
+ *         count the step, take the records it reached, after_step
+ *
+ * A stepper is a static const ops table and a state pointer (GSL's
+ * {type, state}); callbacks return DFLE_OK or a negative status with err
+ * set, which ends the loop with that status. */
+typedef struct dfle_stepping_tally {
+    int reason;          /* enum dfle_stop_reason, once the loop ended   */
+    double time;         /* years stepped in this loop                   */
+    size_t steps;        /* steps taken in this loop                     */
+    double dt_min, dt_max; /* smallest and largest step [yr] (0 if none) */
+    size_t n_recorded;   /* record times reached                        */
+} dfle_stepping_tally;
+
+typedef struct dfle_stepper_ops {
+    int iVersion;        /* 1 */
+    const char *name;    /* for messages: "explicit", "landscape", ... */
+    /* Before every stop check: bring the state up to date for time t of
+     * the loop (forcing, rates) and set *steady = 1 when it meets the
+     * stepper's steady-state criterion (the loop then stops with
+     * DFLE_STOP_STEADY; leave it 0 for transients). */
+    int (*prepare)(void *self, const dfle_stepping_tally *so_far, int *steady, dfle_error *err);
+    /* One step of at most dt_limit [yr] (> 0): *dt receives its length,
+     * 0 < *dt <= dt_limit. */
+    int (*advance)(void *self, double dt_limit, double *dt, dfle_error *err);
+    /* Optional: record time k (record_times[k]) was reached at time t. */
+    int (*record)(void *self, size_t k, double t, dfle_error *err);
+    /* Optional: after every step (the tally already counts it). */
+    int (*after_step)(void *self, const dfle_stepping_tally *so_far, double dt, dfle_error *err);
+} dfle_stepping_ops;
+
+typedef struct dfle_stepping_limits {
+    double max_time;     /* > 0 [yr]                                     */
+    size_t max_steps;    /* > 0                                          */
+    const volatile sig_atomic_t *interrupt; /* may be NULL               */
+    size_t n_record;     /* record times [yr since the loop began],      */
+    const double *record_times; /* increasing, within [0, max_time]      */
+} dfle_stepping_limits;
+
+/* Run the loop (see above) from a fresh tally.  Reaching max_time,
+ * max_steps or the interrupt is not an error: tally->reason says which
+ * stop it was. */
+int dfle_stepping_loop(const dfle_stepping_ops *ops, void *self,
+                       const dfle_stepping_limits *lim, dfle_stepping_tally *tally,
+                       dfle_error *err);
 
 
 #ifdef __cplusplus

@@ -51,6 +51,10 @@ static const plausible_range ranges[] = {
     {"g", "m/s^2", 1.0, 30.0, "gravity (9.81 m/s^2 on Earth)", NULL, 0, NULL, 0},
     {"D_eff", "m", 1e-4, 5.0, "grain sizes (0.1 mm to 5 m)", NULL, 0, "mm", 1e-3},
     {"R_c", "m", 1e-3, 20.0, "mean annual runoff (1 mm to 20 m)", NULL, 0, "mm", 1e-3},
+    /* Debris-flow erodibility (Eq. 6, E_df in m/yr: k_df absorbs the
+     * flows' frequency): the paper's Tables G2-G5 span 3e-5 to 1e-3. */
+    {"k_df", "m^(1-beta)/s^2", 1e-7, 0.1, "debris-flow erodibilities (1e-7 to 0.1; the paper's "
+     "3e-5 to 1e-3)", NULL, 0, NULL, 0},
 };
 
 int dfle_plausible_check(const char *name, double value, char *msg, size_t cap)

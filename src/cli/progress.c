@@ -80,7 +80,8 @@ int dfle_progress_bar_update(void *ud, const dfle_run_status *st)
         fputc(i < filled ? '#' : '.', bar->out);
     fprintf(bar->out, "] %3d%%  t = %.3g yr", (int)(100 * st->fraction), st->time);
     if (st->tol > 0)
-        fprintf(bar->out, "  max|dz/dt|/U = %.2e -> %.0e", st->rate_ratio, st->tol);
+        fprintf(bar->out, "  %s = %.2e -> %.0e",
+                st->ratio_name != NULL ? st->ratio_name : "max|dz/dt|/U", st->rate_ratio, st->tol);
     {
         double left = dfle_progress_eta_update(&bar->eta, t, st->fraction);
         if (left >= 0)

@@ -19,6 +19,7 @@
 
 #include "dem/dem_internal.h"
 
+#include <float.h>
 #include <math.h>
 #include <stdlib.h>
 #include <string.h>
@@ -91,12 +92,24 @@ static int check_elevations(const dfle_dem *d, const char *path, dfle_error *err
     return DFLE_OK;
 }
 
-/* Cell sizes past 1000 km, or a grid whose far edge overflows, come from
- * a damaged header, not from a DEM (degrees are far below the limit). */
+/* 1 when coordinates out to the grid's far corner still tell cells
+ * apart: far out, the centres of neighbouring cells round to one
+ * coordinate (a tie point of 1e300 made them all the same, and maps
+ * failed later, in gnuplot). */
+static int corner_resolved(double x0, double y0, double x1, double y1, double dx, double dy)
+{
+    const double far = fmax(fmax(fabs(x0), fabs(x1)), fmax(fabs(y0), fabs(y1)));
+    return far * DBL_EPSILON <= 1e-4 * fmin(dx, dy);
+}
+
+/* Cell sizes past 1000 km, a grid whose far edge overflows, or a tie
+ * point so far out that its cells cannot be told apart, come from a
+ * damaged header, not from a DEM (degrees are far below the limits). */
 static int check_geometry(const char *path, const double gt[6], int nx, int ny, dfle_error *err)
 {
     double east = gt[0] + (double)nx * gt[1], south = gt[3] + (double)ny * gt[5];
-    if (gt[1] > 1e6 || -gt[5] > 1e6 || !isfinite(east) || !isfinite(south))
+    if (gt[1] > 1e6 || -gt[5] > 1e6 || !isfinite(east) || !isfinite(south) ||
+        !corner_resolved(gt[0], gt[3], east, south, gt[1], -gt[5]))
         return dfle_error_set(err, DFLE_EINVAL, "dem: '%s' has cells of %g x %g and its corner at "
                               "(%g, %g): not the geometry of a DEM; is its header damaged?",
                               path, gt[1], -gt[5], gt[0], gt[3]);
@@ -216,6 +229,11 @@ int dfle_dem_new(size_t nx, size_t ny, const double *z, const dfle_dem_geo *geo,
                               "(got dx = %g, dy = %g)", geo->dx, geo->dy);
     if (!(isfinite(geo->x0) && isfinite(geo->y0)))
         return dfle_error_set(err, DFLE_EINVAL, "dem: the grid's corner must be finite");
+    if (!corner_resolved(geo->x0, geo->y0, geo->x0 + (double)nx * geo->dx,
+                         geo->y0 - (double)ny * geo->dy, geo->dx, geo->dy))
+        return dfle_error_set(err, DFLE_EINVAL, "dem: the grid's corner (%g, %g) is so far out "
+                              "that cells of %g x %g cannot be told apart there", geo->x0,
+                              geo->y0, geo->dx, geo->dy);
     if ((st = dem_alloc(nx, ny, &d, err)) != DFLE_OK)
         return st;
     d->x0 = geo->x0;

@@ -256,6 +256,18 @@ int dfle_drainage_set_hysteresis(dfle_drainage *dr, double margin, dfle_error *e
     return DFLE_OK;
 }
 
+int dfle_drainage_keep_directions(dfle_drainage *dr, const unsigned char *dir, dfle_error *err)
+{
+    if (!dr->routed)
+        return dfle_error_set(err, DFLE_ESTATE, "drainage: directions can be put back only "
+                              "over a routing");
+    memcpy(dr->dir, dir, dr->n);
+    /* The other arrays belong to another routing now: route again. */
+    dr->routed = 0;
+    dr->dirs_given = 1;
+    return DFLE_OK;
+}
+
 /* ---------------------------------------------------------------- */
 /* Routing                                                          */
 /* ---------------------------------------------------------------- */
@@ -277,7 +289,8 @@ int dfle_drainage_route(dfle_drainage *dr, const double *z, dfle_error *err)
 
     if (z == NULL)
         return dfle_error_set(err, DFLE_EINVAL, "drainage: elevations are required");
-    dr->dirs_kept = dr->routed; /* dir[] holds a whole routing (hysteresis) */
+    dr->dirs_kept = dr->routed || dr->dirs_given; /* dir[] holds a whole routing (hysteresis) */
+    dr->dirs_given = 0;
     dr->routed = 0;
     memset(&dr->counts, 0, sizeof dr->counts);
     if (dr->o.depressions == DFLE_DRAINAGE_FILL) {

@@ -81,6 +81,7 @@ struct dfle_drainage {
     unsigned char *outlet;  /* n: cells that always drain off, or NULL  */
     double hysteresis;      /* relative slope margin to keep a receiver */
     int dirs_kept;          /* dir[] holds the last routing's directions */
+    int dirs_given;         /* dir[] was put back (dfle_drainage_keep_directions) */
 
     /* Outputs of the last route, valid while `routed`. */
     int routed;

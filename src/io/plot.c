@@ -1,6 +1,6 @@
 /*
  * plot.c - the figures: x-y, stacked panels, slope-area, long profile
- * (through plot_frame.c), and the shaded-relief map.
+ * (through plot_frame.c); maps are plot_map.c's.
  *
  * Each checks its data and options before gnuplot starts, so a bad call
  * never starts gnuplot or touches a file.  Labels and titles are gnuplot
@@ -17,15 +17,6 @@
 #include <stdlib.h>
 #include <string.h>
 
-enum { FIT_SAMPLES = 200 };
-
-static void put_label(FILE *f, const char *what, const char *text)
-{
-    if (text == NULL) return;
-    fprintf(f, "set %s ", what);
-    dfle_gp_str(f, text);
-    fputs("\n", f);
-}
 
 /* Layers of series, coloured from the palette in order except where a
  * series names its colour (so an explicit grey does not use up blue). */
@@ -121,14 +112,13 @@ static void layer_set(dfle_gp_layer *l, size_t n, const double *x, const double 
     dfle_gp_look_set(&l->look, kind, rgb, lw, 1, pt, ps, 0);
 }
 
-int dfle_plot_slope_area(const char *path, const dfle_plot_opts *opts, size_t n,
-                         const double *A, const double *S,
-                         const dfle_bins *bins, const dfle_eq2_fit *fit,
-                         dfle_error *err)
+int dfle_gp_slope_area_panel(dfle_gp_sa_panel *sp, const dfle_gp_frame *fr, const char *path,
+                             size_t n, const double *A, const double *S, const dfle_bins *bins,
+                             const dfle_eq2_fit *fit, const dfle_plot_axis *y, dfle_error *err)
 {
-    dfle_gp_frame fr;
-    int rc = dfle_gp_frame_of(path, opts, 16, 11, &fr, err);
-    if (rc < 0) return rc;
+    dfle_gp_layer *L = sp->L;
+    size_t nl = 0;
+    memset(sp, 0, sizeof *sp);
     if (n == 0 || A == NULL || S == NULL)
         return dfle_error_set(err, DFLE_EINVAL, "plot: slope-area data "
                               "missing (n = %zu, A or S NULL)", n);
@@ -151,28 +141,24 @@ int dfle_plot_slope_area(const char *path, const dfle_plot_opts *opts, size_t n,
         return dfle_error_set(err, DFLE_EINVAL, "plot: no slope-area pair "
                               "with finite A > 0 and S > 0 for '%s'", path);
 
-    dfle_gp_layer L[4];
-    size_t nl = 0;
     /* Thousands of DEM cells: small dots, grey, under everything. */
     layer_set(&L[nl++], n, A, S, "Data", DFLE_GP_POINTS, DFLE_GP_GREY, 1, 7,
-              dfle_gp_ps(&fr, n > 2000 ? 1.8 : 2.6));
+              dfle_gp_ps(fr, n > 2000 ? 1.8 : 2.6));
     if (bins != NULL && bins->n > 0) {
         int bars = bins->S_q25 != NULL && bins->S_q75 != NULL;
         layer_set(&L[nl], bins->n, bins->A, bins->S_mean,
                   bars ? "Binned mean (quartiles)" : "Binned mean",
-                  bars ? DFLE_GP_BARS : DFLE_GP_POINTS, "#000000", 2, 7, dfle_gp_ps(&fr, 4.2));
+                  bars ? DFLE_GP_BARS : DFLE_GP_POINTS, "#000000", 2, 7, dfle_gp_ps(fr, 4.2));
         if (bars)
             L[nl].lo = bins->S_q25, L[nl].hi = bins->S_q75;
         nl++;
     }
     /* The curve spans the data's areas; A_df is marked only inside it. */
-    double fa[FIT_SAMPLES], fs[FIT_SAMPLES], mark_a = 0, mark_s = 0;
-    char ftitle[320] = "", mtitle[96] = "", extra[200] = "";
     if (fit != NULL) {
         char sdf[40], adf[40], a2[40], r2[32] = "";
-        for (int i = 0; i < FIT_SAMPLES; i++) {
-            fa[i] = amin * pow(amax / amin, i / (FIT_SAMPLES - 1.0));
-            fs[i] = eq2(fit, fa[i]);
+        for (int i = 0; i < DFLE_GP_FIT_SAMPLES; i++) {
+            sp->fa[i] = amin * pow(amax / amin, i / (DFLE_GP_FIT_SAMPLES - 1.0));
+            sp->fs[i] = eq2(fit, sp->fa[i]);
         }
         dfle_plot_number(sdf, sizeof sdf, fit->S_df);
         dfle_plot_number(adf, sizeof adf, fit->A_df);
@@ -180,32 +166,45 @@ int dfle_plot_slope_area(const char *path, const dfle_plot_opts *opts, size_t n,
         if (isfinite(fit->r2))
             snprintf(r2, sizeof r2, ", {/:Italic R}^2 = %.3f", fit->r2);
         int mark = fit->A_df >= amin && fit->A_df <= amax;
-        snprintf(ftitle, sizeof ftitle, "Eq. (2): {/:Italic S}_{df} = %s, "
+        snprintf(sp->ftitle, sizeof sp->ftitle, "Eq. (2): {/:Italic S}_{df} = %s, "
                  "{/:Italic a}_2 = %s%s%s%s%s", sdf, a2, r2,
                  mark ? "" : ", {/:Italic A}_{df} = ", mark ? "" : adf,
                  mark ? "" : " m^2");
-        layer_set(&L[nl++], FIT_SAMPLES, fa, fs, ftitle, DFLE_GP_LINES, DFLE_GP_FIT, 2.5, 0, 0);
+        layer_set(&L[nl++], DFLE_GP_FIT_SAMPLES, sp->fa, sp->fs, sp->ftitle, DFLE_GP_LINES,
+                  DFLE_GP_FIT, 2.5, 0, 0);
         if (mark) { /* as in the paper's Fig. 1: open circle at (A_df,
                      * S_df/2) on the curve and a dashed line at A_df */
-            mark_a = fit->A_df;
-            mark_s = eq2(fit, fit->A_df);
-            snprintf(mtitle, sizeof mtitle, "{/:Italic A}_{df} = %s m^2", adf);
-            layer_set(&L[nl++], 1, &mark_a, &mark_s, mtitle, DFLE_GP_POINTS, DFLE_GP_FIT, 3, 6,
-                      dfle_gp_ps(&fr, 10));
-            snprintf(extra, sizeof extra, "set arrow from %.17g, graph 0 to "
+            sp->mark_a = fit->A_df;
+            sp->mark_s = eq2(fit, fit->A_df);
+            snprintf(sp->mtitle, sizeof sp->mtitle, "{/:Italic A}_{df} = %s m^2", adf);
+            layer_set(&L[nl++], 1, &sp->mark_a, &sp->mark_s, sp->mtitle, DFLE_GP_POINTS,
+                      DFLE_GP_FIT, 3, 6, dfle_gp_ps(fr, 10));
+            snprintf(sp->extra, sizeof sp->extra, "set arrow from %.17g, graph 0 to "
                      "%.17g, graph 1 nohead dt 2 lw 1.5 lc rgb '%s' back\n",
-                     mark_a, mark_a, DFLE_GP_FIT);
+                     sp->mark_a, sp->mark_a, DFLE_GP_FIT);
         }
     }
-    dfle_gp_panel panel;
-    memset(&panel, 0, sizeof panel);
-    panel.layers = L;
-    panel.nl = nl;
-    panel.y = opts != NULL ? &opts->y : NULL;
-    panel.ylog = 1;
-    panel.ylabel = dfle_plot_label("S", NULL);
-    panel.extra = extra[0] != '\0' ? extra : NULL;
-    return dfle_gp_figure(path, &fr, opts, 1, dfle_plot_label("A", NULL), &panel, 1, err);
+    sp->panel.layers = L;
+    sp->panel.nl = nl;
+    sp->panel.y = y;
+    sp->panel.ylog = 1;
+    sp->panel.ylabel = dfle_plot_label("S", NULL);
+    sp->panel.extra = sp->extra[0] != '\0' ? sp->extra : NULL;
+    return DFLE_OK;
+}
+
+int dfle_plot_slope_area(const char *path, const dfle_plot_opts *opts, size_t n,
+                         const double *A, const double *S,
+                         const dfle_bins *bins, const dfle_eq2_fit *fit,
+                         dfle_error *err)
+{
+    dfle_gp_frame fr;
+    dfle_gp_sa_panel sp;
+    int rc = dfle_gp_frame_of(path, opts, 16, 11, &fr, err);
+    if (rc < 0 || (rc = dfle_gp_slope_area_panel(&sp, &fr, path, n, A, S, bins, fit,
+                                                 opts != NULL ? &opts->y : NULL, err)) < 0)
+        return rc;
+    return dfle_gp_figure(path, &fr, opts, 1, dfle_plot_label("A", NULL), &sp.panel, 1, err);
 }
 
 int dfle_plot_profile(const char *path, const dfle_plot_opts *opts, size_t n,
@@ -238,150 +237,4 @@ int dfle_plot_profile(const char *path, const dfle_plot_opts *opts, size_t n,
     }
     return dfle_gp_figure(path, &fr, opts, 0, dfle_plot_label("x", NULL), P, S != NULL ? 2 : 1,
                           err);
-}
-
-/* ---------------------------------------------------------------- */
-/* Maps: shaded relief, channels, debris-flow reach                  */
-/* ---------------------------------------------------------------- */
-
-/* The hypsometric tint, in gnuplot's palette and in C alike. */
-static const double tint_at[5] = {0.0, 0.25, 0.5, 0.75, 1.0};
-static const unsigned tint_rgb[5] = {0x2f6b3a, 0x8fae5d, 0xd8c98e, 0xa9825a, 0xf4f1ea};
-
-static double tint_channel(double f, int shift)
-{
-    int k = 0;
-    while (k < 3 && f > tint_at[k + 1])
-        k++;
-    double u = (f - tint_at[k]) / (tint_at[k + 1] - tint_at[k]);
-    double a = (tint_rgb[k] >> shift) & 255, b = (tint_rgb[k + 1] >> shift) & 255;
-    return a + u * (b - a);
-}
-
-/* Horn's hillshade of cell (r, c) in [0, 1], from the neighbours that
- * have data (a missing one takes the centre's elevation). */
-static double shade_at(const dfle_plot_map *m, size_t r, size_t c, size_t step)
-{
-    double zz[3][3], zc = m->z[r * m->nx + c];
-    for (int i = -1; i <= 1; i++)
-        for (int j = -1; j <= 1; j++) {
-            long long rr = (long long)r + i * (long long)step, cc = (long long)c + j * (long long)step;
-            double v = zc;
-            if (rr >= 0 && cc >= 0 && rr < (long long)m->ny && cc < (long long)m->nx &&
-                !isnan(m->z[rr * (long long)m->nx + cc]))
-                v = m->z[rr * (long long)m->nx + cc];
-            zz[i + 1][j + 1] = v;
-        }
-    /* ESRI's formulation: rows of zz run north to south. */
-    const double pi = 3.14159265358979323846;
-    const double zenith = (90.0 - 45.0) * pi / 180.0, azimuth = (360.0 - 315.0 + 90.0) * pi / 180.0;
-    double hx = 8.0 * m->dx * (double)step, hy = 8.0 * m->dy * (double)step;
-    double dzdx = ((zz[0][2] + 2 * zz[1][2] + zz[2][2]) - (zz[0][0] + 2 * zz[1][0] + zz[2][0])) / hx;
-    double dzdy = ((zz[2][0] + 2 * zz[2][1] + zz[2][2]) - (zz[0][0] + 2 * zz[0][1] + zz[0][2])) / hy;
-    double slope = atan(hypot(dzdx, dzdy)), aspect = atan2(dzdy, -dzdx);
-    double v = cos(zenith) * cos(slope) + sin(zenith) * sin(slope) * cos(azimuth - aspect);
-    return v < 0 ? 0 : v > 1 ? 1 : v;
-}
-
-int dfle_plot_hillshade(const char *path, const dfle_plot_map *m, dfle_error *err)
-{
-    int fmt = dfle_gp_format(path, err);
-    double zmin = HUGE_VAL, zmax = -HUGE_VAL;
-    size_t step = 1, cols, rows;
-    if (fmt < 0) return fmt;
-    if (m == NULL || m->z == NULL || m->nx < 2 || m->ny < 2 || !(m->dx > 0) || !(m->dy > 0))
-        return dfle_error_set(err, DFLE_EINVAL, "plot: a map needs at least 2 x 2 cells of "
-                              "positive size and elevations");
-    for (size_t i = 0; i < m->nx * m->ny; i++)
-        if (!isnan(m->z[i])) {
-            zmin = fmin(zmin, m->z[i]);
-            zmax = fmax(zmax, m->z[i]);
-        }
-    if (zmin > zmax)
-        return dfle_error_set(err, DFLE_EINVAL, "plot: every cell of the map is NoData");
-    /* The map frames the data: the box of the cells with elevations. */
-    size_t r0 = m->ny, r1 = 0, c0 = m->nx, c1 = 0;
-    for (size_t i = 0; i < m->nx * m->ny; i++)
-        if (!isnan(m->z[i])) {
-            size_t rr = i / m->nx, cc = i % m->nx;
-            r0 = rr < r0 ? rr : r0, r1 = rr > r1 ? rr : r1;
-            c0 = cc < c0 ? cc : c0, c1 = cc > c1 ? cc : c1;
-        }
-    while ((m->nx / step) * (m->ny / step) > 1500000)
-        step++;
-    cols = (m->nx + step - 1) / step;
-    rows = (m->ny + step - 1) / step;
-    /* Pixels: the map's aspect, about 900 wide plus room for the key. */
-    double wkm = (double)(c1 - c0 + 1) * m->dx, hkm = (double)(r1 - r0 + 1) * m->dy;
-    int w = 1000, h = (int)(80 + 820.0 * hkm / wkm);
-    if (h > 1400) { h = 1400; w = (int)(150 + 1250.0 * wkm / hkm); }
-    if (h < 400) h = 400;
-    dfle_gp_run r;
-    int rc = dfle_gp_begin(&r, path, fmt, w, h, err);
-    if (rc < 0) return rc;
-    /* One packed RGB value per cell (0xRRGGBB), a matrix datablock. */
-    fputs("$img << EOD\n", r.f);
-    for (size_t rr = 0; rr < rows; rr++) {
-        for (size_t cc = 0; cc < cols; cc++) {
-            size_t i = rr * step * m->nx + cc * step;
-            unsigned rgb = 0xffffff;
-            if (!isnan(m->z[i])) {
-                double f = zmax > zmin ? (m->z[i] - zmin) / (zmax - zmin) : 0.5;
-                double sh = 0.35 + 0.65 * shade_at(m, rr * step, cc * step, step);
-                unsigned R = (unsigned)(tint_channel(f, 16) * sh), G = (unsigned)(tint_channel(f, 8) * sh),
-                         B = (unsigned)(tint_channel(f, 0) * sh);
-                if (m->channel != NULL && m->channel[i] > 0) R = 0x00, G = 0x72, B = 0xB2;
-                if (m->reach != NULL && m->reach[i] > 0) R = 0xD5, G = 0x5E, B = 0x00;
-                rgb = (R << 16) | (G << 8) | B;
-            }
-            fprintf(r.f, "%s%u", cc ? " " : "", rgb);
-        }
-        fputs("\n", r.f);
-    }
-    fputs("EOD\n", r.f);
-    /* A 2 x 2 image off the map gives the colour box its scale. */
-    {
-        double fx = m->x0 / 1000 - 1e6, fy = m->y0 / 1000 + 1e6;
-        fprintf(r.f, "$cb << EOD\n%.17g %.17g %.17g\n%.17g %.17g %.17g\n\n%.17g %.17g %.17g\n"
-                "%.17g %.17g %.17g\nEOD\n", fx, fy, zmin, fx + 1, fy, zmax, fx, fy + 1, zmin,
-                fx + 1, fy + 1, zmax);
-    }
-    put_label(r.f, "title", m->title);
-    fputs("set xlabel 'Easting (km)'\nset ylabel 'Northing (km)'\n", r.f);
-    fputs("set size ratio -1\nset tics out nomirror\nset format x '%.1f'\nset format y '%.1f'\n", r.f);
-    fprintf(r.f, "set xrange [%.17g:%.17g]\nset yrange [%.17g:%.17g]\n",
-            (m->x0 + (double)c0 * m->dx) / 1000, (m->x0 + (double)(c1 + 1) * m->dx) / 1000,
-            (m->y0 - (double)(r1 + 1) * m->dy) / 1000, (m->y0 - (double)r0 * m->dy) / 1000);
-    fprintf(r.f, "set cbrange [%.17g:%.17g]\nset cblabel 'Elevation (m)'\nset colorbox\n", zmin,
-            zmax > zmin ? zmax : zmin + 1);
-    fputs("set palette defined (", r.f);
-    for (int k = 0; k < 5; k++)
-        fprintf(r.f, "%s%g '#%06x'", k ? ", " : "", tint_at[k], tint_rgb[k]);
-    fputs(")\n", r.f);
-    fputs("set bmargin 6\nset key at screen 0.5, screen 0.015 center bottom horizontal Left "
-          "reverse samplen 1.5 spacing 1.2 width 2 box lt 1 lc rgb '#b0b0b0'\n", r.f);
-    /* Cell centres in km: column c at x0 + (c + 0.5) dx (every step-th). */
-    double sx = m->dx * (double)step / 1000, sy = m->dy * (double)step / 1000;
-    fprintf(r.f, "plot $img matrix using (%.17g + ($1 + 0.5) * %.17g):(%.17g - ($2 + 0.5) * "
-            "%.17g):(int($3) >> 16 & 255):(int($3) >> 8 & 255):(int($3) & 255) with rgbimage "
-            "notitle, ", m->x0 / 1000, sx, m->y0 / 1000, sy);
-    fputs("$cb using 1:2:3 with image notitle", r.f); /* the colour box's scale */
-    /* Reach is painted over channels, so the channel colour shows only
-     * where no debris flow goes: no legend entry for a colour the map
-     * does not show (every channel reached). */
-    int channel_seen = 0;
-    for (size_t i = 0; m->channel != NULL && !channel_seen && i < m->nx * m->ny; i++)
-        channel_seen = m->channel[i] > 0 && !(m->reach != NULL && m->reach[i] > 0);
-    if (channel_seen) {
-        fputs(", NaN with lines lw 6 lc rgb '#0072B2' title ", r.f);
-        dfle_gp_str(r.f, m->channel_label != NULL ? m->channel_label
-                         : m->reach != NULL ? "Channels beyond the debris-flow reach"
-                                            : "Channel network");
-    }
-    if (m->reach != NULL) {
-        fputs(", NaN with lines lw 6 lc rgb '#D55E00' title ", r.f);
-        dfle_gp_str(r.f, m->reach_label != NULL ? m->reach_label : "Debris-flow reach");
-    }
-    fputs("\n", r.f);
-    return dfle_gp_end(&r, err);
 }

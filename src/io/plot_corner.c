@@ -35,16 +35,20 @@ static int cmp_desc(const void *a, const void *b)
 }
 
 /* median^{+up}_{-down}, scaled by a power of ten when the numbers are
- * large or small, as enhanced text.  The scripts are set at 0.8 of the
- * font: at full size gnuplot stacks them into each other and into the
- * "×10" after them. */
-static void fmt_interval(char *buf, size_t cap, double med, double lo, double hi)
+ * large or small (by 10^e_axis when the axis is labelled with that
+ * factor, so that the two agree), as enhanced text.  The scripts are set
+ * at 0.8 of the font: at full size gnuplot stacks them into each other
+ * and into the "×10" after them. */
+static void fmt_interval(char *buf, size_t cap, double med, double lo, double hi, int factored,
+                         int e_axis)
 {
     double ref = fabs(med) > 0 ? fabs(med) : fmax(fabs(lo), fabs(hi));
     int e = ref > 0 ? (int)floor(log10(ref)) : 0, dec;
     double s, up, dn, small;
     if (e >= -2 && e <= 3)
         e = 0;
+    if (factored)
+        e = e_axis;
     s = pow(10.0, -e);
     up = (hi - med) * s;
     dn = (med - lo) * s;
@@ -54,11 +58,59 @@ static void fmt_interval(char *buf, size_t cap, double med, double lo, double hi
         dec = 0;
     if (dec > 5)
         dec = 5;
-    if (e != 0)
-        snprintf(buf, cap, "%.*f@^{/*0.8 +%.*f}_{/*0.8 −%.*f} ×10^{%d}", dec, med * s, dec, up,
-                 dec, dn, e);
-    else
-        snprintf(buf, cap, "%.*f@^{/*0.8 +%.*f}_{/*0.8 −%.*f}", dec, med * s, dec, up, dec, dn);
+    {
+        /* @ stacks the scripts, and what follows starts after the
+         * second: the wider goes second, so nothing runs into it */
+        char us[32], ds[32];
+        snprintf(us, sizeof us, "+%.*f", dec, up);
+        snprintf(ds, sizeof ds, "−%.*f", dec, dn);
+        if (strlen(us) + 2 > strlen(ds)) /* "−" is 3 bytes, one glyph */
+            snprintf(buf, cap, "%.*f@_{/*0.8 %s}^{/*0.8 %s}", dec, med * s, ds, us);
+        else
+            snprintf(buf, cap, "%.*f@^{/*0.8 %s}_{/*0.8 %s}", dec, med * s, us, ds);
+        if (e != 0)
+            snprintf(buf + strlen(buf), cap - strlen(buf), " ×10^{%d}", e);
+    }
+}
+
+/* A label "symbol (unit)" split in two (unit "" when it has none). */
+static void split_label(const char *label, char *sym, size_t scap, char *unit, size_t ucap)
+{
+    const char *open = strrchr(label, '(');
+    size_t len = strlen(label);
+    if (open != NULL && open > label && open[-1] == ' ' && len > 0 && label[len - 1] == ')') {
+        snprintf(sym, scap, "%.*s", (int)(open - label - 1), label);
+        snprintf(unit, ucap, "%.*s", (int)(label + len - 1 - open - 1), open + 1);
+    } else {
+        snprintf(sym, scap, "%s", label);
+        unit[0] = '\0';
+    }
+}
+
+/* An axis label too wide for its panel (w pt at font fs), broken before
+ * its unit into two lines: buf holds "k_{df}", then "(×10^{-4} s^{-1}
+ * yr^{-1})" after its NUL.  Returns the lines. */
+static int wrap_label(const char *label, double w, double fs, char *buf, size_t cap)
+{
+    const char *open = strrchr(label, '(');
+    snprintf(buf, cap, "%s", label);
+    if (dfle_gp_text_em(label) * fs <= w || open == NULL || open == label || open[-1] != ' ' ||
+        strlen(label) + 2 > cap)
+        return 1;
+    buf[open - label - 1] = '\0';
+    return 2;
+}
+
+/* An axis label of one or two lines (wrap_label's buf): the first at
+ * (x, y), the second 1.6 font sizes further from the label's start
+ * (below it; right of it when rotated). */
+static void put_axis_label(FILE *f, int tag, const char *buf, int lines, double x, double y,
+                           double rot, const dfle_gp_frame *fr)
+{
+    dfle_gp_page_label(f, tag, buf, x, y, rot, 0, fr);
+    if (lines > 1)
+        dfle_gp_page_label(f, tag + 10, buf + strlen(buf) + 1, x + (rot != 0 ? 1.6 * fr->font_pt : 0),
+                           y - (rot != 0 ? 0 : 1.6 * fr->font_pt), rot, 0, fr);
 }
 
 /* The axis range of parameter j in axis units, padded 4 %. */
@@ -75,8 +127,9 @@ static void axis_range(size_t n, size_t d, const double *x, size_t j, int lg, do
         }
     }
     if (isfinite(truth) && (!lg || truth > 0)) {
-        *lo = fmin(*lo, to_axis(truth, lg));
-        *hi = fmax(*hi, to_axis(truth, lg));
+        double t = to_axis(truth, lg);
+        *lo = fmin(*lo, t);
+        *hi = fmax(*hi, t);
     }
     if (!(*hi > *lo)) {
         double c = isfinite(*lo) ? *lo : 0;
@@ -84,9 +137,20 @@ static void axis_range(size_t n, size_t d, const double *x, size_t j, int lg, do
         *hi = c + (lg ? 0.1 : fmax(fabs(c) * 0.05, 1e-12));
     }
     {
-        double pad = 0.04 * (*hi - *lo);
-        *lo -= pad;
-        *hi += pad;
+        double span = *hi - *lo;
+        *lo -= 0.04 * span;
+        *hi += 0.04 * span;
+    }
+    /* A truth near an end of the samples stands a tenth of the axis
+     * clear of the frame, so that its line is not read as the frame (or
+     * as drawn clamped to it). */
+    if (isfinite(truth) && (!lg || truth > 0)) {
+        const double room = 0.1;
+        double t = to_axis(truth, lg);
+        if (*hi - t < room * (*hi - *lo))
+            *hi = (t - room * *lo) / (1 - room);
+        if (t - *lo < room * (*hi - *lo))
+            *lo = (t - room * *hi) / (1 - room);
     }
 }
 
@@ -138,6 +202,12 @@ static void density(size_t n, size_t d, const double *x, size_t a, size_t b, con
     }
 }
 
+/* Parameter j has a truth its axis can show. */
+static int truth_shown(const dfle_corner_opts *o, size_t j, const int *lg)
+{
+    return o->truth != NULL && isfinite(o->truth[j]) && (!lg[j] || o->truth[j] > 0);
+}
+
 /* Parameter j's axis label: the caller's, or "x_{j}". */
 static const char *axis_label(const dfle_corner_opts *o, size_t j, char *buf, size_t cap)
 {
@@ -162,6 +232,7 @@ int dfle_plot_corner(const char *path, const dfle_plot_opts *opts,
     dfle_gp_frame fr;
     dfle_gp_run r;
     double fs, left, right, bottom, top, gap, w, yem = 0;
+    int wrap_x = 0, wrap_y = 0;
 
     if (d < 1 || d > 12)
         return dfle_error_set(err, DFLE_EINVAL, "plot: a corner plot takes 1 to 12 parameters "
@@ -209,6 +280,21 @@ int dfle_plot_corner(const char *path, const dfle_plot_opts *opts,
     left = (0.5 + 1.5 + 0.7 + 0.3) * fs + yem * fs;
     right = fr.w_pt - 1.5 * fs;
     w = (fmin(right - left, top - bottom) - gap * (double)(d - 1)) / (double)d;
+    /* axis labels too wide for a panel take two lines, and room for them */
+    for (size_t j = 0; j < d; j++) {
+        char bj[32], fx[320], wr[320];
+        const char *lab = axis_label(o, j, bj, sizeof bj);
+        wrap_x |= wrap_label(dfle_gp_axis_label(&tx[j], lab, fx, sizeof fx), w + 0.8 * gap, fs,
+                             wr, sizeof wr) > 1;
+        if (j > 0)
+            wrap_y |= wrap_label(dfle_gp_axis_label(&ty[j], lab, fx, sizeof fx), w + 0.8 * gap,
+                                 fs, wr, sizeof wr) > 1;
+    }
+    if (wrap_x || wrap_y) {
+        bottom += wrap_x ? 1.6 * fs : 0;
+        left += wrap_y ? 1.6 * fs : 0;
+        w = (fmin(right - left, top - bottom) - gap * (double)(d - 1)) / (double)d;
+    }
 
     if (!(w > 3 * fs)) {
         rc = dfle_error_set(err, DFLE_EINVAL, "plot: the page (%.3g x %.3g cm) is too small for "
@@ -291,24 +377,44 @@ int dfle_plot_corner(const char *path, const dfle_plot_opts *opts,
             dfle_gp_axis_put(r.f, "x", &tx[j], i == d - 1);
             if (i == 0 && j == 0 && title != NULL)
                 dfle_gp_page_label(r.f, 100, title, fr.w_pt / 2, fr.h_pt - 1.25 * fs, 0, 0, &fr);
-            if (i == d - 1)
-                dfle_gp_page_label(r.f, 101, dfle_gp_axis_label(&tx[j], lab_j, fx, sizeof fx),
-                                   L0 + w / 2, 0.95 * fs, 0, 0, &fr);
+            if (i == d - 1) {
+                char wr[320];
+                int lines = wrap_label(dfle_gp_axis_label(&tx[j], lab_j, fx, sizeof fx),
+                                       w + 0.8 * gap, fs, wr, sizeof wr);
+                put_axis_label(r.f, 101, wr, lines, L0 + w / 2, (lines > 1 ? 2.55 : 0.95) * fs,
+                               0, &fr);
+            }
             if (i == j) {
                 dfle_summary s;
-                char txt[200], head[320];
+                char txt[200], head[600];
                 dfle_summarize(x + j, n, d, &s, NULL);
                 fputs("unset logscale y\nset yrange [0:1.12]\nunset ytics\n", r.f);
-                fmt_interval(txt, sizeof txt, s.median, s.lo68, s.hi68);
-                snprintf(head, sizeof head, "%s = %s", lab_j, txt);
-                dfle_gp_page_label(r.f, 1, head, L0 + w / 2, T0 + 0.9 * fs, 0, 0, &fr);
+                char sym[160], unit[160];
+                split_label(lab_j, sym, sizeof sym, unit, sizeof unit);
+                fmt_interval(txt, sizeof txt, s.median, s.lo68, s.hi68, tx[j].factored,
+                             tx[j].factor_exp);
+                /* "k_df = 1.1^{+0.4}_{-0.2} ×10^{-4} s^{-1} yr^{-1}", the unit
+                 * left out where the header would run off the page */
+                snprintf(head, sizeof head, "%s = %s%s%s", sym, txt, unit[0] ? " " : "", unit);
+                if (j == d - 1 && dfle_gp_text_em(head) * fs > w + 2.4 * fs)
+                    snprintf(head, sizeof head, "%s = %s", sym, txt);
+                /* centred where it keeps within the panel (the width
+                 * estimate can be a tenth short), else from its left edge */
+                if (j == d - 1 || 1.1 * dfle_gp_text_em(head) * fs <= w) {
+                    dfle_gp_page_label(r.f, 1, head, L0 + w / 2, T0 + 0.9 * fs, 0, 0, &fr);
+                } else { /* from the panel's left edge over the empty upper triangle */
+                    fputs("set label 1 ", r.f);
+                    dfle_gp_str(r.f, head);
+                    fprintf(r.f, " at screen %.5f, screen %.5f left front\n", L0 / fr.w_pt,
+                            (T0 + 0.9 * fs) / fr.h_pt);
+                }
                 fprintf(r.f, "set arrow 1 from %.10g, graph 0 to %.10g, graph 1 nohead lc rgb "
                         "'#1f3b73' lw 3 front\n", s.median, s.median);
                 fprintf(r.f, "set arrow 2 from %.10g, graph 0 to %.10g, graph 1 nohead lc rgb "
                         "'#1f3b73' lw 2 dt 2 front\n", s.lo68, s.lo68);
                 fprintf(r.f, "set arrow 3 from %.10g, graph 0 to %.10g, graph 1 nohead lc rgb "
                         "'#1f3b73' lw 2 dt 2 front\n", s.hi68, s.hi68);
-                if (o->truth != NULL && isfinite(o->truth[j]))
+                if (truth_shown(o, j, lg))
                     fprintf(r.f, "set arrow 4 from %.10g, graph 0 to %.10g, graph 1 nohead lc "
                             "rgb '%s' lw 3 front\n", o->truth[j], o->truth[j], DFLE_GP_FIT);
                 fprintf(r.f, "plot $h%zu using 1:2 with filledcurves y1=0 fs transparent solid "
@@ -316,13 +422,16 @@ int dfle_plot_corner(const char *path, const dfle_plot_opts *opts,
                         "'#0a4a78'\n", j, j);
             } else {
                 dfle_gp_axis_put(r.f, "y", &ty[i], j == 0);
-                if (j == 0)
-                    dfle_gp_page_label(r.f, 102, dfle_gp_axis_label(&ty[i], lab_i, fx, sizeof fx),
-                                       1.1 * fs, T0 - w / 2, 90, 0, &fr);
-                if (o->truth != NULL && isfinite(o->truth[j]))
+                if (j == 0) {
+                    char wr[320];
+                    int lines = wrap_label(dfle_gp_axis_label(&ty[i], lab_i, fx, sizeof fx),
+                                           w + 0.8 * gap, fs, wr, sizeof wr);
+                    put_axis_label(r.f, 102, wr, lines, 1.1 * fs, T0 - w / 2, 90, &fr);
+                }
+                if (truth_shown(o, j, lg))
                     fprintf(r.f, "set arrow 4 from %.10g, graph 0 to %.10g, graph 1 nohead lc "
                             "rgb '%s' lw 2.5 front\n", o->truth[j], o->truth[j], DFLE_GP_FIT);
-                if (o->truth != NULL && isfinite(o->truth[i]))
+                if (truth_shown(o, i, lg))
                     fprintf(r.f, "set arrow 5 from graph 0, first %.10g to graph 1, first %.10g "
                             "nohead lc rgb '%s' lw 2.5 front\n", o->truth[i], o->truth[i],
                             DFLE_GP_FIT);

@@ -69,6 +69,7 @@ static void grow(extent *e, double v)
 
 /* Where things are on the page [pt from the bottom left]. */
 typedef struct layout {
+    dfle_gp_box box;          /* the figure's part of the page    */
     double fx0, fx1;          /* frame, left and right            */
     double top, bottom;       /* of the stack of panels           */
     double cb_x;              /* colour box's left edge           */
@@ -245,8 +246,9 @@ static void put_legend(FILE *f, const dfle_gp_panel *P, int where, const layout 
     if (where == DFLE_LEGEND_BELOW) {
         cols = (size_t)lay->key_cols;
         w = (double)cols * colw + (double)(cols - 1) * KEY_COLGAP * fs;
-        bx = fmax(0.5 * fs, fmin((lay->fx0 + lay->fx1) / 2 - w / 2, W - w - 0.5 * fs));
-        by = lay->key_below; /* top of the rows */
+        bx = fmax(lay->box.x0 + 0.5 * fs,
+                  fmin((lay->fx0 + lay->fx1) / 2 - w / 2, lay->box.x1 - w - 0.5 * fs));
+        by = lay->box.y0 + lay->key_below; /* top of the rows */
     } else if (where == DFLE_LEGEND_OUTSIDE_RIGHT) {
         bx = lay->fx1 + 0.8 * fs;
         by = y1;
@@ -286,8 +288,8 @@ static void put_legend(FILE *f, const dfle_gp_panel *P, int where, const layout 
     }
 }
 
-/* The plot command of a panel's layers (datablocks $p<panel>_<layer>). */
-static void put_plot(FILE *f, size_t pi, const dfle_gp_panel *P)
+/* The plot command of a panel's layers (datablocks $<pre>p<panel>_<layer>). */
+static void put_plot(FILE *f, const char *pre, size_t pi, const dfle_gp_panel *P)
 {
     int first = 1;
     fputs("plot", f);
@@ -296,10 +298,10 @@ static void put_plot(FILE *f, size_t pi, const dfle_gp_panel *P)
         if (l->used == 0)
             continue; /* gnuplot refuses an empty block */
         if (l->c != NULL)
-            fprintf(f, "%s $p%zu_%zu using 1:2:3 with %s lc palette", first ? "" : ",", pi, k,
-                    l->look.with);
+            fprintf(f, "%s $%sp%zu_%zu using 1:2:3 with %s lc palette", first ? "" : ",", pre,
+                    pi, k, l->look.with);
         else
-            fprintf(f, "%s $p%zu_%zu using %s with %s lc rgb '%s'", first ? "" : ",", pi, k,
+            fprintf(f, "%s $%sp%zu_%zu using %s with %s lc rgb '%s'", first ? "" : ",", pre, pi, k,
                     l->y == NULL ? "1:3:4" : l->lo != NULL ? "1:2:3:4" : "1:2", l->look.with,
                     l->look.rgb);
         if (l->title != NULL) {
@@ -314,14 +316,15 @@ static void put_plot(FILE *f, size_t pi, const dfle_gp_panel *P)
 }
 
 /* Datablocks of the usable rows: x, y (a band: hi), then lo hi, then c. */
-static void put_blocks(FILE *f, size_t pi, const dfle_gp_panel *P, int logx, int logy, int logc)
+static void put_blocks(FILE *f, const char *pre, size_t pi, const dfle_gp_panel *P, int logx,
+                       int logy, int logc)
 {
     for (size_t k = 0; k < P->nl; k++) {
         const dfle_gp_layer *l = &P->layers[k];
         int gap = 0;
         if (l->used == 0)
             continue;
-        fprintf(f, "$p%zu_%zu << EOD\n", pi, k);
+        fprintf(f, "$%sp%zu_%zu << EOD\n", pre, pi, k);
         for (size_t i = 0; i < l->n; i++) {
             double x = l->x[i], y = l->y != NULL ? l->y[i] : l->hi[i];
             if (!row_ok(l, i, logx, logy, logc)) {
@@ -368,17 +371,19 @@ static void compute_layout(layout *lay, const dfle_gp_frame *fr, const dfle_plot
                            dfle_gp_axis *ca, int any_c, double weights, double gap)
 {
     const double fs = fr->font_pt;
+    const dfle_gp_box *b = &lay->box;
     double yem = 0, stack_h;
-    lay->top = fr->h_pt - (o->title != NULL ? 2.4 * fs : 0.9 * fs);
-    lay->bottom = (1.25 + 1.3 + 0.45) * fs + (xl != NULL ? 1.2 * fs : 0) + lay->key_below;
+    lay->top = b->y1 - (o->title != NULL ? 2.4 * fs : 0.9 * fs);
+    lay->bottom = b->y0 + (1.25 + 1.3 + 0.45) * fs + (xl != NULL ? 1.2 * fs : 0) +
+                  lay->key_below;
     stack_h = lay->top - lay->bottom - gap * (double)(np - 1);
     for (size_t p = 0; p < np; p++) {
         double h = stack_h * (P[p].weight > 0 ? P[p].weight : 1) / weights;
         dfle_gp_axis_ticks(&ya[p], h, fs, 1, P[p].y);
         yem = fmax(yem, ya[p].max_em);
     }
-    lay->fx0 = (0.5 + 1.5 + 0.7 + 0.3) * fs + yem * fs;
-    lay->fx1 = fr->w_pt - 1.6 * fs - lay->key_right;
+    lay->fx0 = b->x0 + (0.5 + 1.5 + 0.7 + 0.3) * fs + yem * fs;
+    lay->fx1 = b->x1 - 1.6 * fs - lay->key_right;
     if (any_c) {
         /* box, its tick labels, its label, all fixed on the page */
         dfle_gp_axis_ticks(ca, lay->top - lay->bottom, fs, 1, &o->c);
@@ -395,22 +400,75 @@ static double panel_h(const layout *lay, const dfle_gp_panel *P, size_t np, size
     return stack_h * (P[p].weight > 0 ? P[p].weight : 1) / weights;
 }
 
-int dfle_gp_figure(const char *path, const dfle_gp_frame *fr, const dfle_plot_opts *opts,
-                   int xlog, const char *xlabel, dfle_gp_panel *P, size_t np,
-                   dfle_error *err)
+/* Everything a figure needs before gnuplot starts: ranges, ticks, the
+ * layout and where each legend goes. */
+struct dfle_gp_plan {
+    const dfle_gp_frame *fr;
+    const dfle_plot_opts *o;
+    dfle_gp_panel *P;
+    size_t np;
+    int xlog, logc, any_c;
+    const char *xl;
+    double weights, gap;
+    dfle_gp_axis *xa, *ya, *ca;
+    int key_where[16];
+    layout lay;
+};
+
+void dfle_gp_plan_free(dfle_gp_plan *pl)
+{
+    if (pl == NULL)
+        return;
+    free(pl->xa);
+    free(pl->ya);
+    free(pl->ca);
+    free(pl);
+}
+
+/* The x ticks for the frame's width; the last label, centred on the
+ * frame's edge, must fit on the page. */
+static void x_ticks(dfle_gp_plan *pl)
+{
+    layout *lay = &pl->lay;
+    const double fs = pl->fr->font_pt;
+    dfle_gp_axis_ticks(pl->xa, lay->fx1 - lay->fx0, fs, 0, &pl->o->x);
+    if (pl->xa->n > 0 && !pl->any_c)
+        lay->fx1 = fmin(lay->fx1, lay->box.x1 - lay->key_right -
+                        0.5 * dfle_gp_text_em(pl->xa->lab[pl->xa->n - 1]) * fs - 0.3 * fs);
+}
+
+double dfle_gp_plan_key_below(const dfle_gp_plan *pl)
+{
+    return pl->lay.key_below;
+}
+
+void dfle_gp_plan_set_key_below(dfle_gp_plan *pl, double key_below)
+{
+    if (!(key_below > pl->lay.key_below))
+        return;
+    pl->lay.key_below = key_below;
+    compute_layout(&pl->lay, pl->fr, pl->o, pl->xl, pl->P, pl->np, pl->ya, pl->ca, pl->any_c,
+                   pl->weights, pl->gap);
+    x_ticks(pl);
+}
+
+int dfle_gp_plan_new(const char *path, const dfle_gp_frame *fr, const dfle_gp_box *box,
+                     const dfle_plot_opts *opts, int xlog, const char *xlabel, dfle_gp_panel *P,
+                     size_t np, dfle_gp_plan **out, dfle_error *err)
 {
     static const dfle_plot_opts none = {0};
     const dfle_plot_opts *o = opts != NULL ? opts : &none;
     const double fs = fr->font_pt, gap = 0.9 * fs;
-    dfle_gp_axis *xa = NULL, *ya = NULL, *ca = NULL;
+    dfle_gp_plan *pl;
+    dfle_gp_axis *xa, *ya, *ca;
     extent ex = {HUGE_VAL, -HUGE_VAL}, ec = {HUGE_VAL, -HUGE_VAL};
     int logc = o->c.log > 0, any_c = 0, marks = 0, rc = DFLE_OK, have_below = 0;
-    int key_where[16] = {0};
+    int *key_where;
     const char *xl = o->x.label != NULL ? o->x.label : xlabel;
     double weights = 0;
-    layout lay;
-    dfle_gp_run r;
+    layout *lay;
 
+    *out = NULL;
     if (np == 0 || np > 16)
         return dfle_error_set(err, DFLE_EINVAL, "plot: 1 to 16 panels (got %zu)", np);
     if (o->x.log != 0)
@@ -418,13 +476,17 @@ int dfle_gp_figure(const char *path, const dfle_gp_frame *fr, const dfle_plot_op
     if ((rc = dfle_gp_axis_ok('x', &o->x, xlog, err)) < 0 ||
         (rc = dfle_gp_axis_ok('c', &o->c, logc, err)) < 0)
         return rc;
-    xa = calloc(1, sizeof *xa);
-    ya = calloc(np, sizeof *ya);
-    ca = calloc(1, sizeof *ca);
+    if ((pl = calloc(1, sizeof *pl)) == NULL)
+        return dfle_error_set(err, DFLE_ENOMEM, "plot: out of memory");
+    pl->xa = xa = calloc(1, sizeof *xa);
+    pl->ya = ya = calloc(np, sizeof *ya);
+    pl->ca = ca = calloc(1, sizeof *ca);
     if (xa == NULL || ya == NULL || ca == NULL) {
         rc = dfle_error_set(err, DFLE_ENOMEM, "plot: out of memory");
         goto done;
     }
+    key_where = pl->key_where;
+    lay = &pl->lay;
 
     /* Extents: x over every panel, y per panel, colour over all. */
     for (size_t p = 0; p < np; p++) {
@@ -480,8 +542,9 @@ int dfle_gp_figure(const char *path, const dfle_gp_frame *fr, const dfle_plot_op
     /* Layout without outside legends, then where the legends go (inside
      * where no data are; one panel's legend below the frame when every
      * inside place would hide data), then the layout with them. */
-    memset(&lay, 0, sizeof lay);
-    compute_layout(&lay, fr, o, xl, P, np, ya, ca, any_c, weights, gap);
+    memset(lay, 0, sizeof *lay);
+    lay->box = box != NULL ? *box : (dfle_gp_box){0, 0, fr->w_pt, fr->h_pt};
+    compute_layout(lay, fr, o, xl, P, np, ya, ca, any_c, weights, gap);
     for (size_t p = 0; p < np; p++) {
         double kw, kh, em;
         size_t entries, hits;
@@ -490,7 +553,7 @@ int dfle_gp_figure(const char *path, const dfle_gp_frame *fr, const dfle_plot_op
         if (key_where[p] == DFLE_LEGEND_BELOW && have_below)
             key_where[p] = DFLE_LEGEND_AUTO; /* one legend fits below */
         if (key_where[p] == DFLE_LEGEND_AUTO) {
-            double fw = lay.fx1 - lay.fx0, fh = panel_h(&lay, P, np, p, weights, gap);
+            double fw = lay->fx1 - lay->fx0, fh = panel_h(lay, P, np, p, weights, gap);
             key_where[p] = kw > 0.9 * fw || kh > 0.9 * fh
                                ? DFLE_LEGEND_BELOW
                                : best_place(&P[p], xa, &ya[p], logc, kw / fw, kh / fh, &hits);
@@ -502,85 +565,121 @@ int dfle_gp_figure(const char *path, const dfle_gp_frame *fr, const dfle_plot_op
         if (key_where[p] == DFLE_LEGEND_BELOW) {
             /* rows of columns as wide as the widest entry */
             double colw = (KEY_SAMPLE + KEY_GAP + em + KEY_COLGAP) * fs;
-            double cols = fmax(1, fmin((double)entries, floor((fr->w_pt - fs) / colw)));
-            lay.key_cols = (int)cols;
-            lay.key_below = ceil((double)entries / cols) * KEY_ROW * fs + 0.5 * fs;
+            double cols = fmax(1, fmin((double)entries,
+                                       floor((lay->box.x1 - lay->box.x0 - fs) / colw)));
+            lay->key_cols = (int)cols;
+            lay->key_below = ceil((double)entries / cols) * KEY_ROW * fs + 0.5 * fs;
             have_below = 1;
         }
         if (key_where[p] == DFLE_LEGEND_OUTSIDE_RIGHT)
-            lay.key_right = fmax(lay.key_right, kw - 2 * KEY_PAD * fs + 1.2 * fs);
+            lay->key_right = fmax(lay->key_right, kw - 2 * KEY_PAD * fs + 1.2 * fs);
     }
-    if (lay.key_below > 0 || lay.key_right > 0)
-        compute_layout(&lay, fr, o, xl, P, np, ya, ca, any_c, weights, gap);
-    if (lay.fx1 - lay.fx0 < 4 * fs || panel_h(&lay, P, np, 0, weights, gap) < 3 * fs) {
+    if (lay->key_below > 0 || lay->key_right > 0)
+        compute_layout(lay, fr, o, xl, P, np, ya, ca, any_c, weights, gap);
+    if (lay->fx1 - lay->fx0 < 4 * fs || panel_h(lay, P, np, 0, weights, gap) < 3 * fs) {
         rc = dfle_error_set(err, DFLE_EINVAL, "plot: the page (%.3g x %.3g cm) is too small for "
                             "its labels at a %g pt font", fr->w_pt / 72 * 2.54,
                             fr->h_pt / 72 * 2.54, fs);
         goto done;
     }
-    dfle_gp_axis_ticks(xa, lay.fx1 - lay.fx0, fs, 0, &o->x);
-    /* The last x label, centred on the frame's edge, must fit. */
-    if (xa->n > 0 && !any_c)
-        lay.fx1 = fmin(lay.fx1, fr->w_pt - lay.key_right -
-                       0.5 * dfle_gp_text_em(xa->lab[xa->n - 1]) * fs - 0.3 * fs);
-
-    if ((rc = dfle_gp_begin_frame(&r, path, fr, err)) < 0)
-        goto done;
-    for (size_t p = 0; p < np; p++)
-        put_blocks(r.f, p, &P[p], xlog, P[p].ylog, logc);
-    if (any_c) {
-        fputs("set palette defined (0 '#440154', 0.25 '#3b528b', 0.5 '#21918c', "
-              "0.75 '#5ec962', 1 '#fde725')\n", r.f);
-        fprintf(r.f, "set colorbox user origin screen %.5f, screen %.5f size screen %.5f, "
-                "screen %.5f front bdefault\n", lay.cb_x / fr->w_pt, lay.bottom / fr->h_pt,
-                1.1 * fs / fr->w_pt, (lay.top - lay.bottom) / fr->h_pt);
-        ca->nminor = 0; /* a colour box reads by its labelled ticks */
-        dfle_gp_axis_put(r.f, "cb", ca, 1);
-    } else {
-        fputs("unset colorbox\n", r.f);
+    pl->fr = fr, pl->o = o, pl->P = P, pl->np = np, pl->xlog = xlog, pl->logc = logc;
+    pl->any_c = any_c, pl->xl = xl, pl->weights = weights, pl->gap = gap;
+    x_ticks(pl);
+done:
+    if (rc < 0) {
+        dfle_gp_plan_free(pl);
+        return rc;
     }
-    fputs("unset key\n", r.f); /* the legend is drawn by put_legend */
-    if (np > 1)
-        fputs("set multiplot\n", r.f);
+    *out = pl;
+    return DFLE_OK;
+}
+
+void dfle_gp_plan_frame(const dfle_gp_plan *pl, size_t p, double frame[4])
+{
+    double t = pl->lay.top;
+    for (size_t q = 0; q < p; q++)
+        t -= panel_h(&pl->lay, pl->P, pl->np, q, pl->weights, pl->gap) + pl->gap;
+    frame[0] = pl->lay.fx0, frame[1] = t - panel_h(&pl->lay, pl->P, pl->np, p, pl->weights,
+                                                   pl->gap);
+    frame[2] = pl->lay.fx1, frame[3] = t;
+}
+
+void dfle_gp_plan_put(FILE *f, const dfle_gp_plan *pl, int cell, int in_multiplot)
+{
+    const dfle_gp_frame *fr = pl->fr;
+    const dfle_plot_opts *o = pl->o;
+    const layout *lay = &pl->lay;
+    const double fs = fr->font_pt;
+    dfle_gp_panel *P = pl->P;
+    const size_t np = pl->np;
+    char pre[16];
+    snprintf(pre, sizeof pre, "c%d", cell);
+    for (size_t p = 0; p < np; p++)
+        put_blocks(f, pre, p, &P[p], pl->xlog, P[p].ylog, pl->logc);
+    if (pl->any_c) {
+        fputs("set palette defined (0 '#440154', 0.25 '#3b528b', 0.5 '#21918c', "
+              "0.75 '#5ec962', 1 '#fde725')\n", f);
+        fprintf(f, "set colorbox user origin screen %.5f, screen %.5f size screen %.5f, "
+                "screen %.5f front bdefault\n", lay->cb_x / fr->w_pt, lay->bottom / fr->h_pt,
+                1.1 * fs / fr->w_pt, (lay->top - lay->bottom) / fr->h_pt);
+        pl->ca->nminor = 0; /* a colour box reads by its labelled ticks */
+        dfle_gp_axis_put(f, "cb", pl->ca, 1);
+    } else {
+        fputs("unset colorbox\n", f);
+    }
+    fputs("unset key\n", f); /* the legend is drawn by put_legend */
+    if (np > 1 && !in_multiplot)
+        fputs("set multiplot\n", f);
     {
-        double t = lay.top;
+        double t = lay->top;
         for (size_t p = 0; p < np; p++) {
-            double h = panel_h(&lay, P, np, p, weights, gap);
+            double h = panel_h(lay, P, np, p, pl->weights, pl->gap);
             const char *yl = P[p].y != NULL && P[p].y->label != NULL ? P[p].y->label
                                                                       : P[p].ylabel;
-            fprintf(r.f, "set lmargin at screen %.5f\nset rmargin at screen %.5f\n"
+            fprintf(f, "set lmargin at screen %.5f\nset rmargin at screen %.5f\n"
                     "set tmargin at screen %.5f\nset bmargin at screen %.5f\n",
-                    lay.fx0 / fr->w_pt, lay.fx1 / fr->w_pt, t / fr->h_pt, (t - h) / fr->h_pt);
-            dfle_gp_axis_put(r.f, "x", xa, p == np - 1);
-            dfle_gp_axis_put(r.f, "y", &ya[p], 1);
-            fprintf(r.f, "set grid xtics ytics%s%s back ls 81, ls 82\n",
-                    xlog ? " mxtics" : "", ya[p].log ? " mytics" : "");
+                    lay->fx0 / fr->w_pt, lay->fx1 / fr->w_pt, t / fr->h_pt, (t - h) / fr->h_pt);
+            dfle_gp_axis_put(f, "x", pl->xa, p == np - 1);
+            dfle_gp_axis_put(f, "y", &pl->ya[p], 1);
+            fprintf(f, "set grid xtics ytics%s%s back ls 81, ls 82\n",
+                    pl->xlog ? " mxtics" : "", pl->ya[p].log ? " mytics" : "");
             /* The page's labels go with the first panel drawn (title,
              * colour box) or the last (x), each panel its own y. */
             if (p == 0 && o->title != NULL)
-                put_page_label(r.f, 100, o->title, (lay.fx0 + lay.fx1) / 2,
-                               fr->h_pt - 1.25 * fs, 0, fr);
-            if (p == 0 && any_c)
-                put_page_label(r.f, 103, o->c.label, fr->w_pt - 0.9 * fs,
-                               (lay.top + lay.bottom) / 2, 90, fr);
+                put_page_label(f, 100, o->title, (lay->fx0 + lay->fx1) / 2,
+                               lay->box.y1 - 1.25 * fs, 0, fr);
+            if (p == 0 && pl->any_c)
+                put_page_label(f, 103, o->c.label, lay->box.x1 - 0.9 * fs,
+                               (lay->top + lay->bottom) / 2, 90, fr);
             if (p == np - 1)
-                put_page_label(r.f, 101, xl, (lay.fx0 + lay.fx1) / 2,
-                               lay.key_below + 0.95 * fs, 0, fr);
-            put_page_label(r.f, 102, yl, 1.1 * fs, t - h / 2, 90, fr);
-            put_legend(r.f, &P[p], key_where[p], &lay, t - h, t, fr);
+                put_page_label(f, 101, pl->xl, (lay->fx0 + lay->fx1) / 2,
+                               lay->box.y0 + lay->key_below + 0.95 * fs, 0, fr);
+            put_page_label(f, 102, yl, lay->box.x0 + 1.1 * fs, t - h / 2, 90, fr);
+            put_legend(f, &P[p], pl->key_where[p], lay, t - h, t, fr);
             if (P[p].extra != NULL)
-                fputs(P[p].extra, r.f);
-            put_plot(r.f, p, &P[p]);
-            fputs("unset label\nunset arrow\nunset object\n", r.f);
-            t -= h + gap;
+                fputs(P[p].extra, f);
+            put_plot(f, pre, p, &P[p]);
+            fputs("unset label\nunset arrow\nunset object\n", f);
+            t -= h + pl->gap;
         }
     }
-    if (np > 1)
-        fputs("unset multiplot\n", r.f);
-    rc = dfle_gp_end(&r, err);
-done:
-    free(xa);
-    free(ya);
-    free(ca);
+    if (np > 1 && !in_multiplot)
+        fputs("unset multiplot\n", f);
+}
+
+int dfle_gp_figure(const char *path, const dfle_gp_frame *fr, const dfle_plot_opts *opts,
+                   int xlog, const char *xlabel, dfle_gp_panel *P, size_t np,
+                   dfle_error *err)
+{
+    dfle_gp_plan *pl;
+    dfle_gp_run r;
+    int rc = dfle_gp_plan_new(path, fr, NULL, opts, xlog, xlabel, P, np, &pl, err);
+    if (rc < 0)
+        return rc;
+    if ((rc = dfle_gp_begin_frame(&r, path, fr, err)) == DFLE_OK) {
+        dfle_gp_plan_put(r.f, pl, 0, 0);
+        rc = dfle_gp_end(&r, err);
+    }
+    dfle_gp_plan_free(pl);
     return rc;
 }

@@ -6,7 +6,8 @@
  *   plot_axes.c   ranges, ticks whose labels do not touch, numbers;
  *   plot_frame.c  layers of data, the legend's place, colour box, the
  *                 single- and multi-panel figures;
- *   plot.c        the figures: x-y, panels, slope-area, profile, map;
+ *   plot.c        the figures: x-y, panels, slope-area, profile;
+ *   plot_map.c    maps (plot_crs.c names their CRS through GDAL);
  *   plot_corner.c the corner plot; plot_sheet.c the contact sheet.
  *
  * A figure is one gnuplot run: dfle_gp_begin_frame starts gnuplot
@@ -25,6 +26,7 @@
 #include <signal.h>
 #include <stdio.h>
 #include <stdlib.h>
+#include <sys/types.h>
 
 #include "dfle/error.h"
 #include "dfle/file.h"
@@ -57,7 +59,8 @@ typedef struct dfle_gp_frame {
 /* One gnuplot run.  SIGPIPE is blocked for this thread while we write, so
  * a gnuplot that is missing or dies early gives EPIPE, not a dead caller. */
 typedef struct dfle_gp_run {
-    FILE *f;
+    FILE *f;              /* the script, to gnuplot's standard input */
+    pid_t pid;            /* gnuplot's process */
     const char *prog, *out;
     const char *write_to; /* where gnuplot writes: a temporary file beside out */
     dfle_file file;       /* renamed over out once the image is checked */
@@ -78,9 +81,6 @@ void dfle_gp_str(FILE *f, const char *s);
 /* Start gnuplot on the page fr. */
 int dfle_gp_begin_frame(dfle_gp_run *r, const char *path, const dfle_gp_frame *fr,
                         dfle_error *err);
-/* The same for a page of w x h pixels (a map sized to its grid), drawn
- * at 96 dpi with a 12 pt font. */
-int dfle_gp_begin(dfle_gp_run *r, const char *path, int fmt, int w, int h, dfle_error *err);
 int dfle_gp_end(dfle_gp_run *r, dfle_error *err);
 
 /* --- plot_opts.c --- */
@@ -161,6 +161,14 @@ const char *dfle_gp_axis_label(const dfle_gp_axis *a, const char *label, char *b
 void dfle_gp_axis_put(FILE *f, const char *name, const dfle_gp_axis *a, int labels);
 
 
+/* --- plot_crs.c --- */
+
+/* The EPSG code ("EPSG:32611", or "" when there is none) and name of a
+ * map's CRS (NULL or "": none, both ""); DFLE_EINVAL for a CRS GDAL
+ * cannot read or one not projected in metres. */
+int dfle_gp_crs_names(const char *crs, char *code, size_t ccap, char *name, size_t ncap,
+                      dfle_error *err);
+
 /* --- plot_frame.c --- */
 
 /* One thing drawn from n rows (x, y), optionally with error-bar ends
@@ -196,6 +204,45 @@ typedef struct dfle_gp_panel {
  * rot degrees, as gnuplot label `tag`; enhanced text unless plain. */
 void dfle_gp_page_label(FILE *f, int tag, const char *text, double x, double y, double rot,
                         int plain, const dfle_gp_frame *fr);
+
+/* A figure's part of the page [pt from the bottom left]: figures side
+ * by side share one page and one gnuplot run. */
+typedef struct dfle_gp_box {
+    double x0, y0, x1, y1;
+} dfle_gp_box;
+
+/* A figure laid out (ranges, ticks, margins, legends) before gnuplot
+ * starts: np panels over one x axis in `box` (NULL: the whole page), as
+ * dfle_gp_figure draws them.  P and opts must outlive the plan. */
+typedef struct dfle_gp_plan dfle_gp_plan;
+int dfle_gp_plan_new(const char *path, const dfle_gp_frame *fr, const dfle_gp_box *box,
+                     const dfle_plot_opts *opts, int xlog, const char *xlabel, dfle_gp_panel *P,
+                     size_t np, dfle_gp_plan **out, dfle_error *err);
+/* Write the plan's script to a run; `cell` names its data blocks (each
+ * figure on a page its own), in_multiplot: the caller set multiplot. */
+void dfle_gp_plan_put(FILE *f, const dfle_gp_plan *pl, int cell, int in_multiplot);
+/* The room below the frame a plan keeps for its legend [pt], and more
+ * of it (figures side by side with frames of one height). */
+double dfle_gp_plan_key_below(const dfle_gp_plan *pl);
+void dfle_gp_plan_set_key_below(dfle_gp_plan *pl, double key_below);
+/* Panel p's frame on the page: left, bottom, right, top [pt]. */
+void dfle_gp_plan_frame(const dfle_gp_plan *pl, size_t p, double frame[4]);
+void dfle_gp_plan_free(dfle_gp_plan *pl);
+
+/* --- plot.c --- */
+
+/* The slope-area panel of dfle_plot_slope_area (data, bins, Eq. 2 and
+ * A_df), built in sp, which holds what its layers point at. */
+enum { DFLE_GP_FIT_SAMPLES = 200 };
+typedef struct dfle_gp_sa_panel {
+    dfle_gp_panel panel;
+    dfle_gp_layer L[4];
+    double fa[DFLE_GP_FIT_SAMPLES], fs[DFLE_GP_FIT_SAMPLES], mark_a, mark_s;
+    char ftitle[320], mtitle[96], extra[200];
+} dfle_gp_sa_panel;
+int dfle_gp_slope_area_panel(dfle_gp_sa_panel *sp, const dfle_gp_frame *fr, const char *path,
+                             size_t n, const double *A, const double *S, const dfle_bins *bins,
+                             const dfle_eq2_fit *fit, const dfle_plot_axis *y, dfle_error *err);
 
 /* A whole figure: np panels over one x axis (opts->x; xlog and xlabel
  * when it says nothing), a colour box for layers coloured by value,

@@ -15,9 +15,12 @@
  * and no backslash processing.  A relative output path gets a "./" prefix
  * so that gnuplot cannot read a leading '|' as "pipe to a command" or a
  * leading '~' as the home directory.  The program named by DFLE_GNUPLOT
- * is single-quoted for /bin/sh.  gnuplot's stdout and stderr go to a
- * temporary file whose first lines end up in the error message, so the
- * library never writes to the user's terminal.
+ * is started directly (posix_spawnp, no shell between): its standard
+ * input is the script's pipe, its stdout and stderr a temporary file
+ * whose first lines end up in the error message, so the library never
+ * writes to the user's terminal.  A shell there (popen) cost descriptors
+ * of its own: dash saves every descriptor it redirects above 10, so
+ * with ulimit -n 12 or less the plot failed with "Too many open files".
  *
  * One page, three formats: the terminal line scales fonts, lines and
  * points so that a figure of a given size in cm looks the same as PNG,
@@ -33,6 +36,7 @@
 #include <fcntl.h>
 #include <math.h>
 #include <signal.h>
+#include <spawn.h>
 #include <stdio.h>
 #include <stdlib.h>
 #include <string.h>
@@ -79,16 +83,47 @@ void dfle_gp_str(FILE *f, const char *s)
     fputc('\'', f);
 }
 
-/* Append s, single-quoted for /bin/sh (' becomes '\''), to dst. */
-static void sh_quote(char *dst, const char *s)
+extern char **environ;
+
+/* Start prog with its standard input the write end of a pipe (into
+ * *to) and stdout and stderr going to errfd; 0 or an errno. */
+static int spawn_gnuplot(const char *prog, int errfd, FILE **to, pid_t *pid)
 {
-    dst += strlen(dst);
-    *dst++ = '\'';
-    for (; *s != '\0'; s++) {
-        if (*s == '\'') { memcpy(dst, "'\\''", 4); dst += 4; }
-        else *dst++ = *s;
+    posix_spawn_file_actions_t fa;
+    char *argv[2] = {(char *)prog, NULL};
+    int fd[2], rc;
+    if (pipe(fd) != 0)
+        return errno;
+    /* Ours only: gnuplot must not hold the write end (it would never
+     * see the end of its script), nor any other of them. */
+    fcntl(fd[1], F_SETFD, FD_CLOEXEC);
+    if ((rc = posix_spawn_file_actions_init(&fa)) != 0) {
+        close(fd[0]);
+        close(fd[1]);
+        return rc;
     }
-    strcpy(dst, "'");
+    rc = posix_spawn_file_actions_adddup2(&fa, fd[0], 0);
+    if (rc == 0)
+        rc = posix_spawn_file_actions_adddup2(&fa, errfd, 1);
+    if (rc == 0)
+        rc = posix_spawn_file_actions_adddup2(&fa, errfd, 2);
+    if (rc == 0 && fd[0] > 2)
+        rc = posix_spawn_file_actions_addclose(&fa, fd[0]);
+    if (rc == 0 && errfd > 2)
+        rc = posix_spawn_file_actions_addclose(&fa, errfd);
+    if (rc == 0)
+        rc = posix_spawnp(pid, prog, &fa, NULL, argv, environ);
+    posix_spawn_file_actions_destroy(&fa);
+    close(fd[0]);
+    if (rc == 0 && (*to = fdopen(fd[1], "w")) == NULL) {
+        rc = errno;
+        close(fd[1]);
+        waitpid(*pid, NULL, 0);
+        return rc;
+    }
+    if (rc != 0)
+        close(fd[1]);
+    return rc;
 }
 
 /* The terminal for page fr.  The three terminals measure differently
@@ -154,18 +189,17 @@ static int begin(dfle_gp_run *r, const char *path, const dfle_gp_frame *fr, doub
      * path is a clear DFLE_EIO now, and a failure later (a full disk, a
      * size limit, a kill) leaves any old image as it was. */
     rc = dfle_file_begin_external(&r->file, path, "plot", &r->write_to, err);
-    char *cmd = malloc(4 * strlen(r->prog) + 64);
-    if (rc == DFLE_OK && cmd == NULL) {
-        rc = dfle_error_set(err, DFLE_ENOMEM, "plot: out of memory");
-    } else if (rc == DFLE_OK) {
+    if (rc == DFLE_OK) {
         sigset_t pend;
-        cmd[0] = '\0';
-        sh_quote(cmd, r->prog);
-        snprintf(cmd + strlen(cmd), 64, " 2>&%d 1>&2", r->errfd);
-        if ((r->f = popen(cmd, "w")) == NULL) {
+        int e = spawn_gnuplot(r->prog, r->errfd, &r->f, &r->pid);
+        if (e == ENOENT || e == EACCES || e == ENOEXEC || e == ENOTDIR) {
+            rc = dfle_error_set(err, DFLE_EEXTERNAL, "plot: gnuplot could not be run ('%s': "
+                                "%s); install it (apt-get install gnuplot-nox) or set "
+                                "DFLE_GNUPLOT to the gnuplot program", r->prog, strerror(e));
+        } else if (e != 0) {
             rc = dfle_error_set(err, DFLE_EEXTERNAL, "plot: gnuplot could not "
-                                "be run ('%s'): %s", r->prog, strerror(errno));
-        } else { /* after popen, so gnuplot keeps the caller's mask */
+                                "be run ('%s'): %s", r->prog, strerror(e));
+        } else { /* after the spawn, so gnuplot keeps the caller's mask */
             sigemptyset(&r->pipeset);
             sigaddset(&r->pipeset, SIGPIPE);
             pthread_sigmask(SIG_BLOCK, &r->pipeset, &r->oldmask);
@@ -173,7 +207,6 @@ static int begin(dfle_gp_run *r, const char *path, const dfle_gp_frame *fr, doub
                               sigismember(&pend, SIGPIPE);
         }
     }
-    free(cmd);
     if (rc < 0) {
         dfle_file_abort(&r->file);
         close(r->errfd);
@@ -194,14 +227,6 @@ int dfle_gp_begin_frame(dfle_gp_run *r, const char *path, const dfle_gp_frame *f
                         dfle_error *err)
 {
     return begin(r, path, fr, 1.0, err);
-}
-
-int dfle_gp_begin(dfle_gp_run *r, const char *path, int fmt, int w, int h, dfle_error *err)
-{
-    /* 96 dpi and a 12 pt font: the look these pages were designed in
-     * (lines 1.8 times the house width, as they were). */
-    dfle_gp_frame fr = {fmt, w * 0.75, h * 0.75, 96.0, "sans", 12.0};
-    return begin(r, path, &fr, 1.8, err);
 }
 
 /* Up to two meaningful lines of what gnuplot (or sh) said, on one line:
@@ -321,8 +346,15 @@ int dfle_gp_end(dfle_gp_run *r, dfle_error *err)
     struct stat sb;
     int rc = DFLE_OK;
     fputs("unset output\n", r->f);
-    int werr = fflush(r->f) != 0 || ferror(r->f);
-    int st = pclose(r->f), perr = errno;
+    int werr = fflush(r->f) != 0 || ferror(r->f), st = 0, perr = 0;
+    fclose(r->f); /* gnuplot sees the end of its script */
+    while (waitpid(r->pid, &st, 0) < 0) {
+        if (errno != EINTR) {
+            st = -1;
+            perr = errno;
+            break;
+        }
+    }
     sigset_t pend;
     if (!r->pipe_pending && sigpending(&pend) == 0 &&
         sigismember(&pend, SIGPIPE)) { /* eat the SIGPIPE we caused */
@@ -333,17 +365,19 @@ int dfle_gp_end(dfle_gp_run *r, dfle_error *err)
     err_text(r->errfd, msg, sizeof msg);
     close(r->errfd);
 
-    /* sh reports a program it cannot run as 126 or 127, and one killed
-     * by signal n as 128 + n (a size limit is SIGXFSZ, not a missing
-     * gnuplot). */
+    /* A wrapper script reports a program it cannot run as 126 or 127,
+     * and one killed by signal n as 128 + n (a size limit is SIGXFSZ,
+     * not a missing gnuplot). */
     if (st == -1)
         rc = dfle_error_set(err, DFLE_EEXTERNAL, "plot: could not wait for "
                             "gnuplot ('%s'): %s", r->prog, strerror(perr));
     else if (WIFEXITED(st) && (WEXITSTATUS(st) == 126 || WEXITSTATUS(st) == 127))
+        /* (also a spawn whose exec failed in the child, as under
+         * valgrind, which reports it by status 127) */
         rc = dfle_error_set(err, DFLE_EEXTERNAL, "plot: gnuplot could not be "
-                            "run (%s); install it (apt-get install "
+                            "run ('%s': %s); install it (apt-get install "
                             "gnuplot-nox) or set DFLE_GNUPLOT to the gnuplot "
-                            "program", msg);
+                            "program", r->prog, msg);
     else if (WIFSIGNALED(st) || (WIFEXITED(st) && WEXITSTATUS(st) > 128))
         rc = dfle_error_set(err, DFLE_EEXTERNAL, "plot: gnuplot ('%s') was "
                             "killed by signal %d (%s) making '%s'", r->prog,

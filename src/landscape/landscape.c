@@ -22,6 +22,8 @@ void dfle_landscape_opts_default(dfle_landscape_opts *o)
 {
     memset(o, 0, sizeof *o);
     o->dx = o->dy = 30.0;
+    o->x0 = 0.0;
+    o->y0 = NAN; /* ny dy: the south edge at y = 0 */
     for (int s = 0; s < 4; s++)
         o->edge[s] = DFLE_DRAINAGE_BASE_LEVEL;
     o->nodata = DFLE_DRAINAGE_OPEN;
@@ -42,6 +44,22 @@ void dfle_landscape_opts_default(dfle_landscape_opts *o)
 /* Fields in space and time                                         */
 /* ---------------------------------------------------------------- */
 
+void ls_cell_centre(const dfle_landscape *ls, size_t c, double *x, double *y)
+{
+    *x = ls->o.x0 + ((double)(c % ls->nx) + 0.5) * ls->o.dx;
+    *y = ls->o.y0 - ((double)(c / ls->nx) + 0.5) * ls->o.dy;
+}
+
+void ls_cell_name(const dfle_landscape *ls, size_t c, char *buf, size_t cap)
+{
+    double x, y;
+    ls_cell_centre(ls, c, &x, &y);
+    snprintf(buf, cap, "row %zu, column %zu (x = %.10g m, y = %.10g m)", c / ls->nx + 1,
+             c % ls->nx + 1, x, y);
+}
+
+/* Every data cell's value: finite and in range, else the cell named, as
+ * a number option would be (a raster's NoData, NaN, is no uplift). */
 static int check_field(const dfle_landscape *ls, const ls_field *f, dfle_error *err)
 {
     for (size_t c = 0; c < ls->n; c++) {
@@ -50,13 +68,18 @@ static int check_field(const dfle_landscape *ls, const ls_field *f, dfle_error *
             continue;
         v = ls_value(f, c);
         if (!(isfinite(v) && (f->strict ? v > f->lo : v >= f->lo))) {
-            char when[64] = "";
+            char when[64] = "", cell[160];
             if (f->fn != NULL) /* a function of time: when it gave it */
                 snprintf(when, sizeof when, " at t = %g yr", ls->time);
+            if (f->grid == NULL)
+                return dfle_error_set(err, DFLE_EINVAL, "landscape: %s is %g; it must be "
+                                      "finite and %s %g", f->name, v * f->show_scale,
+                                      f->strict ? ">" : ">=", f->lo);
+            ls_cell_name(ls, c, cell, sizeof cell);
             return dfle_error_set(err, DFLE_EINVAL,
-                                  "landscape: %s is %g at cell %zu (row %zu, column %zu)%s; it "
-                                  "must be finite and %s %g", f->name, v, c, c / ls->nx,
-                                  c % ls->nx, when, f->strict ? ">" : ">=", f->lo);
+                                  "landscape: %s is %g at %s, a data cell%s; it must be finite "
+                                  "and %s %g there", f->name, v * f->show_scale, cell, when,
+                                  f->strict ? ">" : ">=", f->lo);
         }
         if (f->grid == NULL)
             break; /* uniform: one check does */
@@ -67,7 +90,8 @@ static int check_field(const dfle_landscape *ls, const ls_field *f, dfle_error *
 static int init_field(dfle_landscape *ls, ls_field *f, const dfle_landscape_field *src,
                       const char *name, double lo, int strict, dfle_error *err)
 {
-    f->name = name;
+    f->name = src->name != NULL ? src->name : name;
+    f->show_scale = src->show_scale != 0 ? src->show_scale : 1.0;
     f->lo = lo;
     f->strict = strict;
     f->value = src->value;
@@ -78,8 +102,10 @@ static int init_field(dfle_landscape *ls, ls_field *f, const dfle_landscape_fiel
         return check_field(ls, f, err);
     if ((f->grid = malloc(ls->n * sizeof *f->grid)) == NULL)
         return dfle_error_set(err, DFLE_ENOMEM, "landscape: out of memory for %s", name);
-    if (src->grid != NULL)
+    if (src->grid != NULL) {
         memcpy(f->grid, src->grid, ls->n * sizeof *f->grid);
+        return check_field(ls, f, err);
+    }
     return DFLE_OK;
 }
 
@@ -239,6 +265,9 @@ int dfle_landscape_new(const dfle_landscape_opts *o, dfle_landscape **out, dfle_
         return dfle_error_set(err, DFLE_EINVAL, "landscape: options are required");
     if ((st = check_opts(o, err)) != DFLE_OK)
         return st;
+    /* Before anything is allocated (landscape_memory.c). */
+    if ((st = dfle_landscape_check_grid(o, 0, err)) != DFLE_OK)
+        return st;
     dfle_drainage_opts_default(&dro);
     dro.nx = o->nx;
     dro.ny = o->ny;
@@ -253,6 +282,8 @@ int dfle_landscape_new(const dfle_landscape_opts *o, dfle_landscape **out, dfle_
         return dfle_error_set(err, DFLE_ENOMEM, "landscape: out of memory");
     ls->o = *o;
     ls->o.z = NULL;
+    if (isnan(ls->o.y0))
+        ls->o.y0 = (double)o->ny * o->dy;
     ls->o.outlets = NULL;
     if ((st = dfle_drainage_new(&dro, &ls->dr, err)) != DFLE_OK)
         goto fail;
@@ -289,6 +320,15 @@ int dfle_landscape_new(const dfle_landscape_opts *o, dfle_landscape **out, dfle_
     if (ls->n_data < 2) {
         st = dfle_error_set(err, DFLE_EINVAL, "landscape: the grid has %zu data cells; need at "
                             "least 2", ls->n_data);
+        goto fail;
+    }
+    /* No cell drains more than the grid: such an A0 leaves no channel,
+     * and a run would call the bare hillslopes steady. */
+    if (o->A0 > (double)ls->n_data * ls->cell_area) {
+        st = dfle_error_set(err, DFLE_EINVAL, "landscape: A0 = %g m^2 (the channel-head area) "
+                            "is more than the grid's %zu data cells drain (%g m^2): no cell "
+                            "could be a channel", o->A0, ls->n_data,
+                            (double)ls->n_data * ls->cell_area);
         goto fail;
     }
     if (o->fluvial != NULL) {
@@ -336,8 +376,11 @@ int dfle_landscape_set_z(dfle_landscape *ls, const double *z, dfle_error *err)
     ls->routed = 0;
     ls->model_z_current = 0;
     ls->have_rates = 0;
+    ls->evolved = 1;
     return DFLE_OK;
 }
+
+int dfle_landscape_has_run(const dfle_landscape *ls) { return ls->evolved; }
 
 size_t dfle_landscape_memory(const dfle_landscape *ls)
 {
@@ -347,17 +390,8 @@ size_t dfle_landscape_memory(const dfle_landscape *ls)
     b += (ls->U.grid != NULL) * ls->n * sizeof(double);
     b += (ls->K_scale.grid != NULL) * ls->n * sizeof(double);
     b += (ls->df_scale.grid != NULL) * ls->n * sizeof(double);
-    if (ls->model != NULL) {
-        const size_t nd = ls->n_data;
-        /* The model's arrays (13 doubles, 2 indices, two flows, its
-         * gathered views: model.c) and the network's (7 indices, 4
-         * doubles, 2 bytes), and the shape scratch here. */
-        b += nd * (13 * sizeof(double) + 2 * sizeof(size_t) + 2 * DFLE_FLOW_ARRAYS * sizeof(double)
-                   + (5 + DFLE_FLOW_ARRAYS) * sizeof(double));
-        b += nd * (7 * sizeof(size_t) + 4 * sizeof(double) + 2);
-        b += ls->n * sizeof *ls->node_of + nd * (sizeof *ls->cell_of + 2 * sizeof(size_t) +
-                                                 5 * sizeof(double) + 2);
-    }
+    if (ls->model != NULL)
+        b += (size_t)ls_model_bytes(ls->n, ls->n_data);
     return b;
 }
 
@@ -437,9 +471,21 @@ int ls_route(dfle_landscape *ls, dfle_error *err)
     if ((st = dfle_drainage_route(ls->dr, ls->z, err)) != DFLE_OK)
         return st;
     rcv = dfle_drainage_receivers(ls->dr);
-    for (size_t c = 0; c < ls->n; c++) {
-        changes += rcv[c] != ls->rcv_prev[c];
-        ls->rcv_prev[c] = rcv[c];
+    {
+        /* The receivers' hash, to tell a network that returns to an
+         * earlier routing (it cycles) from one still settling. */
+        uint64_t h = 0xcbf29ce484222325ull;
+        for (size_t c = 0; c < ls->n; c++) {
+            changes += rcv[c] != ls->rcv_prev[c];
+            ls->rcv_prev[c] = rcv[c];
+            h = (h ^ rcv[c]) * 0x100000001b3ull;
+        }
+        ls->rcv_repeat = 0;
+        for (size_t k = 0; changes > 0 && k < ls->rcv_hashes; k++)
+            ls->rcv_repeat |= ls->rcv_hash[k] == h;
+        memmove(ls->rcv_hash + 1, ls->rcv_hash, (LS_RCV_HISTORY - 1) * sizeof *ls->rcv_hash);
+        ls->rcv_hash[0] = h;
+        ls->rcv_hashes += ls->rcv_hashes < LS_RCV_HISTORY;
     }
     ls->rcv_changes = changes;
     ls->stable = (double)changes <= floor(ls->rcv_tol * (double)ls->n_data) ? ls->stable + 1 : 0;

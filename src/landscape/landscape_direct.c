@@ -246,6 +246,7 @@ int ls_direct_round(dfle_landscape *ls, dfle_error *err)
     ls->routed = 0;
     ls->model_z_current = 0;
     ls->have_rates = 0;
+    ls->evolved = 1;
     if (st == DFLE_OK && ls->o.hillslope == DFLE_HILLSLOPE_DIFFUSION) {
         /* The hillslopes between the channels just built. */
         ls->routed = 1; /* the receivers are those of this round */

@@ -10,8 +10,13 @@
  *   landscape_direct.c one round of the direct steady state (channels
  *                      from the heads down, threshold hillslopes as the
  *                      lowest caps over the channels);
- *   landscape_run.c    runs: transients, steady states (the criterion,
- *                      implicit stepping, the direct method's rounds).
+ *   landscape_steady.c what steady means: |dz/dt|/U on channel and
+ *                      hillslope cells, the volume balance, the
+ *                      criterion in words, the fixed-point check;
+ *   landscape_run.c    runs: the options, time steps weighed against
+ *                      the time asked, the solvers' stepping loop for
+ *                      implicit and explicit steps, the direct rounds;
+ *   landscape_memory.c what a grid needs and what the process may have.
  *
  * Memory per cell is the constraint (a 2000^2 grid is 4e6 cells): the
  * state is z (8 bytes), the receivers of the last routing (4, to count
@@ -96,9 +101,21 @@ typedef struct ls_field {
     void *ud;
     int varies;
     const char *name;          /* for messages: "U", "K_scale", ... */
+    double show_scale;         /* messages show value * show_scale  */
     double lo;                 /* values must be >= lo (U: > 0)     */
     int strict;                /* 1: > lo                            */
 } ls_field;
+
+/* How a state is judged (doc/landscape.md, "What steady means"). */
+typedef struct ls_judge {
+    double tol;                /* |dz/dt| <= tol U                  */
+    double channel_quantile;   /* ... on this fraction of channel cells */
+    double hillslope_quantile; /* ... and of hillslope cells        */
+} ls_judge;
+
+/* Routings whose receivers are remembered (by a hash) to tell a
+ * network that cycles from one that still settles. */
+#define LS_RCV_HISTORY 8
 
 static inline double ls_value(const ls_field *f, size_t c)
 {
@@ -121,6 +138,12 @@ struct dfle_landscape {
     uint32_t *rcv_prev;        /* receivers of the previous routing     */
     size_t rcv_changes, stable, routings;
     double rcv_tol;            /* the run's: changes a stable routing allows */
+    uint64_t rcv_hash[LS_RCV_HISTORY]; /* of the last routings' receivers */
+    size_t rcv_hashes;         /* how many of them are set               */
+    int rcv_repeat;            /* the last routing changed receivers back
+                                * to those of one of the last few: the
+                                * network cycles                        */
+    int evolved;               /* dfle_landscape_has_run                */
     float *dzdt;               /* n: dz/dt of the last step [m/yr]      */
     int have_rates;            /* dzdt holds something                  */
 
@@ -146,6 +169,10 @@ struct dfle_landscape {
 /* Route z if it changed since the last routing; count receiver changes;
  * give the debris-flow model the new network. */
 int ls_route(dfle_landscape *ls, dfle_error *err);
+/* "row r, column c (x = .. m, y = .. m)" of cell c, for messages. */
+void ls_cell_name(const dfle_landscape *ls, size_t c, char *buf, size_t cap);
+/* The map coordinates of cell c's centre [m]. */
+void ls_cell_centre(const dfle_landscape *ls, size_t c, double *x, double *y);
 /* Fields in time: refresh those that vary for the landscape's time. */
 int ls_update_fields(dfle_landscape *ls, int first, dfle_error *err);
 /* Copy z into the model and evaluate it (routes the debris flows). */
@@ -159,23 +186,64 @@ double ls_fluvial_rate(const dfle_landscape *ls, size_t c, double A, double S);
 /* Evaluated dz/dt of the current state into ls->dzdt (explicit
  * rates; the residual the direct method is judged by); fills the
  * status's ratios. */
-int ls_evaluate_rates(dfle_landscape *ls, double tol, double quantile,
-                      dfle_landscape_status *st, dfle_error *err);
+int ls_evaluate_rates(dfle_landscape *ls, const ls_judge *j, dfle_landscape_status *st,
+                      dfle_error *err);
 /* One explicit step of at most dt_cap (CFL); *dt receives its length. */
-int ls_explicit_step(dfle_landscape *ls, double dt_cap, double cfl, double tol,
-                     double quantile, double *dt, dfle_landscape_status *st, dfle_error *err);
-/* The status's ratios from ls->dzdt. */
-void ls_ratios(const dfle_landscape *ls, double tol, double quantile, dfle_landscape_status *st);
+int ls_explicit_step(dfle_landscape *ls, double dt_cap, double cfl, const ls_judge *j,
+                     double *dt, dfle_landscape_status *st, dfle_error *err);
 /* Hillslope diffusion, implicit: (z' - z)/dt = D lap(z') on hillslope
  * cells with channel and base cells held; dt = INFINITY solves the
  * steady state D lap(z) = -U with those cells fixed. */
 int ls_diffuse(dfle_landscape *ls, double dt, dfle_error *err);
 /* D lap(z) at data cell c [m/yr], the stencil ls_diffuse solves with. */
 double ls_laplacian(const dfle_landscape *ls, size_t c);
-/* One backward-Euler sweep as dfle_landscape_step, with the quantile. */
-int ls_implicit_step(dfle_landscape *ls, double dt, double tol, double quantile,
+/* One backward-Euler sweep as dfle_landscape_step, judged by j. */
+int ls_implicit_step(dfle_landscape *ls, double dt, const ls_judge *j,
                      dfle_landscape_status *st, dfle_error *err);
+/* DFLE_EINVAL naming `what` (a step, "dt", or "the explicit (CFL)
+ * step") when U dt is below what z resolves: nothing would move (a
+ * transient), or |dz/dt| could not be told from tol U (tol > 0). */
+int ls_check_step(const dfle_landscape *ls, double dt, double tol, const char *what,
+                  dfle_error *err);
 /* The steady state of the current network, node by node (direct). */
 int ls_direct_round(dfle_landscape *ls, dfle_error *err);
+
+/* landscape_steady.c */
+/* The status's ratios (all, channel, hillslope cells) and volume
+ * balance from ls->dzdt, on the current routing's channel mask. */
+void ls_ratios(const dfle_landscape *ls, const ls_judge *j, dfle_landscape_status *st);
+/* 1 when the rates and the volume balance meet the criterion (the
+ * network is the caller's to judge). */
+int ls_rates_met(const ls_judge *j, const dfle_landscape_status *st);
+/* Why a state is not steady, in words (stable_steps: what the network
+ * needed; 0 leaves the network out). */
+void ls_explain(const ls_judge *j, const dfle_landscape_status *st, size_t stable_steps,
+                double rcv_tol, char *buf, size_t cap);
+/* The state a fixed-point check starts from, kept to go back to. */
+typedef struct ls_saved {
+    double *z;
+    uint32_t *rcv_prev;
+    float *dzdt;
+    unsigned char *dir;        /* the routing's, for its hysteresis */
+} ls_saved;
+void ls_saved_free(ls_saved *sv);
+/* The fixed-point check: `steps` implicit steps of dt [yr] from the
+ * current state, each judged by j (the rates and the volume balance);
+ * *passed says whether all met it, *worst has the figures of the step
+ * with the most channel cells above tol U, *taken how many steps were
+ * taken (it stops at the first that fails).  The state is then put back
+ * as it was (z, routing, rates). */
+int ls_verify(dfle_landscape *ls, const ls_judge *j, size_t steps, double dt, ls_saved *sv,
+              int *passed, size_t *taken, dfle_landscape_status *worst, dfle_error *err);
+
+/* landscape_memory.c */
+/* Bytes of the debris-flow model, its network and the landscape's
+ * shape scratch for n cells, n_data of them data. */
+double ls_model_bytes(size_t n, size_t n_data);
+/* Bytes this process can still have: the least of the memory available
+ * (MemAvailable), a cgroup's limit less its use, and ulimit -v and -d
+ * less what the process holds; which one, in words, into what.
+ * SIZE_MAX when nothing is known. */
+size_t ls_memory_available(char *what, size_t cap);
 
 #endif

@@ -48,76 +48,6 @@ static double cpu_seconds(void)
     return (double)t.tv_sec + 1e-9 * (double)t.tv_nsec;
 }
 
-/* The quantile of |dz/dt|/U comes from a histogram over the bits of the
- * ratio as a float: exponent and the top 3 bits of the mantissa, 8 bins
- * an octave (9 % wide), no logarithm per cell.  Ratios below 2^-40 share
- * the first bin, above 2^40 the last. */
-#define Q_SHIFT 20                          /* keep exponent + 3 mantissa bits */
-#define Q_FIRST ((127u - 40u) << 3)         /* 2^-40 */
-#define Q_LAST ((127u + 40u) << 3)          /* 2^40  */
-#define Q_BINS (Q_LAST - Q_FIRST + 2)
-
-static unsigned q_bin(float r)
-{
-    uint32_t bits;
-    unsigned k;
-    memcpy(&bits, &r, sizeof bits);
-    k = bits >> Q_SHIFT; /* r >= 0: no sign bit */
-    return k < Q_FIRST ? 0 : k > Q_LAST ? Q_BINS - 1 : k - Q_FIRST + 1;
-}
-
-/* The upper edge of bin b (b in 1 .. Q_BINS - 2). */
-static double q_edge(unsigned b)
-{
-    uint32_t bits = (uint32_t)(b - 1 + Q_FIRST + 1) << Q_SHIFT;
-    float f;
-    memcpy(&f, &bits, sizeof f);
-    return f;
-}
-
-void ls_ratios(const dfle_landscape *ls, double tol, double quantile, dfle_landscape_status *st)
-{
-    const uint32_t *rcv = dfle_drainage_receivers(ls->dr);
-    size_t hist[Q_BINS], count = 0, above = 0;
-    double sum = 0.0, mx = 0.0;
-    const int uniform = ls->U.grid == NULL;
-
-    memset(hist, 0, sizeof hist);
-    for (size_t c = 0; c < ls->n; c++) {
-        double r;
-        if (rcv[c] == c) /* base levels and NoData */
-            continue;
-        /* Divided, not multiplied by 1/U: a subnormal U (valid, > 0)
-         * has 1/U = inf, and 0 * inf made the mean NaN where nothing
-         * changed.  A ratio that overflows stops at DBL_MAX, as the
-         * model's rate_ratio does (a result scripts print and compare). */
-        r = fabs((double)ls->dzdt[c]) / (uniform ? ls->U.value : ls->U.grid[c]);
-        r = r <= DBL_MAX ? r : DBL_MAX;
-        count++;
-        sum += r;
-        mx = r > mx ? r : mx;
-        above += r > tol;
-        hist[q_bin((float)r)]++;
-    }
-    st->max_ratio = mx;
-    st->mean_ratio = count > 0 ? fmin(sum, DBL_MAX) / (double)count : 0.0; /* (sum may overflow) */
-    st->frac_above = count > 0 ? (double)above / (double)count : 0.0;
-    st->q_ratio = 0.0;
-    if (count > 0) {
-        /* At most one bin (9 %) above the exact value. */
-        size_t want = (size_t)ceil(quantile * (double)count), cum = 0;
-        for (unsigned b = 0; b < Q_BINS; b++) {
-            cum += hist[b];
-            if (cum >= want) {
-                st->q_ratio = b == 0 ? 0.0 : b == Q_BINS - 1 ? mx : q_edge(b);
-                break;
-            }
-        }
-        if (st->q_ratio > mx)
-            st->q_ratio = mx;
-    }
-}
-
 void ls_pow_init(ls_pow *t, double p)
 {
     t->p = p;
@@ -370,7 +300,7 @@ static size_t count_reached(const dfle_landscape *ls)
     return k;
 }
 
-int ls_implicit_step(dfle_landscape *ls, double dt, double tol, double quantile,
+int ls_implicit_step(dfle_landscape *ls, double dt, const ls_judge *j,
                      dfle_landscape_status *st, dfle_error *err)
 {
     const uint32_t *rcv, *stack;
@@ -493,6 +423,7 @@ int ls_implicit_step(dfle_landscape *ls, double dt, double tol, double quantile,
     ls->routed = 0;
     ls->model_z_current = 0;
     ls->have_rates = 1;
+    ls->evolved = 1;
     if (hill == DFLE_HILLSLOPE_DIFFUSION) {
         double before = 0.0, after = 0.0;
         for (size_t c = 0; c < ls->n; c++)
@@ -512,7 +443,7 @@ int ls_implicit_step(dfle_landscape *ls, double dt, double tol, double quantile,
     if (st != NULL) {
         st->route_seconds = t1 - t0;
         st->solve_seconds = cpu_seconds() - t1;
-        ls_ratios(ls, tol, quantile, st);
+        ls_ratios(ls, j, st);
         status_network(ls, st);
         st->reached = reached;
         st->dt = dt;
@@ -525,18 +456,48 @@ int ls_implicit_step(dfle_landscape *ls, double dt, double tol, double quantile,
     return DFLE_OK;
 }
 
+int ls_check_step(const dfle_landscape *ls, double dt, double tol, const char *what,
+                  dfle_error *err)
+{
+    double zmax = 1.0, Umin = INFINITY, ulp, need;
+    for (size_t c = 0; c < ls->n; c++) {
+        if (isnan(ls->z[c]))
+            continue;
+        zmax = fmax(zmax, fabs(ls->z[c]));
+        Umin = fmin(Umin, ls_value(&ls->U, c));
+    }
+    /* z is resolved to about ulp; a step's uplift must be well above it
+     * (a transient: 64 ulp, so that it carries more than a digit or
+     * two), and for a steady run |dz/dt| = change / dt must resolve
+     * tol U (an error of 16 ulp in the change is 1/16 of tol U dt). */
+    ulp = zmax * DBL_EPSILON;
+    need = tol > 0 ? 16.0 * ulp / tol : 64.0 * ulp;
+    if (Umin * dt >= need)
+        return DFLE_OK;
+    return dfle_error_set(err, DFLE_EINVAL, "landscape: %s = %g yr is too short for the "
+                          "precision of z: its uplift U dt = %g m is below %g m, what elevations "
+                          "of up to %g m resolve%s; take %s of at least %g yr", what, dt,
+                          Umin * dt, need, zmax, tol > 0 ? " to tell |dz/dt| from tol U" : "",
+                          strcmp(what, "dt") == 0 ? "dt" : "steps", need / Umin);
+}
+
 int dfle_landscape_step(dfle_landscape *ls, double dt, double tol, dfle_landscape_status *st,
                         dfle_error *err)
 {
+    const ls_judge j = {tol, 0.99, 0.95};
     int s;
     if (!(isfinite(dt) && dt > 0))
         return dfle_error_set(err, DFLE_EINVAL, "landscape: the time step must be > 0 yr (got "
                               "%g)", dt);
+    if (!(isfinite(tol) && tol > 0))
+        return dfle_error_set(err, DFLE_EINVAL, "landscape: tol must be > 0 (got %g)", tol);
     if (st != NULL)
         memset(st, 0, sizeof *st);
+    if ((s = ls_check_step(ls, dt, 0.0, "dt", err)) != DFLE_OK)
+        return s;
     if ((s = ls_update_fields(ls, 0, err)) != DFLE_OK)
         return s;
-    if ((s = ls_implicit_step(ls, dt, tol, 0.95, st, err)) != DFLE_OK)
+    if ((s = ls_implicit_step(ls, dt, &j, st, err)) != DFLE_OK)
         return s;
     ls->time += dt;
     return DFLE_OK;
@@ -546,8 +507,8 @@ int dfle_landscape_step(dfle_landscape *ls, double dt, double tol, dfle_landscap
 /* Evaluated rates and explicit steps                               */
 /* ---------------------------------------------------------------- */
 
-int ls_evaluate_rates(dfle_landscape *ls, double tol, double quantile,
-                      dfle_landscape_status *st, dfle_error *err)
+int ls_evaluate_rates(dfle_landscape *ls, const ls_judge *j, dfle_landscape_status *st,
+                      dfle_error *err)
 {
     const uint32_t *rcv;
     const unsigned char *dir;
@@ -590,16 +551,15 @@ int ls_evaluate_rates(dfle_landscape *ls, double tol, double quantile,
     }
     ls->have_rates = 1;
     if (st != NULL) {
-        ls_ratios(ls, tol, quantile, st);
+        ls_ratios(ls, j, st);
         status_network(ls, st);
         st->reached = count_reached(ls);
     }
     return DFLE_OK;
 }
 
-int ls_explicit_step(dfle_landscape *ls, double dt_cap, double cfl, double tol,
-                     double quantile, double *dt_out, dfle_landscape_status *st,
-                     dfle_error *err)
+int ls_explicit_step(dfle_landscape *ls, double dt_cap, double cfl, const ls_judge *j,
+                     double *dt_out, dfle_landscape_status *st, dfle_error *err)
 {
     const uint32_t *rcv, *stack;
     const unsigned char *dir;
@@ -608,7 +568,7 @@ int ls_explicit_step(dfle_landscape *ls, double dt_cap, double cfl, double tol,
     size_t n_stack;
     int s;
 
-    if ((s = ls_evaluate_rates(ls, tol, quantile, NULL, err)) != DFLE_OK)
+    if ((s = ls_evaluate_rates(ls, j, NULL, err)) != DFLE_OK)
         return s;
     if (ls->model != NULL && (s = dfle_model_celerity(ls->model, &cel, err)) != DFLE_OK)
         return s;
@@ -670,11 +630,12 @@ int ls_explicit_step(dfle_landscape *ls, double dt_cap, double cfl, double tol,
     }
     ls->routed = 0;
     ls->model_z_current = 0;
+    ls->evolved = 1;
     if ((s = check_surface(ls, dt, (const double[5]){VU, Vf, Vdf, Vh, dV}, VU, Vh, err)) != DFLE_OK)
         return s;
     *dt_out = dt;
     if (st != NULL) {
-        ls_ratios(ls, tol, quantile, st);
+        ls_ratios(ls, j, st);
         status_network(ls, st);
         st->dt = dt;
         st->dV = dV * ls->cell_area;

@@ -112,17 +112,19 @@ static int l_fit_slope_area(lua_State *L)
     memset(&bins, 0, sizeof bins);
     st = dfle_slope_area_fit_residuals(n, A, S, nbins, residuals, &bins, &fit, &err);
     if (st == DFLE_EFIT) {
-        dfle_model *m = luaL_testudata(L, 1, DFLE_LUA_MODEL) != NULL
-                            ? *(dfle_model **)lua_touserdata(L, 1) : NULL;
+        /* A model that has not run is still at its fluvial start, a pure
+         * power law that Eq. (2) cannot fit: say so.  Whether it ran is
+         * the model's record of its last run (a direct solve leaves the
+         * time at 0), not its time. */
+        int unrun = luaL_testudata(L, 1, DFLE_LUA_MODEL) != NULL &&
+                    lua_getfield(L, 1, "has_run") == LUA_TBOOLEAN && !lua_toboolean(L, -1);
         dfle_bins_release(&bins);
         lua_pushnil(L);
-        /* A model that has not run is still at its fluvial start, a pure
-         * power law that Eq. (2) cannot fit: say so. */
         lua_pushfstring(L, "dfle.fit_slope_area: %s%s", err.msg,
-                        m != NULL && dfle_model_time(m) == 0
-                            ? " (the model has not been run: its profile is the fluvial starting "
-                              "state; run it first, e.g. m:run_to_steady{})"
-                            : "");
+                        unrun ? " (the model has not been run: its profile is the fluvial "
+                                "starting state or one set; run it first, e.g. "
+                                "m:run_to_steady{})"
+                              : "");
         return 2;
     }
     if (st != DFLE_OK) {

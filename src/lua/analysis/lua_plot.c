@@ -22,14 +22,45 @@
 
 #define DEFAULT_NBINS 100
 
-static double fit_field(lua_State *L, int idx, const char *key)
+static double fit_field(lua_State *L, int idx, const char *fn, const char *key)
 {
     double v;
     if (lua_getfield(L, idx, key) != LUA_TNUMBER)
-        luaL_error(L, "dfle.plot.slope_area: fit table lacks number '%s'", key);
+        luaL_error(L, "dfle.%s: fit table lacks number '%s'", fn, key);
     v = lua_tonumber(L, -1);
     lua_pop(L, 1);
     return v;
+}
+
+const dfle_eq2_fit *dfle_lua_plot_slope_area_data(lua_State *L, int src, int fit_idx,
+                                                  const char *fn, size_t nbins, size_t *n,
+                                                  const double **A, const double **S,
+                                                  dfle_bins *bins, dfle_eq2_fit *fit)
+{
+    const dfle_eq2_fit *fitp = NULL;
+    dfle_error err;
+    memset(fit, 0, sizeof *fit);
+    memset(bins, 0, sizeof *bins);
+    if (lua_istable(L, fit_idx)) {
+        fit->S_df = fit_field(L, fit_idx, fn, "S_df");
+        fit->A_df = fit_field(L, fit_idx, fn, "A_df");
+        fit->a2 = fit_field(L, fit_idx, fn, "a2");
+        fit->r2 = fit_field(L, fit_idx, fn, "r2");
+        fitp = fit;
+    } else if (!lua_isnil(L, fit_idx) &&
+               !(lua_isboolean(L, fit_idx) && !lua_toboolean(L, fit_idx))) {
+        luaL_argerror(L, fit_idx, "expected a fit table from dfle.fit_slope_area, nil or false");
+    }
+    *n = dfle_lua_slope_area(L, src, fn, A, S);
+    if (dfle_bins_compute(*n, *A, *S, nbins, bins, &err) != DFLE_OK)
+        luaL_error(L, "dfle.%s: %s", fn, err.msg);
+    /* No fit given: fit now; a fit that fails just leaves the curve out. */
+    if (fitp == NULL && lua_isnil(L, fit_idx)) {
+        dfle_error fit_err;
+        if (dfle_slope_area_fit(*n, *A, *S, nbins, NULL, fit, &fit_err) == DFLE_OK)
+            fitp = fit;
+    }
+    return fitp;
 }
 
 static int l_plot_slope_area(lua_State *L)
@@ -39,7 +70,8 @@ static int l_plot_slope_area(lua_State *L)
     double nbins = DEFAULT_NBINS;
     const dfle_lua_param params[] = {{"nbins", &nbins}};
     dfle_plot_opts o;
-    dfle_eq2_fit fit, *fitp = NULL;
+    dfle_eq2_fit fit;
+    const dfle_eq2_fit *fitp;
     dfle_bins bins;
     dfle_error err;
     size_t n;
@@ -49,27 +81,8 @@ static int l_plot_slope_area(lua_State *L)
     path = dfle_lua_check_string(L, 2, "plot.slope_area", "the path");
     dfle_lua_plot_opts(L, 4, "plot.slope_area", DFLE_LUA_PLOT_AXES, params, 1, NULL, &o);
     dfle_lua_check_whole(L, nbins, "plot.slope_area", "nbins", 1, 1e6);
-    memset(&fit, 0, sizeof fit);
-    if (lua_istable(L, 3)) {
-        fit.S_df = fit_field(L, 3, "S_df");
-        fit.A_df = fit_field(L, 3, "A_df");
-        fit.a2 = fit_field(L, 3, "a2");
-        fit.r2 = fit_field(L, 3, "r2");
-        fitp = &fit;
-    } else if (!lua_isnil(L, 3) && !(lua_isboolean(L, 3) && !lua_toboolean(L, 3))) {
-        luaL_argerror(L, 3, "expected a fit table from dfle.fit_slope_area, nil or false");
-    }
-    n = dfle_lua_slope_area(L, 1, "plot.slope_area", &A, &S);
-    memset(&bins, 0, sizeof bins);
-    st = dfle_bins_compute(n, A, S, (size_t)nbins, &bins, &err);
-    if (st != DFLE_OK)
-        return luaL_error(L, "dfle.plot.slope_area: %s", err.msg);
-    /* No fit given: fit now; a fit that fails just leaves the curve out. */
-    if (fitp == NULL && lua_isnil(L, 3)) {
-        dfle_error fit_err;
-        if (dfle_slope_area_fit(n, A, S, (size_t)nbins, NULL, &fit, &fit_err) == DFLE_OK)
-            fitp = &fit;
-    }
+    fitp = dfle_lua_plot_slope_area_data(L, 1, 3, "plot.slope_area", (size_t)nbins, &n, &A, &S,
+                                         &bins, &fit);
     st = dfle_plot_slope_area(path, &o, n, A, S, &bins, fitp, &err);
     dfle_bins_release(&bins);
     if (st != DFLE_OK)

@@ -270,6 +270,15 @@ void dfle_lua_plot_axis(lua_State *L, int idx, const char *fn, char axis, dfle_p
  * x, y (or lo, hi), label, style, lines, color, rgb, dash, width,
  * marker, marker_size.  Arrays go to scratch userdata on the stack. */
 void dfle_lua_plot_series(lua_State *L, int idx, const char *fn, size_t k, dfle_plot_series *s);
+/* (lua_plot.c) The data of a slope-area figure of dfle.<fn>: the pairs of
+ * the source at src (as dfle_lua_slope_area), their nbins bins (release
+ * them; nothing raises after they are made) and the fit: the table at
+ * fit_idx (a dfle.fit_slope_area result), nil (fitted now: a fit that
+ * fails leaves the curve out) or false (none).  Returns the fit or NULL. */
+const dfle_eq2_fit *dfle_lua_plot_slope_area_data(lua_State *L, int src, int fit_idx,
+                                                  const char *fn, size_t nbins, size_t *n,
+                                                  const double **A, const double **S,
+                                                  dfle_bins *bins, dfle_eq2_fit *fit);
 /* Raise err (a message from dfle/plot.h, "plot: ...") as "dfle.<fn>: ...". */
 int dfle_lua_plot_raise(lua_State *L, const char *fn, const dfle_error *err);
 
@@ -423,6 +432,7 @@ int dfle_lua_law_compiled(lua_State *L, dfle_law *law);
 void dfle_lua_open_model(lua_State *L);
 void dfle_lua_open_analysis(lua_State *L);
 void dfle_lua_open_plot(lua_State *L);
+void dfle_lua_open_chi(lua_State *L); /* after plot: dfle.chi, dfle.concavity, their plots */
 void dfle_lua_open_sampling(lua_State *L);
 void dfle_lua_open_args(lua_State *L); /* dfle.args, dfle.mkdir (lua_args.c) */
 /* Whether msg is the error dfle.args raised last for a mistake on the

@@ -33,6 +33,7 @@ int luaopen_dfle(lua_State *L)
     dfle_lua_open_model(L);
     dfle_lua_open_analysis(L);
     dfle_lua_open_plot(L);
+    dfle_lua_open_chi(L); /* after plot: adds dfle.plot.chi, ... */
     dfle_lua_open_sampling(L);
     dfle_lua_open_args(L);
     dfle_lua_open_write_csv(L);

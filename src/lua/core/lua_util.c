@@ -223,6 +223,13 @@ size_t dfle_lua_slope_area(lua_State *L, int arg, const char *fn, const double *
          * position of the script's to give. */
         dfle_lua_check_object(L, arg, luaL_testudata(L, arg, "dfle.profile") != NULL
                                           ? "dfle.profile" : "dfle.landscape");
+        /* A landscape that has not run is its start (noise, z or a DEM):
+         * fitted, it gave Eq. (2) of random slopes without a word. */
+        if (luaL_testudata(L, arg, "dfle.landscape") != NULL &&
+            lua_getfield(L, arg, "has_run") == LUA_TBOOLEAN && !lua_toboolean(L, -1))
+            luaL_error(L, "dfle.%s: the landscape has not run: its surface is the start it was "
+                          "built with (noise, z or a DEM), not a landscape of the model; run it "
+                          "first (ls:run_to_steady{}), or measure a DEM with dem:network{}", fn);
         lua_getfield(L, arg, "slope_area");
         lua_pushvalue(L, arg);
         lua_call(L, 1, 1);

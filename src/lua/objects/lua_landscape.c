@@ -122,6 +122,16 @@ static void push_status(lua_State *L, const dfle_landscape_status *s)
     NUM("mean_ratio", s->mean_ratio);
     NUM("max_ratio", s->max_ratio);
     NUM("frac_above", s->frac_above);
+    NUM("channel_q_ratio", s->channel_q_ratio);
+    NUM("channel_max_ratio", s->channel_max_ratio);
+    NUM("channel_frac_above", s->channel_frac_above);
+    INT("channel_above", s->channel_above);
+    NUM("hillslope_q_ratio", s->hillslope_q_ratio);
+    NUM("hillslope_max_ratio", s->hillslope_max_ratio);
+    NUM("hillslope_frac_above", s->hillslope_frac_above);
+    NUM("uplift_flux", s->uplift_flux);
+    NUM("outflux", s->outflux);
+    NUM("volume_balance", s->volume_balance);
     INT("rcv_changes", s->rcv_changes);
     INT("stable", s->stable);
     INT("channel_cells", s->channel_cells);
@@ -162,15 +172,25 @@ typedef struct run_ctx {
     lua_ls_series series; /* the NetCDF time series (lua_landscape_files.c) */
     const dfle_lua_progress *prog;
     double max_time, tol;
+    const char *fn, *ratio_name;
 } run_ctx;
 
 static int progress_cb(void *ud, const dfle_landscape_status *s)
 {
     run_ctx *c = ud;
+    /* A transient shows its time only (tol 0): the steady target means
+     * nothing for a run of fixed length. */
     dfle_run_status rs = {.time = s->time, .max_time = c->max_time, .steps = s->steps,
-                          .dt = s->dt, .rate_ratio = s->q_ratio, .tol = c->tol,
-                          .fraction = s->fraction};
+                          .dt = s->dt, .rate_ratio = s->channel_q_ratio, .tol = c->tol,
+                          .fraction = s->fraction, .ratio_name = c->ratio_name};
     return c->prog->update(c->prog->ud, &rs);
+}
+
+/* The run's doubts, as warnings at the script's line. */
+static void warn_cb(void *ud, const char *msg)
+{
+    run_ctx *c = ud;
+    dfle_lua_warn(c->u->L, c->fn, msg);
 }
 
 static int landscape_run(lua_State *L, int steady)
@@ -182,29 +202,41 @@ static int landscape_run(lua_State *L, int steady)
     dfle_landscape_run_opts o;
     dfle_landscape_result res;
     dfle_error err;
-    double years = 0, max_steps, stable;
+    double years = 0, max_steps, stable, verify_steps;
     run_ctx ctx;
     int st;
 
     memset(&ctx, 0, sizeof ctx);
     ctx.u = u;
+    ctx.fn = fn;
     lua_settop(L, 2);
     if (!steady)
         luaL_checktype(L, 2, LUA_TTABLE);
     dfle_landscape_run_opts_default(&o);
     max_steps = (double)o.max_steps;
     stable = (double)o.stable_steps;
+    verify_steps = (double)o.verify_steps;
     {
-        const dfle_lua_param sp[] = {{"tol", &o.tol}, {"quantile", &o.quantile},
+        int rcv_tol_given = lua_istable(L, 2) && lua_getfield(L, 2, "rcv_tol") != LUA_TNIL &&
+                            lua_getfield(L, 2, "rcv_tol_cycle") == LUA_TNIL;
+        const dfle_lua_param sp[] = {{"tol", &o.tol}, {"channel_quantile", &o.channel_quantile},
+                                     {"hillslope_quantile", &o.hillslope_quantile},
                                      {"stable_steps", &stable}, {"max_time", &o.max_time},
                                      {"max_steps", &max_steps}, {"dt", &o.dt}, {"cfl", &o.cfl},
-                                     {"rcv_tol", &o.rcv_tol}};
+                                     {"rcv_tol", &o.rcv_tol}, {"rcv_tol_cycle", &o.rcv_tol_cycle},
+                                     {"verify_steps", &verify_steps},
+                                     {"verify_dt", &o.verify_dt}};
         const dfle_lua_param tp[] = {{"years", &years}, {"max_steps", &max_steps},
                                      {"dt", &o.dt}, {"cfl", &o.cfl}};
+        lua_settop(L, 2);
         if (steady)
             dfle_lua_read_params(L, 2, fn, sp, sizeof sp / sizeof sp[0], other);
         else
             dfle_lua_read_params(L, 2, fn, tp, sizeof tp / sizeof tp[0], other);
+        /* A looser rcv_tol given without rcv_tol_cycle is the rule
+         * throughout (the cycle rule cannot be stricter than it). */
+        if (rcv_tol_given && o.rcv_tol_cycle < o.rcv_tol)
+            o.rcv_tol_cycle = o.rcv_tol;
     }
     if (!steady) {
         if (!(years > 0))
@@ -213,6 +245,7 @@ static int landscape_run(lua_State *L, int steady)
     }
     o.max_steps = (size_t)dfle_lua_check_whole(L, max_steps, fn, "max_steps", 1, 1e15);
     o.stable_steps = (size_t)dfle_lua_check_whole(L, stable, fn, "stable_steps", 0, 1e9);
+    o.verify_steps = (size_t)dfle_lua_check_whole(L, verify_steps, fn, "verify_steps", 0, 1000);
     o.method = steady ? DFLE_METHOD_AUTO : DFLE_METHOD_IMPLICIT;
     if (lua_istable(L, 2) && lua_getfield(L, 2, "method") != LUA_TNIL) {
         o.method = dfle_lua_check_method(L, -1, fn);
@@ -228,7 +261,10 @@ static int landscape_run(lua_State *L, int steady)
     if (lua_istable(L, 2) && lua_getfield(L, 2, "progress") != LUA_TNIL && !lua_toboolean(L, -1))
         ctx.prog = NULL;
     ctx.max_time = steady ? o.max_time : years;
-    ctx.tol = o.tol;
+    ctx.tol = steady ? o.tol : 0.0;
+    ctx.ratio_name = "channel |dz/dt|/U (q99)";
+    o.warn = warn_cb;
+    o.warn_ud = &ctx;
     if (ctx.prog != NULL && ctx.prog->update != NULL) {
         o.progress = progress_cb;
         o.progress_ud = &ctx;
@@ -254,8 +290,16 @@ static int landscape_run(lua_State *L, int steady)
                                        "\"interrupted\")", fn, dfle_landscape_time(u->ls));
     else if (steady && !res.converged) /* never silently */
         dfle_lua_warn(L, fn, res.note);
-    lua_createtable(L, 0, 25);
+    lua_createtable(L, 0, 40);
     lua_pushboolean(L, res.converged), lua_setfield(L, -2, "converged");
+    lua_pushboolean(L, res.verified), lua_setfield(L, -2, "verified");
+    lua_pushinteger(L, (lua_Integer)res.verify_steps), lua_setfield(L, -2, "verify_steps");
+    lua_pushnumber(L, res.rcv_tol), lua_setfield(L, -2, "rcv_tol");
+    if (res.verify_steps > 0) {
+        lua_createtable(L, 0, 20);
+        push_status(L, &res.verify);
+        lua_setfield(L, -2, "verify");
+    }
     lua_pushstring(L, dfle_stop_reason_name(res.reason)), lua_setfield(L, -2, "reason");
     lua_pushstring(L, dfle_method_name(res.method)), lua_setfield(L, -2, "method");
     lua_pushboolean(L, res.fallback), lua_setfield(L, -2, "fallback");
@@ -300,6 +344,7 @@ static int l_plot(lua_State *L)
     m.ny = dfle_landscape_ny(u->ls);
     m.x0 = u->x0, m.y0 = u->y0;
     m.dx = dfle_landscape_dx(u->ls), m.dy = dfle_landscape_dy(u->ls);
+    m.crs = u->crs; /* named in the axis labels */
     m.z = get_field(L, DFLE_LS_Z, "dfle.landscape:plot");
     if (channels)
         m.channel = get_field(L, DFLE_LS_CHANNEL, "dfle.landscape:plot");
@@ -376,6 +421,8 @@ static int l_property(lua_State *L)
         lua_pushinteger(L, (lua_Integer)dfle_landscape_data_cells(ls));
     else if (strcmp(key, "memory") == 0)
         lua_pushinteger(L, (lua_Integer)dfle_landscape_memory(ls));
+    else if (strcmp(key, "has_run") == 0)
+        lua_pushboolean(L, dfle_landscape_has_run(ls));
     else if (strcmp(key, "x0") == 0)
         lua_pushnumber(L, u->x0);
     else if (strcmp(key, "y0") == 0)

@@ -26,6 +26,7 @@ typedef struct field_cb {
     double divide_by; /* a scale: the value over the component's own */
     int with_t;       /* f(x, y, t): called every step */
     const char *name;
+    int judged;       /* its values were put to the plausibility table */
 } field_cb;
 
 typedef struct lua_ls {

@@ -108,8 +108,13 @@ static void record_run_opts(dfle_record *rec, const char *fn, const dfle_landsca
                                                     ? methods[o->method] : "?");
     if (steady) {
         dfle_record_param_number(rec, "tol", o->tol, "");
-        dfle_record_param_number(rec, "quantile", o->quantile, "");
+        dfle_record_param_number(rec, "channel_quantile", o->channel_quantile, "");
+        dfle_record_param_number(rec, "hillslope_quantile", o->hillslope_quantile, "");
         dfle_record_param_number(rec, "stable_steps", (double)o->stable_steps, "");
+        dfle_record_param_number(rec, "rcv_tol", o->rcv_tol, "");
+        dfle_record_param_number(rec, "rcv_tol_cycle", o->rcv_tol_cycle, "");
+        dfle_record_param_number(rec, "verify_steps", (double)o->verify_steps, "");
+        dfle_record_param_number(rec, "verify_dt", o->verify_dt, "yr");
         dfle_record_param_number(rec, "max_time", o->max_time, "yr");
     } else {
         dfle_record_param_number(rec, "years", o->years, "yr");
@@ -170,8 +175,9 @@ void dfle_lua_ls_series_open(lua_State *L, lua_ls *u, int opts, const char *fn,
             lua_pop(L, 1);
             for (size_t i = 0; i < j; i++)
                 if (s->fields[i] == s->fields[j])
-                    luaL_error(L, "dfle.%s: field '%s' is listed twice in 'fields'", fn,
-                               dfle_landscape_field_name(s->fields[j]));
+                    luaL_error(L, "dfle.%s: field '%s' is listed twice in 'fields' (entries %d "
+                               "and %d)", fn, dfle_landscape_field_name(s->fields[j]), (int)i + 1,
+                               (int)j + 1);
         }
     }
     dfle_nc_opts_default(&no);
@@ -236,6 +242,11 @@ int dfle_lua_ls_series_close(lua_State *L, lua_ls_series *s, const dfle_landscap
     dfle_record_number(s->rec, "time", res->last.time, "yr");
     dfle_record_number(s->rec, "recorded", (double)res->n_recorded, NULL);
     dfle_record_text(s->rec, "note", res->note);
+    /* what "steady" rested on: the channel cells and the volume balance */
+    dfle_record_number(s->rec, "channel_max_ratio", res->last.channel_max_ratio, NULL);
+    dfle_record_number(s->rec, "channel_frac_above", res->last.channel_frac_above, NULL);
+    dfle_record_number(s->rec, "volume_balance", res->last.volume_balance, NULL);
+    dfle_record_bool(s->rec, "verified", res->verified);
     if (dfle_nc_annotate(nc, s->rec, err) != DFLE_OK) {
         dfle_nc_abort(nc);
         return err->code;
@@ -270,13 +281,23 @@ int dfle_lua_ls_write_geotiff(lua_State *L)
         fields[nf++] = dfle_lua_ls_field_id(L, 3, fn);
     } else {
         luaL_checktype(L, 3, LUA_TTABLE);
-        for (size_t k = 1; k <= lua_rawlen(L, 3) && nf < DFLE_LS_NFIELDS; k++) {
+        if (lua_rawlen(L, 3) > DFLE_LS_NFIELDS)
+            luaL_error(L, "dfle.%s: at most %d fields, each once (got %d)", fn,
+                       DFLE_LS_NFIELDS, (int)lua_rawlen(L, 3));
+        for (size_t k = 1; k <= lua_rawlen(L, 3); k++) {
             lua_rawgeti(L, 3, (lua_Integer)k);
-            fields[nf++] = dfle_lua_ls_field_id(L, -1, fn);
+            fields[nf] = dfle_lua_ls_field_id(L, -1, fn);
             lua_pop(L, 1);
+            /* a name twice would be two bands of one name */
+            for (size_t j = 0; j < nf; j++)
+                if (fields[j] == fields[nf])
+                    luaL_error(L, "dfle.%s: field '%s' is listed twice in the fields "
+                               "(entries %d and %d)", fn, dfle_landscape_field_name(fields[nf]),
+                               (int)j + 1, (int)nf + 1);
+            nf++;
         }
         if (nf == 0)
-            luaL_error(L, "dfle.landscape:write_geotiff: no fields to write");
+            luaL_error(L, "dfle.%s: no fields to write", fn);
     }
     for (size_t k = 0; k < nf; k++) {
         bands[k].values = dfle_lua_ls_get_field(L, fields[k], "dfle.landscape:write_geotiff");

@@ -19,7 +19,29 @@
 
 #include "dfle/crs.h"
 #include "dfle/dem.h"
+#include "dfle/plausible.h"
 #include "dfle/raster.h"
+
+/* The plausibility table's word (dfle/plausible.h) on a field given as
+ * an array, a raster or a function, as dfle.model gives it on numbers:
+ * its largest and smallest values, one warning a field. */
+static void warn_implausible_field(lua_State *L, const char *key, const char *kind, double lo,
+                                   double hi)
+{
+    char msg[400], full[520];
+    if (!(lo <= hi))
+        return; /* no finite value: the checks of values say why */
+    if (lo == hi) {
+        dfle_lua_warn_implausible(L, "landscape", key, lo);
+        return;
+    }
+    if (dfle_plausible_check(key, hi, msg, sizeof msg) ||
+        dfle_plausible_check(key, lo, msg, sizeof msg)) {
+        snprintf(full, sizeof full, "%s %s, at its %s: %s", kind, key,
+                 dfle_plausible_check(key, hi, msg, sizeof msg) ? "largest" : "smallest", msg);
+        dfle_lua_warn(L, "landscape", full);
+    }
+}
 
 static int msgh(lua_State *L)
 {
@@ -46,9 +68,10 @@ static int field_fn(void *ud, double t, double *out, dfle_error *err)
     const double dx = u->dx, dy = u->dy;
     const double *z = u->zmask;
     int top = lua_gettop(L);
+    double lo = INFINITY, hi = -INFINITY;
     lua_pushcfunction(L, msgh);
     for (size_t c = 0; c < n; c++) {
-        double x, y;
+        double x, y, v;
         if (isnan(z[c]))
             continue;
         centre(u, nx, dx, dy, c, &x, &y);
@@ -69,10 +92,19 @@ static int field_fn(void *ud, double t, double *out, dfle_error *err)
             lua_settop(L, top);
             return DFLE_ECALLBACK;
         }
-        out[c] = lua_tonumber(L, -1) / cb->divide_by;
+        v = lua_tonumber(L, -1);
+        if (isfinite(v)) {
+            lo = v < lo ? v : lo;
+            hi = v > hi ? v : hi;
+        }
+        out[c] = v / cb->divide_by;
         lua_pop(L, 1);
     }
     lua_settop(L, top);
+    if (!cb->judged) { /* its first values: once, not at every step */
+        cb->judged = 1;
+        warn_implausible_field(L, cb->name, "the function", lo, hi);
+    }
     dfle_lua_touch(L);
     return DFLE_OK;
 }
@@ -131,16 +163,52 @@ static void anchor(lua_State *L)
     lua_rawseti(L, 3, (lua_Integer)lua_rawlen(L, 3) + 1);
 }
 
+/* The smallest and largest finite values of g over the grid's data
+ * cells (the user's, before a scale divides them). */
+static void data_range(const lua_ls *u, const double *g, size_t n, double *lo, double *hi)
+{
+    *lo = INFINITY;
+    *hi = -INFINITY;
+    for (size_t c = 0; c < n; c++)
+        if (!isnan(u->zmask[c]) && isfinite(g[c])) {
+            *lo = g[c] < *lo ? g[c] : *lo;
+            *hi = g[c] > *hi ? g[c] : *hi;
+        }
+}
+
+/* A raster for a field lies on the grid: the same cells, the same
+ * corner (to a millionth of a cell).  It is not resampled. */
+static void check_raster_grid(lua_State *L, const lua_ls *u, const dfle_dem *d, const char *key,
+                              size_t nx, size_t ny)
+{
+    double e[4], rdx = dfle_dem_dx(d), rdy = dfle_dem_dy(d);
+    char msg[600];
+    dfle_dem_extent(d, e);
+    if (dfle_dem_nx(d) != nx || dfle_dem_ny(d) != ny || fabs(rdx - u->dx) > 1e-9 * u->dx ||
+        fabs(rdy - u->dy) > 1e-9 * u->dy || fabs(e[0] - u->x0) > 1e-6 * u->dx ||
+        fabs(e[3] - u->y0) > 1e-6 * u->dy) {
+        snprintf(msg, sizeof msg, "raster '%s' is %zu x %zu cells of %g x %g m with its "
+                 "north-west corner at (%.10g, %.10g), the grid %zu x %zu cells of %g x %g m at "
+                 "(%.10g, %.10g): it must lie on the grid (resample it first, e.g. with "
+                 "gdalwarp, or give the grid's x0 and y0)", key, dfle_dem_nx(d), dfle_dem_ny(d),
+                 rdx, rdy, e[0], e[3], nx, ny, u->dx, u->dy, u->x0, u->y0);
+        luaL_error(L, "dfle.landscape: %s", msg);
+    }
+}
+
 /* A field option: a number, an array of nx * ny, a dfle.dem on the grid,
- * or a function f(x, y [, t]). */
-static void read_field(lua_State *L, lua_ls *u, int opts, const char *key, int which,
-                       dfle_landscape_field *f, size_t nx, size_t ny, double divide_by)
+ * or a function f(x, y [, t]).  Its values are the C library's to check
+ * cell by cell (named as given here); the plausibility table warns. */
+static void read_field(lua_State *L, lua_ls *u, int opts, const char *key, const char *named,
+                       int which, dfle_landscape_field *f, size_t nx, size_t ny, double divide_by)
 {
     int t = lua_getfield(L, opts, key);
     field_cb *cb = &u->cb[which];
     cb->u = u;
     cb->name = key;
     cb->divide_by = divide_by;
+    f->name = named;
+    f->show_scale = divide_by;
     if (t == LUA_TNIL) {
         lua_pop(L, 1);
         return;
@@ -149,6 +217,7 @@ static void read_field(lua_State *L, lua_ls *u, int opts, const char *key, int w
         f->value = lua_tonumber(L, -1) / divide_by;
         if (!isfinite(f->value))
             luaL_error(L, "dfle.landscape: parameter '%s' must be finite", key);
+        dfle_lua_warn_implausible(L, "landscape", key, lua_tonumber(L, -1));
     } else if (t == LUA_TFUNCTION) {
         lua_Debug ar;
         lua_pushvalue(L, -1);
@@ -161,10 +230,10 @@ static void read_field(lua_State *L, lua_ls *u, int opts, const char *key, int w
         return;
     } else if (t == LUA_TUSERDATA && luaL_testudata(L, -1, "dfle.dem") != NULL) {
         dfle_dem *d = dfle_lua_check_object(L, lua_gettop(L), "dfle.dem");
-        double *g;
-        if (dfle_dem_nx(d) != nx || dfle_dem_ny(d) != ny)
-            luaL_error(L, "dfle.landscape: raster '%s' has %d x %d cells, the grid %d x %d", key,
-                       (int)dfle_dem_nx(d), (int)dfle_dem_ny(d), (int)nx, (int)ny);
+        double *g, lo, hi;
+        check_raster_grid(L, u, d, key, nx, ny);
+        data_range(u, dfle_dem_z(d), nx * ny, &lo, &hi);
+        warn_implausible_field(L, key, "the raster", lo, hi);
         g = lua_newuserdatauv(L, nx * ny * sizeof *g, 0);
         for (size_t c = 0; c < nx * ny; c++)
             g[c] = dfle_dem_z(d)[c] / divide_by;
@@ -175,12 +244,14 @@ static void read_field(lua_State *L, lua_ls *u, int opts, const char *key, int w
     } else if (t == LUA_TTABLE) {
         size_t n;
         char what[64];
-        double *g;
+        double *g, lo, hi;
         snprintf(what, sizeof what, "landscape: %s", key);
         g = dfle_lua_check_array(L, -1, what, &n);
         if (n != nx * ny)
             luaL_error(L, "dfle.landscape: '%s' has %d values, the grid %d x %d = %d cells", key,
                        (int)n, (int)nx, (int)ny, (int)(nx * ny));
+        data_range(u, g, n, &lo, &hi);
+        warn_implausible_field(L, key, "the array", lo, hi);
         for (size_t c = 0; c < n; c++)
             g[c] /= divide_by;
         anchor(L);
@@ -387,6 +458,22 @@ int dfle_lua_landscape_new(lua_State *L)
     n = o.nx * o.ny;
     u->x0 = x0;
     u->y0 = isnan(y0) ? (double)o.ny * dy : y0;
+    o.x0 = u->x0;
+    o.y0 = u->y0;
+    /* The corner and the memory before anything of the grid's size is
+     * allocated (its elevations here: 8 bytes a cell).  The estimate
+     * asks only whether there will be debris flows (a router: the
+     * default, unless router = false); the router is read below. */
+    {
+        static char router_to_come;
+        dfle_landscape_opts pre = o;
+        int t = lua_getfield(L, 1, "router");
+        pre.router = t == LUA_TBOOLEAN && !lua_toboolean(L, -1)
+                         ? NULL : (dfle_router *)(void *)&router_to_come;
+        lua_pop(L, 1);
+        if (dfle_landscape_check_grid(&pre, n * sizeof(double), &err) != DFLE_OK)
+            return dfle_lua_raise(L, &err);
+    }
 
     /* Initial elevations. */
     zbuf = lua_newuserdatauv(L, n * sizeof *zbuf, 0);
@@ -557,7 +644,9 @@ int dfle_lua_landscape_new(lua_State *L)
         push_component(L, 1, "fluvial", DFLE_LUA_FLUVIAL, "fluvial", "stochastic_threshold");
         push_component(L, 1, "router", DFLE_LUA_ROUTER, "router", "empirical");
         if (lua_isnil(L, comp + 1)) {
-            if (lua_getfield(L, 1, "law") != LUA_TNIL)
+            /* law = false says the same as router = false: no debris flows. */
+            int t = lua_getfield(L, 1, "law");
+            if (t != LUA_TNIL && !(t == LUA_TBOOLEAN && !lua_toboolean(L, -1)))
                 luaL_error(L, "dfle.landscape: 'law' given but router = false (no debris flows)");
             lua_pop(L, 1);
             lua_pushnil(L);
@@ -574,7 +663,7 @@ int dfle_lua_landscape_new(lua_State *L)
 
         /* Fields in space.  K and k_e scale the fluvial K, k_df the
          * law's k_df. */
-        read_field(L, u, 1, "U", F_U, &o.U, o.nx, o.ny, 1.0);
+        read_field(L, u, 1, "U", "U (uplift, m/yr)", F_U, &o.U, o.nx, o.ny, 1.0);
         if (lua_getfield(L, 1, "K") != LUA_TNIL && lua_getfield(L, 1, "k_e") != LUA_TNIL)
             luaL_error(L, "dfle.landscape: give 'K' or 'k_e', not both");
         lua_settop(L, comp + 2);
@@ -588,9 +677,11 @@ int dfle_lua_landscape_new(lua_State *L)
             lua_settop(L, comp + 2);
         } else {
             double Kl = dfle_fluvial_K(o.fluvial);
-            read_field(L, u, 1, "K", F_K, &o.K_scale, o.nx, o.ny, Kl > 0 ? Kl : 1.0);
+            read_field(L, u, 1, "K", "K (fluvial erodibility)", F_K, &o.K_scale, o.nx, o.ny,
+                       Kl > 0 ? Kl : 1.0);
             if (u->cb[F_K].ref == LUA_NOREF && o.K_scale.grid == NULL && o.K_scale.value == 1.0)
-                read_field(L, u, 1, "k_e", F_K, &o.K_scale, o.nx, o.ny, 5e-14);
+                read_field(L, u, 1, "k_e", "k_e (fluvial erodibility)", F_K, &o.K_scale, o.nx,
+                           o.ny, 5e-14);
         }
         if (lua_getfield(L, 1, "k_df") != LUA_TNIL) {
             dfle_param p[32];
@@ -605,7 +696,8 @@ int dfle_lua_landscape_new(lua_State *L)
                 luaL_error(L, "dfle.landscape: 'k_df' in space scales the law's own k_df, and "
                               "law '%s' has none", dfle_law_name(o.law));
             lua_pop(L, 1);
-            read_field(L, u, 1, "k_df", F_DF, &o.df_scale, o.nx, o.ny, kdf);
+            read_field(L, u, 1, "k_df", "k_df (debris-flow erodibility)", F_DF, &o.df_scale, o.nx,
+                       o.ny, kdf);
         } else {
             lua_pop(L, 1);
         }

@@ -667,6 +667,10 @@ static int l_model_property(lua_State *L)
         lua_pushinteger(L, (lua_Integer)dfle_model_size(m));
         return 1;
     }
+    if (strcmp(key, "has_run") == 0) { /* the profile is a run's, not one set */
+        lua_pushboolean(L, lua_getiuservalue(L, 1, UV_RUN) == LUA_TTABLE);
+        return 1;
+    }
     for (int k = 0; k < 4; k++)
         if (strcmp(key, components[k]) == 0) {
             lua_getiuservalue(L, 1, k + 1);
