@@ -85,7 +85,11 @@ int inv_summarize(inv_run *R)
 
     r->complete = N >= 1 && r->have == N + 1;
     if (!r->complete) {
-        int bad = N >= 1 ? inv_warn(r, "the chain is not complete") : 0;
+        int bad = N < 1            ? 0
+                  : r->interrupted ? inv_warn(r, "interrupted after step %zu of %zu: a cut "
+                                                 "chain has no posterior; running again "
+                                                 "resumes it", r->have > 0 ? r->have - 1 : 0, N)
+                                   : inv_warn(r, "the chain is not complete");
         r->first_alert = r->nwarnings;
         return bad;
     }

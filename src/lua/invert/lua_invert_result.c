@@ -375,10 +375,23 @@ static int l_tostring(lua_State *L)
     lua_getfield(L, 1, "steps");
     lua_getfield(L, 1, "burn");
     lua_getfield(L, 1, "acceptance");
-    snprintf(line, sizeof line, "dfle.invert: %d walkers x %d steps (burn-in %d), acceptance "
-             "%.3f\n", (int)lua_tointeger(L, -4), (int)lua_tointeger(L, -3),
-             (int)lua_tointeger(L, -2), lua_tonumber(L, -1));
-    lua_pop(L, 4);
+    lua_getfield(L, 1, "reason");
+    lua_getfield(L, 1, "have");
+    lua_getfield(L, 1, "file");
+    if (lua_isstring(L, -3) && strcmp(lua_tostring(L, -3), "interrupted") == 0) {
+        /* a cut chain has no posterior: say so first, and what was kept */
+        const char *file = lua_tostring(L, -1);
+        snprintf(line, sizeof line, "dfle.invert: %d walkers x %d steps, interrupted after step "
+                 "%d: no posterior; %s%s%s\n", (int)lua_tointeger(L, -7),
+                 (int)lua_tointeger(L, -6), (int)lua_tointeger(L, -2),
+                 file != NULL ? "the whole steps are in " : "no 'out' file: the chain is lost",
+                 file != NULL ? file : "", file != NULL ? ", and running again resumes it" : "");
+    } else {
+        snprintf(line, sizeof line, "dfle.invert: %d walkers x %d steps (burn-in %d), "
+                 "acceptance %.3f\n", (int)lua_tointeger(L, -7), (int)lua_tointeger(L, -6),
+                 (int)lua_tointeger(L, -5), lua_tonumber(L, -4));
+    }
+    lua_pop(L, 7);
     dfle_lua_text_str(L, &parts, line);
     if (lua_istable(L, 3) && lua_istable(L, 4)) {
         snprintf(line, sizeof line, "  %-10s %12s %27s %27s %8s\n", "parameter", "median",
@@ -387,7 +400,7 @@ static int l_tostring(lua_State *L)
         for (lua_Integer j = 1; j <= nn; j++) {
             static const char *const keys[5] = {"median", "lo68", "hi68", "lo95", "hi95"};
             double v[5], t;
-            const char *name;
+            const char *name, *bound;
             lua_geti(L, 2, j);
             name = lua_tostring(L, -1);
             lua_getfield(L, 4, name);
@@ -399,9 +412,13 @@ static int l_tostring(lua_State *L)
                 v[k] = lua_tonumber(L, -1);
                 lua_pop(L, 1);
             }
+            /* an interval a prior's bound holds is marked where it is read */
+            lua_getfield(L, -1, "bounded");
+            bound = lua_tostring(L, -1);
             snprintf(line, sizeof line, "  %-10s %12.4g   [%11.4g, %11.4g]   [%11.4g, %11.4g] "
-                     "%8.1f\n", name ? name : "?", v[0], v[1], v[2], v[3], v[4], t);
-            lua_pop(L, 2);
+                     "%8.1f%s%s\n", name ? name : "?", v[0], v[1], v[2], v[3], v[4], t,
+                     bound != NULL ? "  bounded: " : "", bound != NULL ? bound : "");
+            lua_pop(L, 3);
             dfle_lua_text_str(L, &parts, line);
         }
     }
@@ -425,10 +442,11 @@ static int l_tostring(lua_State *L)
         }
         lua_pop(L, 1);
     }
-    lua_getfield(L, 1, "failures");
+    /* the tally is the whole chain's, which a cut one is not */
+    lua_getfield(L, 1, lua_istable(L, 3) ? "failures" : "(none)");
     if (lua_istable(L, -1)) {
         dfle_lua_text_str(L, &parts, "  proposals:");
-        for (int k = DFLE_PROPOSAL_OUTSIDE; k < DFLE_PROPOSAL_N; k++) {
+        for (int k = DFLE_PROPOSAL_OUTSIDE; k <= DFLE_PROPOSAL_ERROR; k++) {
             lua_getfield(L, -1, dfle_proposal_name(k));
             snprintf(line, sizeof line, " %s %d", dfle_proposal_name(k), (int)lua_tointeger(L, -1));
             lua_pop(L, 1);
