@@ -78,11 +78,16 @@ local res = dfle.invert{
 if dfle.worker() then return end
 
 print(res)
+-- Ctrl-C: the whole steps are in the chain file; a cut chain has no
+-- posterior, and running the command again resumes it.
+if res.reason == "interrupted" then return end
 print(("%-8s %12s %12s %27s  %s"):format("", "truth", "median", "95 % interval", ""))
 for _, k in ipairs{ "U", "k_df", "gamma", "sigma" } do
   local s, t = res.summary[k], k == "sigma" and sigma or truth[k]
-  print(("%-8s %12.4g %12.4g   [%11.4g, %11.4g]  %s"):format(k, t, s.median, s.lo95, s.hi95,
-        (s.lo95 <= t and t <= s.hi95) and "inside" or "OUTSIDE"))
+  -- an interval that ends on a prior bound says so beside it
+  print(("%-8s %12.4g %12.4g   [%11.4g, %11.4g]  %s%s"):format(k, t, s.median, s.lo95, s.hi95,
+        (s.lo95 <= t and t <= s.hi95) and "inside" or "OUTSIDE",
+        s.bounded and ("  (held by the " .. s.bounded .. " prior bound)") or ""))
 end
 -- What the data cannot separate: in the debris-flow reach the slope
 -- depends on U / k_df and on gamma together (the analytical solution,

@@ -49,6 +49,8 @@ typedef struct dfle_ens_table {
     size_t *index;   /* nrows 1-based sample indices, increasing    */
     char **rows;     /* nrows complete lines (no newline), index first */
     long valid_bytes; /* length of the file up to its last complete line */
+    size_t *line;    /* nrows: the file line of each row (1-based), for
+                      * messages; NULL in a table not read from a file */
 } dfle_ens_table;
 
 /* Read an ensemble file.  A last line without its newline (a run killed

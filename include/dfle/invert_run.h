@@ -19,15 +19,52 @@
  * The chain file (one row per walker and step, the position after the
  * step):
  *
- *     # dfle.invert v1 seed=1 walkers=32 a=2 params=U:log-uniform[0.0001,0.001];... <identity>
+ *     # dfle.invert v2 seed=1 walkers=32 a=2 params=U:log-uniform[0.0001,0.001];... <identity>
+ *     # dfle: 0.1.0
+ *     # date: 2026-12-03T20:12:54Z
+ *     # command: dfle run.lua            (what opts.describe says)
+ *     # units: U=m/yr, ..., log_post=-, log_like=-
  *     index,step,walker,U,...,log_post,log_like,proposal
- *     1,0,1,0.00012645153376660576,...,-32.1,-46.8,initial
+ *     1,0,1,0.000126451533767,...,-32.10303259,-46.79132086,initial
  *
  * index = step K + walker, so the ensemble file layer (ensemble.h)
- * streams, cuts and sorts it.  Numbers carry 17 digits: a resumed chain
- * continues bit for bit, and the chain is the same for any number of
- * workers (the random numbers of walker k at step s come from their own
- * stream, stream.h).
+ * streams, cuts and sorts it.  The lines between the first and the
+ * header describe the file (written when it is created, kept by a
+ * resume); the first line identifies the chain.  Positions are held at
+ * 12 significant digits (every proposal and starting draw is rounded
+ * to the double of its 12-digit decimal before it is evaluated), so the
+ * file's text is the chain itself: it reads back to the same doubles and
+ * a resumed chain continues bit for bit, and the chain is the same for
+ * any number of workers (the random numbers of walker k at step s come
+ * from their own stream, stream.h).  log_post and log_like are written
+ * with 10 significant digits; the sampler keeps their exact values, and
+ * a resume recomputes those of the walkers it continues from.
+ *
+ * A resume validates what it reads: every number finite, every position
+ * inside its prior, whole steps without gaps, a walker that did not move
+ * with the values of its step before, log_post - log_like equal to the
+ * log prior (custom priors apart), and the last step's log_post and
+ * log_like equal to what the evaluator gives at its positions now; a
+ * file that fails is refused with its line named.
+ *
+ * Walker health: after burn-in a walker whose median log posterior lies
+ * far below the others' (by more than half the 1 - 1e-6 quantile of
+ * chi-square with d degrees of freedom: the drop at which a Gaussian
+ * posterior has all but 1e-6 of its mass above), or whose acceptance is
+ * below a quarter of the walkers' median and improbably so (binomial
+ * p < 1e-6), is stranded: reported and warned by number.  With
+ * opts.move_stranded (default) the same test runs at steps burn/2 and
+ * burn, on the steps since the previous check, and a stranded walker is
+ * moved onto the position of a healthy one (a walker picked by its own
+ * stream), its row saying "moved", so it can no longer set an interval.
+ *
+ * Prior bounds: a parameter's marginal piles against a finite bound of
+ * its prior when the density of its samples within h of the bound is at
+ * least a quarter of their density within h/2 of the median (h: a
+ * tenth of the 95 % interval's width, in ln x for log-scaled
+ * parameters), or when the point estimate (dfle_invert_set_point) lies
+ * within 1e-3 of the prior's width of it: flagged (result.bounded) and
+ * warned.
  */
 #ifndef DFLE_INVERT_RUN_H
 #define DFLE_INVERT_RUN_H
@@ -40,6 +77,7 @@
 #include "dfle/evaluator.h"
 #include "dfle/mcmc_diag.h"
 #include "dfle/prior.h"
+#include "dfle/record.h"
 
 #ifdef __cplusplus
 extern "C" {
@@ -54,12 +92,39 @@ enum dfle_proposal {
     DFLE_PROPOSAL_NOT_CONVERGED, /* "not_converged"                          */
     DFLE_PROPOSAL_INVALID,       /* "invalid_profile"                        */
     DFLE_PROPOSAL_ERROR,         /* "error"                                  */
+    DFLE_PROPOSAL_MOVED,         /* "moved": a stranded walker moved onto a
+                                  * healthy one's position in burn-in        */
     DFLE_PROPOSAL_N
 };
 const char *dfle_proposal_name(int proposal);
 
 /* A failure's message is kept up to this length (with its NUL). */
 #define DFLE_INVERT_MSG 200
+/* Whether a marginal is held by a bound of its prior (result.bounded). */
+enum dfle_bound {
+    DFLE_BOUND_NONE = 0,
+    DFLE_BOUND_LOWER = 1, /* "lower" */
+    DFLE_BOUND_UPPER = 2, /* "upper" */
+    DFLE_BOUND_BOTH = 3   /* "both": flat over the prior, not learned */
+};
+const char *dfle_bound_name(int bound); /* "none", "lower", "upper", "both" */
+
+/* A walker found stranded after burn-in. */
+typedef struct dfle_invert_walker {
+    size_t walker;              /* 1-based                                   */
+    double acceptance;          /* its acceptance after burn-in              */
+    double ensemble_acceptance; /* the walkers' median                       */
+    double lp_drop;             /* its median log posterior below the median
+                                 * of the walkers' medians                   */
+    double *median;             /* d: its median position                    */
+} dfle_invert_walker;
+
+/* A stranded walker moved in burn-in (a "moved" row of the chain). */
+typedef struct dfle_invert_move {
+    size_t step, walker, onto;  /* onto: the walker whose position it took */
+    double lp_gain;             /* its log posterior after minus before     */
+} dfle_invert_move;
+
 /* opts.burn when not given: steps / 4. */
 #define DFLE_INVERT_BURN_DEFAULT ((size_t)-1)
 
@@ -86,9 +151,21 @@ typedef struct dfle_invert_opts {
      * after each step, from the calling thread. */
     void (*progress)(void *ud, size_t done, size_t total, size_t failed, double elapsed);
     void *ud;
+    /* Appended after the first release of this struct (its defaults
+     * come from dfle_invert_opts_default): */
+    /* What made a new chain file, as its comment lines (the command, the
+     * script, ...), after its own version and date lines; NULL: just
+     * those.  Only read while the file is created. */
+    const dfle_record *describe;
+    /* d units of the parameters for the file's units line ("m/yr", "-"),
+     * or NULL (none, or NULL entries: left out). */
+    const char *const *units;
+    /* Move walkers stranded in burn-in back into the ensemble (1). */
+    int move_stranded;
 } dfle_invert_opts;
 
-/* walkers 0 (the default), burn default, seed 1, a = 2, resume, 1 worker. */
+/* walkers 0 (the default), burn default, seed 1, a = 2, resume, 1 worker,
+ * move_stranded. */
 void dfle_invert_opts_default(dfle_invert_opts *o);
 
 /* The chain and what it says.  Arrays are (steps + 1) x walkers (x d),
@@ -120,6 +197,18 @@ typedef struct dfle_invert_result {
     size_t best;               /* row of the largest log_post              */
     size_t nwarnings;
     char **warnings;           /* what to be careful of, sentences         */
+    /* Appended after the first release of this struct: */
+    size_t nstranded;          /* walkers stranded after burn-in           */
+    dfle_invert_walker *stranded;
+    size_t nmoved;             /* stranded walkers moved in burn-in (the
+                                * chain's "moved" rows; any call)          */
+    dfle_invert_move *moved;
+    unsigned char *bounded;    /* d: enum dfle_bound                       */
+    double threshold_lp;       /* the log-posterior drop that strands      */
+    size_t first_alert;        /* warnings[first_alert ..]: stranded
+                                * walkers and prior bounds, what says that
+                                * a number printed is not the data's (a
+                                * binding shows them at run time)          */
 } dfle_invert_result;
 
 /* The options checked (and defaults resolved) as dfle_invert_new does,
@@ -139,6 +228,12 @@ typedef struct dfle_invert dfle_invert;
  * opts->read_only, read a finished chain and summarise it.  opts is
  * copied, its arrays and texts must outlive the object. */
 int dfle_invert_new(const dfle_invert_opts *opts, dfle_invert **out, dfle_error *err);
+
+/* A point estimate (the least-squares fit: d values in natural units,
+ * NaN where there is none) to be checked against the priors' bounds
+ * with the samples: one on a bound flags that parameter (see the top).
+ * Call before dfle_invert_run; NULL forgets it. */
+int dfle_invert_set_point(dfle_invert *inv, const double *x, dfle_error *err);
 
 /* Run the chain from where it is to opts->steps on opts->workers
  * evaluators of ev, close the file (sorted), and summarise it.

@@ -33,6 +33,7 @@ void dfle_invert_opts_default(dfle_invert_opts *o)
     o->a = 2;
     o->resume = 1;
     o->workers = 1;
+    o->move_stranded = 1;
 }
 
 int inv_resolve(const dfle_invert_opts *o, dfle_invert_opts *r, dfle_error *err)
@@ -198,7 +199,9 @@ typedef struct loop {
     batch b;
     double *y;        /* K x d proposals                       */
     unsigned char *acc;
-    double *cur_ll;   /* K: the walkers' current log-likelihoods */
+    double *cur_lp;   /* K: the walkers' log posteriors, exact (the
+                       * chain's are rounded as the file has them)   */
+    double *cur_ll;   /* K: their log-likelihoods, exact             */
     size_t failed;    /* failed forward runs this call           */
     double t0;
     size_t total;     /* evaluations expected this call          */
@@ -264,7 +267,7 @@ static int start(loop *lp, dfle_error *err)
             dfle_stream s;
             dfle_stream_init(&s, R->o.seed, 0, idx[i], attempt[idx[i]] + 1);
             for (size_t j = 0; j < d; j++)
-                lp->y[i * d + j] = dfle_prior_draw(&R->o.priors[j], &s);
+                lp->y[i * d + j] = inv_round(dfle_prior_draw(&R->o.priors[j], &s), INV_X_DIGITS);
         }
         if ((st = evaluate(lp, npend, err)) != DFLE_OK)
             goto done;
@@ -273,8 +276,10 @@ static int start(loop *lp, dfle_error *err)
             const char *m = lp->b.msgs + i * DFLE_INVERT_MSG;
             if (lp->b.st[i] == DFLE_PROPOSAL_ACCEPTED) {
                 memcpy(r->x + k * d, lp->y + i * d, d * sizeof *r->x);
-                r->log_post[k] = lp->b.lp[i];
-                r->log_like[k] = lp->b.ll[i];
+                lp->cur_lp[k] = lp->b.lp[i];
+                lp->cur_ll[k] = lp->b.ll[i];
+                r->log_post[k] = inv_round(lp->b.lp[i], INV_LP_DIGITS);
+                r->log_like[k] = inv_round(lp->b.ll[i], INV_LP_DIGITS);
                 r->proposal[k] = DFLE_PROPOSAL_INITIAL;
             } else {
                 note(lp, lp->b.st[i], m);
@@ -303,6 +308,47 @@ done:
     return st;
 }
 
+/* A chain read back continues from its last step: its walkers' log
+ * densities are evaluated again (the sampler needs them exact, and they
+ * must be what the file says: a file edited, or a model changed since,
+ * would continue a chain of another posterior). */
+static int recompute_last(loop *lp, dfle_error *err)
+{
+    inv_run *R = lp->R;
+    dfle_invert_result *r = R->r;
+    const size_t K = r->walkers, d = r->d, s = r->have - 1;
+    int st;
+
+    memcpy(lp->y, r->x + s * K * d, K * d * sizeof *lp->y);
+    if ((st = evaluate(lp, K, err)) != DFLE_OK)
+        return st;
+    for (size_t k = 0; k < K; k++) {
+        const size_t at = s * K + k;
+        char place[300];
+        inv_row_place(R, s, k, place, sizeof place);
+        if (lp->b.st[k] != DFLE_PROPOSAL_ACCEPTED)
+            return dfle_error_set(err, DFLE_EINVAL,
+                                  "invert: %s: step %zu, walker %zu: the chain continues from "
+                                  "here, but its position now has zero posterior (%.*s): the "
+                                  "file was edited, or the model or data changed; remove it, "
+                                  "pass resume = false, or choose another 'out'",
+                                  place, s, k + 1, DFLE_INVERT_MSG,
+                                  lp->b.msgs + k * DFLE_INVERT_MSG);
+        if (fabs(lp->b.lp[k] - r->log_post[at]) > 1e-9 * (1 + fabs(lp->b.lp[k])) ||
+            fabs(lp->b.ll[k] - r->log_like[at]) > 1e-9 * (1 + fabs(lp->b.ll[k])))
+            return dfle_error_set(err, DFLE_EINVAL,
+                                  "invert: %s: step %zu, walker %zu: log_post %.10g and log_like "
+                                  "%.10g in the file, but its position gives %.10g and %.10g "
+                                  "now: the file was edited, or the model or data changed; "
+                                  "remove it, pass resume = false, or choose another 'out'",
+                                  place, s, k + 1, r->log_post[at], r->log_like[at],
+                                  lp->b.lp[k], lp->b.ll[k]);
+        lp->cur_lp[k] = lp->b.lp[k];
+        lp->cur_ll[k] = lp->b.ll[k];
+    }
+    return DFLE_OK;
+}
+
 static int run_chain(loop *lp, dfle_error *err)
 {
     inv_run *R = lp->R;
@@ -311,11 +357,16 @@ static int run_chain(loop *lp, dfle_error *err)
     dfle_mcmc_opts mo;
     dfle_mcmc *mc = NULL;
     int *logs = malloc(d * sizeof *logs);
-    int st;
+    inv_health health;
+    int st, health_ok = inv_health_init(&health, K, d, r->steps) == 0;
 
-    if (logs == NULL)
+    if (logs == NULL || !health_ok) {
+        free(logs);
+        if (health_ok)
+            inv_health_free(&health);
         return dfle_error_set(err, DFLE_ENOMEM, "invert: out of memory");
-    if (r->have == 0 && (st = start(lp, err)) != DFLE_OK)
+    }
+    if ((st = r->have == 0 ? start(lp, err) : recompute_last(lp, err)) != DFLE_OK)
         goto done;
     for (size_t j = 0; j < d; j++)
         logs[j] = dfle_prior_log_scale(&R->o.priors[j]);
@@ -326,16 +377,18 @@ static int run_chain(loop *lp, dfle_error *err)
     mo.a = R->o.a;
     mo.log_scale = logs;
     if ((st = dfle_mcmc_new(&mo, &mc, err)) != DFLE_OK ||
-        (st = dfle_mcmc_set_state(mc, r->have - 1, r->x + (r->have - 1) * K * d,
-                                  r->log_post + (r->have - 1) * K, err)) != DFLE_OK) {
+        (st = dfle_mcmc_set_state(mc, r->have - 1, r->x + (r->have - 1) * K * d, lp->cur_lp,
+                                  err)) != DFLE_OK) {
         dfle_drive_prefix(err, "invert");
         goto done;
     }
-    memcpy(lp->cur_ll, r->log_like + (r->have - 1) * K, K * sizeof *lp->cur_ll);
     for (size_t s = r->have; s <= r->steps; s++) {
         for (int h = 0; h < 2; h++) {
             if ((st = dfle_mcmc_propose(mc, h, lp->y, err)) != DFLE_OK)
                 goto done;
+            /* the chain's positions are its file's numbers */
+            for (size_t i = 0; i < H * d; i++)
+                lp->y[i] = inv_round(lp->y[i], INV_X_DIGITS);
             if ((st = evaluate(lp, H, err)) != DFLE_OK)
                 goto done; /* interrupted or failed: this step is not written */
             if ((st = dfle_mcmc_accept(mc, h, lp->y, lp->b.lp, lp->acc, err)) != DFLE_OK)
@@ -354,8 +407,18 @@ static int run_chain(loop *lp, dfle_error *err)
             }
         }
         memcpy(r->x + s * K * d, dfle_mcmc_x(mc), K * d * sizeof *r->x);
-        memcpy(r->log_post + s * K, dfle_mcmc_lp(mc), K * sizeof *r->log_post);
-        memcpy(r->log_like + s * K, lp->cur_ll, K * sizeof *r->log_like);
+        memcpy(lp->cur_lp, dfle_mcmc_lp(mc), K * sizeof *lp->cur_lp);
+        for (size_t k = 0; k < K; k++) {
+            r->log_post[s * K + k] = inv_round(lp->cur_lp[k], INV_LP_DIGITS);
+            r->log_like[s * K + k] = inv_round(lp->cur_ll[k], INV_LP_DIGITS);
+        }
+        /* in burn-in, stranded walkers back into the ensemble */
+        if (R->o.move_stranded && inv_check_step(s, r->burn) &&
+            inv_move_stranded(R, s, lp->cur_lp, lp->cur_ll, &health) > 0 &&
+            (st = dfle_mcmc_set_state(mc, s, r->x + s * K * d, lp->cur_lp, err)) != DFLE_OK) {
+            dfle_drive_prefix(err, "invert");
+            goto done;
+        }
         if ((st = inv_write_step(R, s, err)) != DFLE_OK)
             goto done;
         r->have = s + 1;
@@ -365,6 +428,8 @@ static int run_chain(loop *lp, dfle_error *err)
 done:
     dfle_mcmc_free(mc);
     free(logs);
+    inv_health_free(&health);
+    inv_forget_partial(R);
     return st;
 }
 
@@ -394,6 +459,7 @@ static int sample(inv_run *R, const dfle_evaluator *ev, dfle_error *err)
     lp.b.msgs = zalloc(K, DFLE_INVERT_MSG, &ok);
     lp.b.lprior = zalloc(K, sizeof *lp.b.lprior, &ok);
     lp.acc = zalloc(K, 1, &ok);
+    lp.cur_lp = zalloc(K, sizeof *lp.cur_lp, &ok);
     lp.cur_ll = zalloc(K, sizeof *lp.cur_ll, &ok);
     lp.t0 = dfle_drive_now();
     lp.total = (R->r->steps + 1 - R->r->have) * K;
@@ -425,6 +491,7 @@ static int sample(inv_run *R, const dfle_evaluator *ev, dfle_error *err)
     free(lp.b.msgs);
     free(lp.b.lprior);
     free(lp.acc);
+    free(lp.cur_lp);
     free(lp.cur_ll);
     return st;
 }
@@ -438,10 +505,21 @@ static void unsummarize(dfle_invert_result *r)
     for (size_t k = 0; k < r->nwarnings; k++)
         free(r->warnings[k]);
     free(r->warnings);
+    for (size_t k = 0; k < r->nstranded; k++)
+        free(r->stranded[k].median);
+    free(r->stranded);
+    free(r->moved);
+    free(r->bounded);
     r->summary = NULL;
     r->tau = r->acceptance_walkers = NULL;
     r->warnings = NULL;
     r->nwarnings = 0;
+    r->stranded = NULL;
+    r->nstranded = 0;
+    r->moved = NULL;
+    r->nmoved = 0;
+    r->bounded = NULL;
+    r->first_alert = 0;
     r->complete = 0;
 }
 
@@ -486,11 +564,28 @@ void dfle_invert_free(dfle_invert *inv)
         return;
     dfle_ens_file_close(inv->R.file, 0, NULL);
     dfle_text_free(&inv->R.row);
+    inv_forget_partial(&inv->R);
+    free(inv->R.line);
+    free(inv->R.point);
     result_free(inv->R.r);
     free(inv);
 }
 
 const dfle_invert_result *dfle_invert_result_of(const dfle_invert *inv) { return inv->R.r; }
+
+int dfle_invert_set_point(dfle_invert *inv, const double *x, dfle_error *err)
+{
+    inv_run *R = &inv->R;
+    if (x == NULL) {
+        free(R->point);
+        R->point = NULL;
+        return DFLE_OK;
+    }
+    if (R->point == NULL && (R->point = malloc(R->o.d * sizeof *R->point)) == NULL)
+        return dfle_error_set(err, DFLE_ENOMEM, "invert: out of memory");
+    memcpy(R->point, x, R->o.d * sizeof *R->point);
+    return DFLE_OK;
+}
 
 int dfle_invert_new(const dfle_invert_opts *opts, dfle_invert **out, dfle_error *err)
 {
@@ -514,7 +609,7 @@ int dfle_invert_new(const dfle_invert_opts *opts, dfle_invert **out, dfle_error 
             st = dfle_error_set(err, DFLE_EINVAL, "invert: %s is not a finished chain", R->o.out);
             goto fail;
         }
-        if (inv_summarize(R->r) != 0) {
+        if (inv_summarize(R) != 0) {
             st = dfle_error_set(err, DFLE_ENOMEM, "invert: out of memory for the summaries");
             goto fail;
         }
@@ -573,7 +668,7 @@ int dfle_invert_run(dfle_invert *inv, const dfle_evaluator *ev, dfle_error *err)
             dfle_drive_prefix(err, "invert");
         }
     }
-    if ((st == DFLE_OK || st == DFLE_ECANCELED) && inv_summarize(R->r) != 0 && st == DFLE_OK)
+    if ((st == DFLE_OK || st == DFLE_ECANCELED) && inv_summarize(R) != 0 && st == DFLE_OK)
         st = dfle_error_set(err, DFLE_ENOMEM, "invert: out of memory for the summaries");
     return st;
 }

@@ -2,8 +2,10 @@
  * invert_summary.c - what a finished chain says and how far to trust
  * it: the samples after burn-in summarised (medians, intervals), their
  * autocorrelation times and effective size, acceptance, the tally of
- * failed proposals, the best sample, and warnings in sentences a user
- * reads beside the numbers (doc/inversion.md, "Diagnostics").
+ * failed proposals, the best sample, the stranded walkers
+ * (invert_health.c) and the marginals held by a prior bound
+ * (invert_bounds.c), and warnings in sentences a user reads beside the
+ * numbers (doc/inversion.md, "Diagnostics").
  */
 #include "drive/invert_internal.h"
 
@@ -12,13 +14,7 @@
 #include <stdlib.h>
 #include <string.h>
 
-static int warn(dfle_invert_result *r, const char *fmt, ...)
-#if defined(__GNUC__)
-    __attribute__((format(printf, 2, 3)))
-#endif
-    ;
-
-static int warn(dfle_invert_result *r, const char *fmt, ...)
+int inv_warn(dfle_invert_result *r, const char *fmt, ...)
 {
     char buf[600], **w, *s;
     va_list ap;
@@ -47,39 +43,40 @@ static int warnings(dfle_invert_result *r, int windowed, double tau_use)
     for (size_t i = K; i < (N + 1) * K; i++)
         acc += r->proposal[i] == DFLE_PROPOSAL_ACCEPTED;
     if (!windowed || !isfinite(tau_max))
-        bad |= warn(r, "the chain is too short to estimate the autocorrelation time (%zu steps "
+        bad |= inv_warn(r, "the chain is too short to estimate the autocorrelation time (%zu steps "
                        "after burn-in); the intervals are unreliable: run many more steps",
                     npost);
     else if ((double)npost < 50 * tau_use && npost < 100)
-        bad |= warn(r, "the chain is too short: %zu steps after burn-in are fewer than 50 "
+        bad |= inv_warn(r, "the chain is too short: %zu steps after burn-in are fewer than 50 "
                        "autocorrelation times (tau = %.1f steps, itself underestimated on so "
                        "short a chain); the intervals are rough: run many more steps",
                     npost, tau_max);
     else if ((double)npost < 50 * tau_use)
-        bad |= warn(r, "the chain is too short: %zu steps after burn-in are fewer than 50 "
+        bad |= inv_warn(r, "the chain is too short: %zu steps after burn-in are fewer than 50 "
                        "autocorrelation times (tau = %.1f steps); the intervals are rough, run "
                        "at least %.0f steps",
                     npost, tau_max, ceil(50 * tau_use + (double)r->burn));
     if (isfinite(tau_max) && (double)r->burn < 2 * tau_max)
-        bad |= warn(r, "burn-in (%zu steps) is shorter than 2 autocorrelation times (tau = %.1f): "
+        bad |= inv_warn(r, "burn-in (%zu steps) is shorter than 2 autocorrelation times (tau = %.1f): "
                        "the start may still show in the samples",
                     r->burn, tau_max);
     if ((double)acc < 0.1 * (double)(N * K))
-        bad |= warn(r, "low acceptance (%.3f): the walkers rarely move; see the failures and the "
+        bad |= inv_warn(r, "low acceptance (%.3f): the walkers rarely move; see the failures and the "
                        "priors",
                     (double)acc / (double)(N * K));
     fails = r->tally[DFLE_PROPOSAL_NOT_CONVERGED] + r->tally[DFLE_PROPOSAL_INVALID] +
             r->tally[DFLE_PROPOSAL_ERROR];
     if ((double)fails > 0.05 * (double)(N * K))
-        bad |= warn(r, "%.1f %% of the proposals failed in the forward model (%zu not converged, "
+        bad |= inv_warn(r, "%.1f %% of the proposals failed in the forward model (%zu not converged, "
                        "%zu invalid profiles, %zu errors); they count as zero likelihood",
                     100.0 * (double)fails / (double)(N * K), r->tally[DFLE_PROPOSAL_NOT_CONVERGED],
                     r->tally[DFLE_PROPOSAL_INVALID], r->tally[DFLE_PROPOSAL_ERROR]);
     return bad;
 }
 
-int inv_summarize(dfle_invert_result *r)
+int inv_summarize(inv_run *R)
 {
+    dfle_invert_result *r = R->r;
     const size_t K = r->walkers, d = r->d, N = r->steps, burn = r->burn;
     size_t npost, m, acc = 0;
     const double *post;
@@ -87,8 +84,15 @@ int inv_summarize(dfle_invert_result *r)
     int windowed = 1;
 
     r->complete = N >= 1 && r->have == N + 1;
-    if (!r->complete)
-        return N >= 1 ? warn(r, "the chain is not complete") : 0;
+    if (!r->complete) {
+        int bad = N < 1            ? 0
+                  : r->interrupted ? inv_warn(r, "interrupted after step %zu of %zu: a cut "
+                                                 "chain has no posterior; running again "
+                                                 "resumes it", r->have > 0 ? r->have - 1 : 0, N)
+                                   : inv_warn(r, "the chain is not complete");
+        r->first_alert = r->nwarnings;
+        return bad;
+    }
     npost = N - burn;
     m = npost * K;
     post = r->x + (burn + 1) * K * d;
@@ -133,5 +137,10 @@ int inv_summarize(dfle_invert_result *r)
             r->best = i;
     /* what to trust: emcee's rule of thumb, N > 50 tau */
     r->converged = windowed && isfinite(tau_use) && (double)npost >= 50 * tau_use;
-    return warnings(r, windowed, tau_use);
+    if (warnings(r, windowed, tau_use) != 0)
+        return -1;
+    /* what the numbers rest on: the walkers' health, then the priors' bounds */
+    if (inv_health_report(R) != 0 || inv_bounds(R) != 0)
+        return -1;
+    return 0;
 }

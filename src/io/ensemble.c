@@ -58,6 +58,7 @@ void dfle_ens_table_free(dfle_ens_table *t)
         free(t->rows[i]);
     free(t->rows);
     free(t->index);
+    free(t->line);
     free(t->meta);
     free(t->comments);
     free(t->header);
@@ -192,11 +193,13 @@ int dfle_ens_table_read(const char *path, dfle_ens_table **out, dfle_error *err)
         }
     t->index = malloc((t->nrows ? t->nrows : 1) * sizeof *t->index);
     t->rows = malloc((t->nrows ? t->nrows : 1) * sizeof *t->rows);
-    if (t->index == NULL || t->rows == NULL)
+    t->line = malloc((t->nrows ? t->nrows : 1) * sizeof *t->line);
+    if (t->index == NULL || t->rows == NULL || t->line == NULL)
         goto nomem;
     for (size_t i = 0; i < t->nrows; i++) {
         t->index[i] = refs[i].index;
         t->rows[i] = refs[i].row;
+        t->line[i] = refs[i].line;
     }
     free(refs);
     free(text);

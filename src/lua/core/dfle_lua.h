@@ -171,6 +171,10 @@ void dfle_lua_warn(lua_State *L, const char *fn, const char *msg);
  * "direct").  `fn` and `what` name it in the error ("dfle.<fn>: <what>
  * contains a NUL byte"). */
 const char *dfle_lua_check_string(lua_State *L, int idx, const char *fn, const char *what);
+/* The unit, in dfle's style, of a parameter or output name dfle knows
+ * ("U": "m/yr", "gamma": "-"), or NULL for a user's own (and for k_df,
+ * whose unit depends on the law's exponents). */
+const char *dfle_lua_known_unit(const char *name);
 /* The index in `choices` (NULL-terminated) of the string at idx; any
  * other value raises "dfle.<fn>: <what> must be 'a', 'b' or 'c' (got
  * 'x')" (luaL_checkoption names a field read onto the stack as

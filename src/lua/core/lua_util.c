@@ -470,3 +470,17 @@ int dfle_lua_check_option(lua_State *L, int idx, const char *fn, const char *wha
         return luaL_error(L, "dfle.%s: %s must be %s (got '%s')", fn, what, list, shown);
     }
 }
+
+const char *dfle_lua_known_unit(const char *name)
+{
+    static const char *const units[][2] = {
+        {"U", "m/yr"}, {"M0", "m^(3-2 gamma)"}, {"tau_y", "Pa"}, {"mu", "Pa s"},
+        {"rho_b", "kg/m^3"}, {"k_e", "m^2.5 s^2 kg^-1.5"}, {"S_df", "-"}, {"A_df", "m^2"},
+        {"S_max", "-"}, {"S_ch", "-"}, {"S_max_minus_S_ch", "-"}, {"r2", "-"},
+        {"runout_A", "m^2"}, {"runout_x", "m"}, {"time", "yr"}, {"steps", "-"}, {"gamma", "-"},
+        {"alpha", "-"}, {"beta", "-"}, {"sigma", "-"}};
+    for (size_t k = 0; k < sizeof units / sizeof units[0]; k++)
+        if (strcmp(name, units[k][0]) == 0)
+            return units[k][1];
+    return NULL;
+}

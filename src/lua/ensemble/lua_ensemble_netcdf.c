@@ -34,23 +34,6 @@ static const char *push_design(lua_State *L, const char *file)
     return s;
 }
 
-/* Units of the parameters and outputs dfle knows, in dfle's style (the
- * writer puts them in UDUNITS' or, where it has none, as dfle_units);
- * NULL (no units attribute) for a user's own. */
-static const char *known_units(const char *name)
-{
-    static const char *const units[][2] = {
-        {"U", "m/yr"}, {"M0", "m^(3-2 gamma)"}, {"tau_y", "Pa"}, {"mu", "Pa s"},
-        {"rho_b", "kg/m^3"}, {"k_e", "m^2.5 s^2 kg^-1.5"}, {"S_df", "-"}, {"A_df", "m^2"},
-        {"S_max", "-"}, {"S_ch", "-"}, {"S_max_minus_S_ch", "-"}, {"r2", "-"},
-        {"runout_A", "m^2"}, {"runout_x", "m"}, {"time", "yr"}, {"steps", "-"}, {"gamma", "-"},
-        {"alpha", "-"}, {"beta", "-"}};
-    for (size_t k = 0; k < sizeof units / sizeof units[0]; k++)
-        if (strcmp(name, units[k][0]) == 0)
-            return units[k][1];
-    return NULL;
-}
-
 /* The number column `name` of ens.data (at index data), nrows values. */
 static void read_column(lua_State *L, int data, const char *name, size_t nrows, double *out)
 {
@@ -119,7 +102,7 @@ static int l_write_netcdf(lua_State *L)
             if (name == NULL)
                 return luaL_error(L, "dfle.%s: column names must be strings", fn);
         }
-        cols[k] = (dfle_nc_var){name, k == 0 ? "1" : known_units(name), k == 0 ? "sample index (row of the design, from 1)"
+        cols[k] = (dfle_nc_var){name, k == 0 ? "1" : dfle_lua_known_unit(name), k == 0 ? "sample index (row of the design, from 1)"
                                            : k <= nin ? "input parameter" : "output", NULL, NULL};
         read_column(L, data, name, nrows, values + k * nrows);
         colp[k] = values + k * nrows;

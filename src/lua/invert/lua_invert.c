@@ -46,6 +46,39 @@ static void note_chain(inv_run *R)
     R->ST = r->proposal;
 }
 
+/* The point estimate's values (natural units, NaN for sigma and where
+ * it failed) to the driver, which checks them against the priors'
+ * bounds with the samples. */
+static void give_point(lua_State *L, int lsq_idx, inv_run *R)
+{
+    double *x = lua_newuserdatauv(L, R->d * sizeof *x, 0);
+    dfle_error err;
+    for (size_t j = 0; j < R->d; j++)
+        x[j] = NAN;
+    if (lua_getfield(L, lsq_idx, "values") == LUA_TTABLE)
+        for (size_t j = 0; j < R->nmodel; j++) {
+            if (lua_getfield(L, -1, R->names[j]) == LUA_TNUMBER)
+                x[j] = lua_tonumber(L, -1);
+            lua_pop(L, 1);
+        }
+    lua_pop(L, 1);
+    if (dfle_invert_set_point(R->inv, x, &err) != DFLE_OK)
+        dfle_lua_raise(L, &err);
+    lua_pop(L, 1);
+}
+
+/* What says a printed number is not the data's (stranded walkers, prior
+ * bounds), on stderr as the run ends: a top-level call only (one inside
+ * an ensemble's sample has its own caller to tell). */
+static void alert(lua_State *L, const inv_run *R)
+{
+    const dfle_invert_result *r = dfle_invert_result_of(R->inv);
+    if (R->nested)
+        return;
+    for (size_t k = r->first_alert; k < r->nwarnings; k++)
+        dfle_lua_warn(L, "invert", r->warnings[k]);
+}
+
 static int l_invert(lua_State *L)
 {
     const dfle_lua_host *host = dfle_lua_host_of(L);
@@ -79,6 +112,8 @@ static int l_invert(lua_State *L)
         inv_push_result(L, ctx, R, 0, 0);
         return 1;
     }
+    /* Nothing new starts once interrupted. */
+    dfle_lua_check_interrupt(L, "invert");
     {
         int nw = dfle_lua_par_workers(host, R->o.workers, 0);
         if (host == NULL || host->open_state == NULL || R->nested)
@@ -88,15 +123,27 @@ static int l_invert(lua_State *L)
     R->o.interrupt = dfle_lua_get_interrupt(L);
     R->o.progress = host != NULL && host->progress != NULL && !R->nested ? hook_progress : NULL;
     R->o.ud = (void *)host;
+    /* What made the file, for its comment lines (kept on the stack). */
+    if (out != NULL)
+        R->o.describe = dfle_lua_push_record(L, "dfle.invert chain: every walker at every step");
     /* The chain file first: another inversion's is refused before the
      * point estimate takes its time. */
     if (dfle_invert_new(&R->o, &R->inv, &err) != DFLE_OK)
         return dfle_lua_raise(L, &err);
+    R->o.describe = NULL; /* read while the file was made */
     if (R->lsq && R->nmodel >= 1) {
         dfle_lua_par_depth(L, +1);
         inv_push_lsq(L, ctx, R);
         dfle_lua_par_depth(L, -1);
         lsq_idx = lua_gettop(L);
+        /* runs an interrupt cut short are failures to the fit, not the
+         * fit: it is left out (the chain, below, does not start) */
+        if (dfle_lua_interrupted(L)) {
+            lua_pop(L, 1);
+            lsq_idx = 0;
+        } else {
+            give_point(L, lsq_idx, R);
+        }
     }
     lua_getfield(L, ctx, "identity");
     st = dfle_lua_evaluator_init(&R->ev, &inv_kind, host, L, ctx, call, lua_tostring(L, -1), &err);
@@ -112,21 +159,23 @@ static int l_invert(lua_State *L)
         host->progress_end(host->ud);
     note_chain(R);
     if (st == DFLE_ECANCELED) {
+        /* The whole steps are kept; the result says "interrupted" and has
+         * no posterior (nothing of a cut chain is a result). */
         const dfle_invert_result *r = dfle_invert_result_of(R->inv);
+        int last = (int)(r->have > 0 ? r->have - 1 : 0);
         if (out != NULL)
             dfle_lua_set_interrupt_note(L, "dfle.invert stopped after step %d of %d; the whole "
                                            "steps are in %s, and running the script again "
-                                           "resumes it", (int)(r->have > 0 ? r->have - 1 : 0),
-                                        (int)r->steps, out);
+                                           "resumes it", last, (int)r->steps, out);
         else
             dfle_lua_set_interrupt_note(L, "dfle.invert stopped after step %d of %d (no 'out' "
-                                           "file: the chain is lost)",
-                                        (int)(r->have > 0 ? r->have - 1 : 0), (int)r->steps);
-        dfle_lua_check_interrupt(L, "invert");
-    }
-    if (st != DFLE_OK)
+                                           "file: the chain is lost)", last, (int)r->steps);
+    } else if (st != DFLE_OK) {
         return dfle_lua_raise(L, &err);
+    }
     inv_push_result(L, ctx, R, lsq_idx, dfle_lua_now() - t0);
+    if (st == DFLE_OK)
+        alert(L, R);
     return 1;
 }
 

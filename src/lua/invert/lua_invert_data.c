@@ -110,7 +110,7 @@ int inv_read_data(lua_State *L, int arg, inv_run *R, size_t nbins, int nbins_giv
         lua_setfield(L, out, "count");
         lua_pushinteger(L, (lua_Integer)nbad), lua_setfield(L, out, "nonpositive");
     } else if (lua_type(L, data) == LUA_TSTRING) {
-        const char *path = lua_tostring(L, data);
+        const char *path = dfle_lua_check_string(L, data, "invert", "parameter 'data' (a file)");
         const double *A, *S;
         dfle_error err;
         int st;

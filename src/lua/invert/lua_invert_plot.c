@@ -27,7 +27,7 @@ static int plot_args(lua_State *L, const char *fn, unsigned which, const dfle_lu
     int ctx;
     lua_settop(L, 3);
     ctx = inv_result_ctx(L, 1);
-    *path = luaL_checkstring(L, 2);
+    *path = dfle_lua_check_string(L, 2, fn, "the path");
     dfle_lua_plot_opts(L, 3, fn, which, nums, nnums, keys, o);
     return ctx;
 }

@@ -70,6 +70,43 @@ static void add_warning(lua_State *L, int warn, const char *fmt, ...)
     lua_rawseti(L, warn, (lua_Integer)lua_rawlen(L, warn) + 1);
 }
 
+/* res.stranded (the walkers stranded after burn-in) and res.moved (those
+ * moved back in burn-in), arrays of tables. */
+static void push_health(lua_State *L, const dfle_invert_result *r, int names)
+{
+    lua_createtable(L, (int)r->nstranded, 0);
+    for (size_t i = 0; i < r->nstranded; i++) {
+        const dfle_invert_walker *w = &r->stranded[i];
+        lua_createtable(L, 0, 5);
+        lua_pushinteger(L, (lua_Integer)w->walker), lua_setfield(L, -2, "walker");
+        set_num(L, "acceptance", w->acceptance);
+        set_num(L, "ensemble_acceptance", w->ensemble_acceptance);
+        set_num(L, "lp_drop", w->lp_drop);
+        lua_createtable(L, 0, (int)r->d);
+        for (size_t j = 0; j < r->d; j++) {
+            lua_geti(L, names, (lua_Integer)j + 1);
+            lua_pushnumber(L, w->median[j]);
+            lua_settable(L, -3);
+        }
+        lua_setfield(L, -2, "median");
+        lua_rawseti(L, -2, (lua_Integer)i + 1);
+    }
+    lua_setfield(L, -2 - 1, "stranded");
+    lua_createtable(L, (int)r->nmoved, 0);
+    for (size_t i = 0; i < r->nmoved; i++) {
+        const dfle_invert_move *mv = &r->moved[i];
+        lua_createtable(L, 0, 4);
+        lua_pushinteger(L, (lua_Integer)mv->step), lua_setfield(L, -2, "step");
+        lua_pushinteger(L, (lua_Integer)mv->walker), lua_setfield(L, -2, "walker");
+        lua_pushinteger(L, (lua_Integer)mv->onto), lua_setfield(L, -2, "onto");
+        set_num(L, "lp_gain", mv->lp_gain);
+        lua_rawseti(L, -2, (lua_Integer)i + 1);
+    }
+    lua_setfield(L, -2 - 1, "moved");
+    lua_pushnumber(L, r->threshold_lp);
+    lua_setfield(L, -2 - 1, "strand_drop");
+}
+
 void inv_push_result(lua_State *L, int ctx, inv_run *R, int lsq_idx, double elapsed)
 {
     const dfle_invert_result *r = dfle_invert_result_of(R->inv);
@@ -89,6 +126,13 @@ void inv_push_result(lua_State *L, int ctx, inv_run *R, int lsq_idx, double elap
     lua_pushinteger(L, (lua_Integer)r->burn), lua_setfield(L, res, "burn");
     lua_pushinteger(L, (lua_Integer)R->o.seed), lua_setfield(L, res, "seed");
     lua_pushinteger(L, (lua_Integer)r->ran), lua_setfield(L, res, "ran");
+    /* "complete", or "interrupted" (then no posterior: the whole steps
+     * are in the file, and running again resumes them) */
+    lua_pushstring(L, r->interrupted ? "interrupted" : r->complete || N == 0 ? "complete"
+                                                                             : "incomplete");
+    lua_setfield(L, res, "reason");
+    lua_pushinteger(L, (lua_Integer)(r->have > 0 ? r->have - 1 : 0));
+    lua_setfield(L, res, "have");
     lua_pushinteger(L, (lua_Integer)(r->evaluations + R->lsq_evaluations));
     lua_setfield(L, res, "evaluations");
     lua_pushnumber(L, r->forward_seconds + R->lsq_seconds);
@@ -99,7 +143,7 @@ void inv_push_result(lua_State *L, int ctx, inv_run *R, int lsq_idx, double elap
     lua_getfield(L, ctx, "data"), lua_setfield(L, res, "data");
     /* the first message of each kind of failure (of this call) */
     lua_newtable(L);
-    for (int k = DFLE_PROPOSAL_OUTSIDE; k < DFLE_PROPOSAL_N; k++)
+    for (int k = DFLE_PROPOSAL_OUTSIDE; k <= DFLE_PROPOSAL_ERROR; k++)
         if (r->failure[k][0] != '\0') {
             lua_pushstring(L, r->failure[k]);
             lua_setfield(L, -2, dfle_proposal_name(k));
@@ -138,9 +182,14 @@ void inv_push_result(lua_State *L, int ctx, inv_run *R, int lsq_idx, double elap
         for (size_t j = 0; j < d; j++) {
             lua_geti(L, names, (lua_Integer)j + 1);
             push_summary(L, &r->summary[j]);
+            if (r->bounded != NULL && r->bounded[j] != DFLE_BOUND_NONE) {
+                lua_pushstring(L, dfle_bound_name(r->bounded[j]));
+                lua_setfield(L, -2, "bounded");
+            }
             lua_settable(L, -3);
         }
         lua_setfield(L, res, "summary");
+        push_health(L, r, names);
         lua_createtable(L, 0, (int)d);
         for (size_t j = 0; j < d; j++) {
             lua_geti(L, names, (lua_Integer)j + 1);
@@ -173,7 +222,7 @@ void inv_push_result(lua_State *L, int ctx, inv_run *R, int lsq_idx, double elap
     for (size_t k = 0; k < r->nwarnings; k++)
         add_warning(L, warn, "%s", r->warnings[k]);
     lua_createtable(L, 0, 5);
-    for (int k = DFLE_PROPOSAL_OUTSIDE; k < DFLE_PROPOSAL_N; k++) {
+    for (int k = DFLE_PROPOSAL_OUTSIDE; k <= DFLE_PROPOSAL_ERROR; k++) {
         lua_pushinteger(L, (lua_Integer)r->tally[k]);
         lua_setfield(L, -2, dfle_proposal_name(k));
     }
@@ -326,10 +375,23 @@ static int l_tostring(lua_State *L)
     lua_getfield(L, 1, "steps");
     lua_getfield(L, 1, "burn");
     lua_getfield(L, 1, "acceptance");
-    snprintf(line, sizeof line, "dfle.invert: %d walkers x %d steps (burn-in %d), acceptance "
-             "%.3f\n", (int)lua_tointeger(L, -4), (int)lua_tointeger(L, -3),
-             (int)lua_tointeger(L, -2), lua_tonumber(L, -1));
-    lua_pop(L, 4);
+    lua_getfield(L, 1, "reason");
+    lua_getfield(L, 1, "have");
+    lua_getfield(L, 1, "file");
+    if (lua_isstring(L, -3) && strcmp(lua_tostring(L, -3), "interrupted") == 0) {
+        /* a cut chain has no posterior: say so first, and what was kept */
+        const char *file = lua_tostring(L, -1);
+        snprintf(line, sizeof line, "dfle.invert: %d walkers x %d steps, interrupted after step "
+                 "%d: no posterior; %s%s%s\n", (int)lua_tointeger(L, -7),
+                 (int)lua_tointeger(L, -6), (int)lua_tointeger(L, -2),
+                 file != NULL ? "the whole steps are in " : "no 'out' file: the chain is lost",
+                 file != NULL ? file : "", file != NULL ? ", and running again resumes it" : "");
+    } else {
+        snprintf(line, sizeof line, "dfle.invert: %d walkers x %d steps (burn-in %d), "
+                 "acceptance %.3f\n", (int)lua_tointeger(L, -7), (int)lua_tointeger(L, -6),
+                 (int)lua_tointeger(L, -5), lua_tonumber(L, -4));
+    }
+    lua_pop(L, 7);
     dfle_lua_text_str(L, &parts, line);
     if (lua_istable(L, 3) && lua_istable(L, 4)) {
         snprintf(line, sizeof line, "  %-10s %12s %27s %27s %8s\n", "parameter", "median",
@@ -338,7 +400,7 @@ static int l_tostring(lua_State *L)
         for (lua_Integer j = 1; j <= nn; j++) {
             static const char *const keys[5] = {"median", "lo68", "hi68", "lo95", "hi95"};
             double v[5], t;
-            const char *name;
+            const char *name, *bound;
             lua_geti(L, 2, j);
             name = lua_tostring(L, -1);
             lua_getfield(L, 4, name);
@@ -350,9 +412,13 @@ static int l_tostring(lua_State *L)
                 v[k] = lua_tonumber(L, -1);
                 lua_pop(L, 1);
             }
+            /* an interval a prior's bound holds is marked where it is read */
+            lua_getfield(L, -1, "bounded");
+            bound = lua_tostring(L, -1);
             snprintf(line, sizeof line, "  %-10s %12.4g   [%11.4g, %11.4g]   [%11.4g, %11.4g] "
-                     "%8.1f\n", name ? name : "?", v[0], v[1], v[2], v[3], v[4], t);
-            lua_pop(L, 2);
+                     "%8.1f%s%s\n", name ? name : "?", v[0], v[1], v[2], v[3], v[4], t,
+                     bound != NULL ? "  bounded: " : "", bound != NULL ? bound : "");
+            lua_pop(L, 3);
             dfle_lua_text_str(L, &parts, line);
         }
     }
@@ -376,10 +442,11 @@ static int l_tostring(lua_State *L)
         }
         lua_pop(L, 1);
     }
-    lua_getfield(L, 1, "failures");
+    /* the tally is the whole chain's, which a cut one is not */
+    lua_getfield(L, 1, lua_istable(L, 3) ? "failures" : "(none)");
     if (lua_istable(L, -1)) {
         dfle_lua_text_str(L, &parts, "  proposals:");
-        for (int k = DFLE_PROPOSAL_OUTSIDE; k < DFLE_PROPOSAL_N; k++) {
+        for (int k = DFLE_PROPOSAL_OUTSIDE; k <= DFLE_PROPOSAL_ERROR; k++) {
             lua_getfield(L, -1, dfle_proposal_name(k));
             snprintf(line, sizeof line, " %s %d", dfle_proposal_name(k), (int)lua_tointeger(L, -1));
             lua_pop(L, 1);

@@ -369,8 +369,50 @@ static void push_identity(lua_State *L, int ctx, inv_run *R)
 /* ------------------------------------------------------------------ */
 /* The table.                                                          */
 
-static const char *const spec_keys[] = {"data", "build", "params", "fixed", "sigma", "channel",
-                                        "run", "lsq", "out", "resume", NULL};
+static const char *const spec_keys[] = {"data",  "build", "params",        "fixed",
+                                        "sigma", "channel", "run",        "lsq",
+                                        "out",   "resume", "move_stranded", "units", NULL};
+
+/* The units of the chain's parameter columns: `units = { name = "unit" }`,
+ * else the ones dfle knows (U in m/yr, gamma, sigma dimensionless, ...).
+ * Held by ctx.c_units (the strings by ctx.units). */
+static void read_units(lua_State *L, int arg, int ctx, inv_run *R)
+{
+    const char **u = lua_newuserdatauv(L, R->d * sizeof *u, 0);
+    int given;
+    lua_setfield(L, ctx, "c_units");
+    lua_newtable(L);
+    given = lua_gettop(L);
+    if (lua_getfield(L, arg, "units") != LUA_TNIL) {
+        if (!lua_istable(L, -1))
+            luaL_error(L, "dfle.invert: parameter 'units' must be a table { name = \"unit\" }, "
+                          "got %s", luaL_typename(L, -1));
+        lua_pushnil(L);
+        while (lua_next(L, -2) != 0) {
+            if (lua_type(L, -2) != LUA_TSTRING || lua_type(L, -1) != LUA_TSTRING)
+                luaL_error(L, "dfle.invert: 'units' maps parameter names to unit texts");
+            dfle_lua_check_string(L, -1, "invert", "a unit");
+            lua_pushvalue(L, -2);
+            lua_insert(L, -2);
+            lua_rawset(L, given);
+        }
+    }
+    lua_pop(L, 1);
+    lua_getfield(L, ctx, "names");
+    for (size_t j = 0; j < R->d; j++) {
+        const char *name;
+        lua_geti(L, -1, (lua_Integer)j + 1);
+        name = lua_tostring(L, -1);
+        if (lua_getfield(L, given, name) == LUA_TSTRING)
+            u[j] = lua_tostring(L, -1); /* held by ctx.units */
+        else
+            u[j] = dfle_lua_known_unit(name);
+        lua_pop(L, 2);
+    }
+    lua_pop(L, 1);
+    lua_setfield(L, ctx, "units");
+    R->o.units = u;
+}
 
 void inv_read_spec(lua_State *L, int arg, inv_run **box)
 {
@@ -605,21 +647,26 @@ void inv_read_spec(lua_State *L, int arg, inv_run **box)
     R->o.a = a;
     R->o.workers = (int)dfle_lua_check_whole(L, workers, "invert", "workers", 0, 4096);
     R->lsq = 1;
-    for (int k = 0; k < 2; k++) {
-        const char *key = k == 0 ? "lsq" : "resume";
-        if (lua_getfield(L, arg, key) != LUA_TNIL) {
+    for (int k = 0; k < 3; k++) {
+        static const char *const keys[] = {"lsq", "resume", "move_stranded"};
+        int *flag = k == 0 ? &R->lsq : k == 1 ? &R->o.resume : &R->o.move_stranded;
+        if (lua_getfield(L, arg, keys[k]) != LUA_TNIL) {
             if (!lua_isboolean(L, -1))
-                luaL_error(L, "dfle.invert: parameter '%s' must be a boolean, got %s", key,
+                luaL_error(L, "dfle.invert: parameter '%s' must be a boolean, got %s", keys[k],
                            luaL_typename(L, -1));
-            *(k == 0 ? &R->lsq : &R->o.resume) = lua_toboolean(L, -1);
+            *flag = lua_toboolean(L, -1);
         }
         lua_pop(L, 1);
     }
-    if (lua_getfield(L, arg, "out") != LUA_TNIL && lua_type(L, -1) != LUA_TSTRING)
-        luaL_error(L, "dfle.invert: parameter 'out' (the chain's CSV file) must be a file name, "
-                      "got %s", luaL_typename(L, -1));
+    if (lua_getfield(L, arg, "out") != LUA_TNIL) {
+        if (lua_type(L, -1) != LUA_TSTRING)
+            luaL_error(L, "dfle.invert: parameter 'out' (the chain's CSV file) must be a file "
+                          "name, got %s", luaL_typename(L, -1));
+        dfle_lua_check_string(L, -1, "invert", "parameter 'out'");
+    }
     R->o.out = lua_tostring(L, -1); /* held by ctx */
     lua_setfield(L, ctx, "out");
+    read_units(L, arg, ctx, R);
 
     push_problem(L, ctx, R);
     push_identity(L, ctx, R);
