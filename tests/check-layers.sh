@@ -19,7 +19,7 @@ rank() {
     case $1 in
     base) echo 0 ;; domain) echo 1 ;; routers | drainage) echo 2 ;; laws) echo 3 ;;
     model) echo 4 ;; solvers) echo 5 ;; dem) echo 6 ;; analysis) echo 7 ;; landscape) echo 8 ;;
-    io) echo 9 ;; drive) echo 10 ;; mpi) echo 11 ;; lua) echo 12 ;; cli) echo 13 ;; *) echo 99 ;;
+    io) echo 9 ;; drive) echo 10 ;; mpi) echo 11 ;; lua) echo 12 ;; cli) echo 13 ;; python) echo 14 ;; *) echo 99 ;;
     esac
 }
 # The Lua binding's subfolders, bottom first: the core every file uses,
@@ -28,7 +28,7 @@ rank() {
 lua_rank() {
     case $1 in
     core) echo 0 ;; trace) echo 1 ;; define) echo 2 ;; objects | analysis) echo 3 ;;
-    drive) echo 4 ;; ensemble | invert) echo 5 ;; *) echo 99 ;;
+    drive) echo 4 ;; ensemble | invert) echo 5 ;; bridge) echo 6 ;; *) echo 99 ;;
     esac
 }
 header_layer() {
