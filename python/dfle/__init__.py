@@ -75,6 +75,14 @@ for _name in _module.keys():
         _export(_name)
 
 from . import _objects  # noqa: E402  (classes of the object types, custom laws)
-from ._objects import Model, Landscape, Dem  # noqa: E402,F401
+from ._objects import Model, Landscape, Dem, to_pandas  # noqa: E402,F401
 
 _objects._install(__import__(__name__), _classes)
+
+
+def bounds(lo, hi, **options):
+    """A parameter's range for dfle.ensemble, dfle.lhs and dfle.invert:
+    Lua's {lo, hi, log = true} is bounds(lo, hi, log=True)."""
+    table = {1: lo, 2: hi}
+    table.update(options)
+    return table

@@ -67,3 +67,13 @@ def _install(pkg, classes):
     classes["dfle.dem"] = Dem
     pkg.law["define"] = _with_sources(pkg.law["define"], "law")
     pkg.router["define"] = _with_sources(pkg.router["define"], "router")
+
+
+def to_pandas(result):
+    """An ensemble's rows (result.data: one column per parameter, output,
+    status and reason) as a pandas.DataFrame indexed by sample (needs pandas)."""
+    import pandas as pd
+    data = result["data"]
+    cols = {k: list(data[k]) if not hasattr(data[k], "dtype") else data[k] for k in data.keys()}
+    df = pd.DataFrame(cols)
+    return df.set_index("index") if "index" in df else df
