@@ -212,7 +212,7 @@ fuzz-long: all
 memcheck: all $(TEST_BIN) $(GATE_TEST) $(MISSING_TEST)
 	@BUILD=$(BUILD) MEMCHECK=1 sh tests/run-tests.sh
 
-bench: all $(BENCH_BIN) $(if $(HAVE_MPICC),$(BUILD)/dfle-mpi)
+bench: all $(BENCH_BIN) $(if $(HAVE_MPICC),$(BUILD)/dfle-mpi) $(if $(HAVE_PYTHON),python)
 	@sh bench/run.sh $(CLI) $(BUILD)/bench
 
 # Every example's figures in quick mode, checked against doc/figures.md,
@@ -286,7 +286,7 @@ LIBDIR := $(DESTDIR)$(PREFIX)/lib
 # C library (static and shared, pkg-config file) and headers, the man
 # page, the docs and the examples.  `dfle --help` finds the docs relative
 # to its own path, so a DESTDIR or relocated tree works too.
-install: all $(INSTALL_MPI)
+install: all $(INSTALL_MPI) $(if $(HAVE_PYTHON),python)
 	install -d $(DESTDIR)$(PREFIX)/bin $(LIBDIR)/lua/5.4 $(LIBDIR)/pkgconfig \
 	    $(DESTDIR)$(PREFIX)/include/dfle $(DESTDIR)$(PREFIX)/share/man/man1 $(DOCDIR)/examples
 	install -m 755 $(CLI) $(DESTDIR)$(PREFIX)/bin/dfle
@@ -303,6 +303,9 @@ install: all $(INSTALL_MPI)
 	install -m 644 doc/dfle.1 $(DESTDIR)$(PREFIX)/share/man/man1/dfle.1
 	install -m 644 README.md doc/*.md $(DOCDIR)/
 	install -m 644 examples/*.lua $(DOCDIR)/examples/
+	$(if $(HAVE_PYTHON),install -d $(DESTDIR)$(PYTHON_SITE)/dfle && \
+	    install -m 644 $(PY_FILES) $(DESTDIR)$(PYTHON_SITE)/dfle/ && \
+	    install -m 644 $(PY_EXT) $(DESTDIR)$(PYTHON_SITE)/dfle/)
 
 uninstall:
 	rm -f $(DESTDIR)$(PREFIX)/bin/dfle $(DESTDIR)$(PREFIX)/bin/dfle-mpi \
@@ -310,6 +313,7 @@ uninstall:
 	    $(LIBDIR)/libdfle.so.$(VERSION) $(LIBDIR)/libdfle.so.$(SOMAJOR) $(LIBDIR)/libdfle.so \
 	    $(LIBDIR)/pkgconfig/dfle.pc $(DESTDIR)$(PREFIX)/share/man/man1/dfle.1
 	rm -rf $(DESTDIR)$(PREFIX)/include/dfle $(DOCDIR)
+	$(if $(HAVE_PYTHON),rm -rf $(DESTDIR)$(PYTHON_SITE)/dfle)
 
 clean:
 	rm -rf build
