@@ -16,6 +16,7 @@
 
 
 #include "dfle_test.h"
+#include "scratch_dir.h"
 #include "lua_snippet.h"
 
 #include "dfle/crs.h"
@@ -29,20 +30,18 @@ static int setup(void **state)
     (void)state;
     GDALAllRegister();
     CPLPushErrorHandler(CPLQuietErrorHandler);
-    return mkdtemp(dir) == NULL;
+    return scratch_dir_make(dir);
 }
 
 static int teardown(void **state)
 {
-    char cmd[600];
     (void)state;
-    snprintf(cmd, sizeof cmd, "rm -rf '%s'", dir);
-    return system(cmd);
+    return scratch_dir_remove(dir);
 }
 
 static void in_dir(char *buf, size_t cap, const char *name)
 {
-    snprintf(buf, cap, "%s/%s", dir, name);
+    scratch_path(buf, cap, dir, name);
 }
 
 

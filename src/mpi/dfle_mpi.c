@@ -90,6 +90,7 @@ static struct service {
     /* set by the service thread */
     int active;   /* a task is shared (begin .. poll's last call)        */
     int finished; /* ... and the service no longer touches the task     */
+    double finished_at; /* when it finished [s, dfle_link_now]            */
     int error;
     int exhausted; /* the task had nothing for a rank that asked        */
     char msg[DFLE_ERROR_MSG_MAX];
@@ -221,6 +222,9 @@ static void set_error(const char *fmt, ...)
     va_end(ap);
 }
 
+/* How long a finished ensemble waits for the other ranks' last word [s]. */
+#define DFLE_MPI_DRAIN_S 2.0
+
 static int in_ensemble(const peer *p) { return p->state == P_BUSY && p->seq == S.seq; }
 
 static void give(peer *p, size_t index)
@@ -263,6 +267,7 @@ static void end_ensemble(void)
             S.peers[r].want = 0;
         }
     S.finished = 1;
+    S.finished_at = dfle_link_now();
     S.task = NULL;
 }
 
@@ -577,6 +582,14 @@ static int remote_poll(void *ud, int stop, dfle_error *err)
         pthread_cond_signal(&S.wake);
     }
     r = !S.finished ? 1 : S.error ? -1 : 0;
+    /* Finished: the ranks still in it are told to stop and answer with
+     * their CPU time once their threads have ended.  Wait a little for
+     * those answers, so that what the ensemble cost is reported with it
+     * (not at the next ensemble, or never); a rank that does not answer
+     * in time is not waited for. */
+    if (r == 0 && !S.stop && dfle_link_now() - S.finished_at < DFLE_MPI_DRAIN_S)
+        for (int k = 1; k < dfle_link_size && r == 0; k++)
+            r = S.peers[k].state == P_BUSY && S.peers[k].seq == S.seq;
     if (r < 0)
         dfle_error_set(err, DFLE_ECALLBACK, "%s", S.msg);
     if (r <= 0)
