@@ -114,3 +114,26 @@ def test_gil_released_during_a_run():
     th.join()
     assert len(ticks) > 5                      # Python ran meanwhile
     assert ls.time == 3000
+
+
+def test_threads_take_turns_with_the_same_numbers():
+    # Two threads running models at once: the Lua state is shared under a
+    # lock, and each gets the numbers it would get alone.
+    def one():
+        m = dfle.model(channel=dfle.channel(dx=20, A_max=1e6), U=5e-4)
+        m.run_to_steady(tol=1e-3)
+        return m.get("z")
+
+    alone = one()
+    out = [None] * 4
+
+    def worker(k):
+        out[k] = one()
+
+    threads = [threading.Thread(target=worker, args=(k,)) for k in range(4)]
+    for t in threads:
+        t.start()
+    for t in threads:
+        t.join()
+    for z in out:
+        assert np.array_equal(z, alone)
