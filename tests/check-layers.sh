@@ -24,7 +24,8 @@ rank() {
 }
 # The Lua binding's subfolders, bottom first: the core every file uses,
 # the tracer, laws and routers written in Lua, the objects, the analysis
-# functions, the parallel calls' machinery and the calls themselves.
+# functions, the parallel calls' machinery, the calls themselves, and the
+# bridge through which a host without Lua (src/python/) drives the module.
 lua_rank() {
     case $1 in
     core) echo 0 ;; trace) echo 1 ;; define) echo 2 ;; objects | analysis) echo 3 ;;
@@ -96,6 +97,11 @@ check() {
                     bad=1
                 fi
             done
+        fi
+        # Python's headers in the Python extension only.
+        if [ "$layer" != python ] && grep -q '^#include <\(Python\|numpy/[a-z_]*\)\.h>' "$text"; then
+            echo "not ok - $f ($layer) is not the Python extension but includes Python"
+            bad=1
         fi
         case $layer in
         lua | cli) ;;

@@ -164,3 +164,29 @@ def test_to_xarray():
     assert isinstance(ds, xr.Dataset)
     assert np.array_equal(ds["z"].values, m.get("z"))
     assert ds["x"].attrs["units"] == "m"
+
+
+def test_reference_cycles_are_collected():
+    import gc
+    import weakref
+
+    class Holder:
+        pass
+
+    h = Holder()
+    h.m = dfle.model(channel=dfle.channel(dx=50))
+    h.self = h                      # a cycle through a Python object
+    w = weakref.ref(h.m)
+    del h
+    gc.collect()
+    assert w() is None
+
+
+def test_handles_stay_valid_after_arrays_and_results():
+    m = dfle.model(channel=dfle.channel(dx=50))
+    run = m.run_to_steady(tol=1e-3)
+    z = m.get("z")
+    del m
+    import gc
+    gc.collect()
+    assert np.all(np.isfinite(z)) and run.converged
