@@ -11,6 +11,12 @@
 --   <!-- doc-test: skip REASON -->   not run (a fragment, a sketch of a
 --                                     long job); REASON must be given
 --
+-- A fenced ```python block marked "continue" reads the files the page's
+-- Lua blocks above it wrote: those run as one script, then the block runs
+-- in the same directory with Debian's /usr/bin/python3 (skipped, and said
+-- so, when that has no xarray and netCDF4).  Other python blocks are not
+-- run.
+--
 -- One test per block, named "FILE:LINE".
 local T = ...
 local tests = {}
@@ -42,10 +48,13 @@ local function blocks_of(file)
             else
                 cur.code = cur.code .. line .. "\n"
             end
-        elseif line:match("^```lua%s*$") then
+        elseif line:match("^```lua%s*$") or
+               (line:match("^```python%s*$") and prev:match("^<!%-%- doc%-test:")) then
             local marker = prev:match("^<!%-%- doc%-test: (.-) %-%->%s*$")
-            cur = { line = lineno, code = "" }
-            if marker == "continue" then
+            cur = { line = lineno, code = "", python = line:match("python") ~= nil }
+            if cur.python and marker ~= "continue" then
+                cur.bad_marker = (marker or prev) .. "' on a python block ('continue' is the only one"
+            elseif marker == "continue" then
                 cur.continues = true
             elseif marker and marker:match("^skip") then
                 cur.skip = marker:match("^skip%s+(.+)$") or ""
@@ -59,7 +68,9 @@ local function blocks_of(file)
     return blocks
 end
 
-local function run_block(file, block, code)
+local PYTHON = "/usr/bin/python3"
+
+local function run_block(file, block, code, python)
     local dir = T.tmpname()
     os.remove(dir)
     assert(os.execute("mkdir -p " .. T.shquote(dir)))
@@ -67,6 +78,10 @@ local function run_block(file, block, code)
     T.write_file(script, code)
     local cmd = "cd " .. T.shquote(dir) .. " && timeout " .. LIMIT .. " " .. T.shquote(T.dfle) ..
                 " -q block.lua 2>&1"
+    if python then
+        T.write_file(dir .. "/block.py", python)
+        cmd = cmd .. " && timeout " .. LIMIT .. " " .. PYTHON .. " -W error::UserWarning block.py 2>&1"
+    end
     local h = io.popen(cmd)
     local out = h:read("a")
     local ok, _, status = h:close()
@@ -87,13 +102,24 @@ for _, file in ipairs(doc_files()) do
         if block.bad_marker then
             tests[name] = function()
                 error(name .. ": unknown doc-test marker '" .. block.bad_marker ..
-                      "' (continue, or skip with a reason)", 0)
+                      (block.python and ")" or "' (continue, or skip with a reason)"), 0)
             end
         elseif block.skip then
             -- Skipped blocks still have to be Lua.
             tests[name .. " (parses; skipped: " .. block.skip .. ")"] = function()
                 T.ok(block.skip ~= "", name .. ": a skipped block needs a reason")
                 T.ok(load(block.code, "=" .. name), name .. " does not parse")
+            end
+        elseif block.python then
+            local lua = code_so_far
+            tests[name] = function()
+                T.ok(lua ~= nil, name .. ": a python block with no Lua block before it")
+                local _, has = T.sh(PYTHON .. " -c 'import xarray, netCDF4' 2>/dev/null")
+                if not has then
+                    print("skip - " .. name .. ": " .. PYTHON .. " has no xarray and netCDF4")
+                    return
+                end
+                run_block(file, block, lua, block.code)
             end
         else
             local code
