@@ -9,6 +9,8 @@
 #   make bench      benchmark figures (see bench/; C drivers go to build/bench/)
 #   make mpi        build/dfle-mpi, ensembles across MPI ranks (needs mpicc;
 #                   `make test-mpi` checks it; doc/ensembles.md)
+#   make python     the Python package dfle (build/python/dfle), for Debian's
+#                   /usr/bin/python3 with numpy (doc/python.md)
 #   make install    PREFIX=/usr/local DESTDIR=
 #   make clean
 #
@@ -44,7 +46,7 @@ ALL_LDFLAGS := $(LDFLAGS) $(SANITIZE) -pthread
 
 # The tree reads like the architecture (README "Layout"): the C library is
 # every folder of src/ but the Lua binding, the command and the MPI driver.
-CORE_SRC  := $(filter-out src/lua/% src/cli/% src/mpi/%,$(wildcard src/*/*.c))
+CORE_SRC  := $(filter-out src/lua/% src/cli/% src/mpi/% src/python/%,$(wildcard src/*/*.c))
 LUA_SRC   := $(wildcard src/lua/*/*.c)
 CLI_SRC   := $(wildcard src/cli/*.c)
 TEST_SRC  := $(wildcard tests/test_*.c)
@@ -71,7 +73,7 @@ LIB_LUA   := $(BUILD)/libdfle_lua.a
 CLI       := $(BUILD)/dfle
 MODULE    := $(BUILD)/dfle.so
 
-.PHONY: figures all test check fuzz fuzz-long memcheck bench install uninstall clean mpi test-mpi FORCE
+.PHONY: figures all test check fuzz fuzz-long memcheck bench install uninstall clean mpi test-mpi python FORCE
 # Keep test objects between builds (make would delete them as intermediates).
 .SECONDARY:
 all: $(CLI) $(MODULE) $(SHLIB)
@@ -188,7 +190,7 @@ $(BUILD)/bench/%: $(BUILD)/obj/bench/%.o $(LIB_CORE)
 HAVE_MPICC := $(if $(SANITIZE),,$(shell command -v $(MPICC) 2>/dev/null))
 
 # The benchmark drivers are built (not run) so they cannot rot.
-test: all $(TEST_BIN) $(GATE_TEST) $(MISSING_TEST) $(BENCH_BIN)
+test: all $(TEST_BIN) $(GATE_TEST) $(MISSING_TEST) $(BENCH_BIN) $(if $(and $(HAVE_PYTHON),$(if $(SANITIZE),,yes)),python)
 	@BUILD=$(BUILD) SANITIZE='$(SANITIZE)' sh tests/run-tests.sh
 ifneq ($(HAVE_MPICC),)
 	@$(MAKE) --no-print-directory test-mpi
@@ -210,7 +212,7 @@ fuzz-long: all
 memcheck: all $(TEST_BIN) $(GATE_TEST) $(MISSING_TEST)
 	@BUILD=$(BUILD) MEMCHECK=1 sh tests/run-tests.sh
 
-bench: all $(BENCH_BIN) $(if $(HAVE_MPICC),$(BUILD)/dfle-mpi)
+bench: all $(BENCH_BIN) $(if $(HAVE_MPICC),$(BUILD)/dfle-mpi) $(if $(HAVE_PYTHON),python)
 	@sh bench/run.sh $(CLI) $(BUILD)/bench
 
 # Every example's figures in quick mode, checked against doc/figures.md,
@@ -242,6 +244,40 @@ test-mpi: all $(MPI_CLI)
 	@BUILD=$(BUILD) sh tests/mpi-ensemble.sh
 # --- end MPI build ---
 
+# --- Python (doc/python.md): only these rules need Python ---
+
+# Debian's interpreter, never another one first on PATH; its headers and
+# numpy's.  Without them `make python` fails and the tests skip Python.
+PYTHON    ?= /usr/bin/python3
+HAVE_PYTHON := $(shell $(PYTHON) -c 'import numpy, sysconfig; sysconfig.get_paths' 2>/dev/null && \
+                 test -f "$$($(PYTHON) -c 'import sysconfig; print(sysconfig.get_paths()["include"])')/Python.h" && echo yes)
+PY_CFLAGS  = $(shell $(PYTHON) -c 'import sysconfig, numpy; print("-I" + sysconfig.get_paths()["include"], "-I" + numpy.get_include())')
+PY_SUFFIX  = $(shell $(PYTHON) -c 'import sysconfig; print(sysconfig.get_config_var("EXT_SUFFIX"))')
+PY_VERSION = $(shell $(PYTHON) -c 'import sys; print("%d.%d" % sys.version_info[:2])')
+PYTHON_SITE ?= $(PREFIX)/lib/python$(PY_VERSION)/dist-packages
+PY_DIR    := $(BUILD)/python
+PY_OBJ    := $(patsubst %.c,$(BUILD)/obj/%.o,$(wildcard src/python/*.c))
+PY_FILES  := $(patsubst python/%,$(PY_DIR)/%,$(wildcard python/dfle/*.py))
+PY_EXT     = $(PY_DIR)/dfle/_dfle$(PY_SUFFIX)
+
+# Python's headers are seen here only (as Lua's in src/lua/).
+$(BUILD)/obj/src/python/%.o: src/python/%.c
+	@mkdir -p $(dir $@)
+	$(CC) $(ALL_CFLAGS) -Isrc $(PY_CFLAGS) -MMD -MP -c $< -o $@
+
+# The extension takes the binding and the library in (static), and
+# Python's symbols from the interpreter that loads it.
+$(PY_DIR)/dfle/_dfle%: $(PY_OBJ) $(LIB_LUA) $(LIB_CORE)
+	@mkdir -p $(dir $@)
+	$(CC) -shared $(ALL_LDFLAGS) $^ $(LUA_LIBS) $(CORE_LIBS) -o $@
+
+$(PY_DIR)/dfle/%.py: python/dfle/%.py
+	@mkdir -p $(dir $@)
+	cp $< $@
+
+python: $(PY_EXT) $(PY_FILES)
+# --- end Python ---
+
 INSTALL_MPI := $(if $(HAVE_MPICC),$(MPI_CLI))
 DOCDIR := $(DESTDIR)$(PREFIX)/share/doc/dfle
 LIBDIR := $(DESTDIR)$(PREFIX)/lib
@@ -250,7 +286,7 @@ LIBDIR := $(DESTDIR)$(PREFIX)/lib
 # C library (static and shared, pkg-config file) and headers, the man
 # page, the docs and the examples.  `dfle --help` finds the docs relative
 # to its own path, so a DESTDIR or relocated tree works too.
-install: all $(INSTALL_MPI)
+install: all $(INSTALL_MPI) $(if $(HAVE_PYTHON),python)
 	install -d $(DESTDIR)$(PREFIX)/bin $(LIBDIR)/lua/5.4 $(LIBDIR)/pkgconfig \
 	    $(DESTDIR)$(PREFIX)/include/dfle $(DESTDIR)$(PREFIX)/share/man/man1 $(DOCDIR)/examples
 	install -m 755 $(CLI) $(DESTDIR)$(PREFIX)/bin/dfle
@@ -267,6 +303,9 @@ install: all $(INSTALL_MPI)
 	install -m 644 doc/dfle.1 $(DESTDIR)$(PREFIX)/share/man/man1/dfle.1
 	install -m 644 README.md doc/*.md $(DOCDIR)/
 	install -m 644 examples/*.lua $(DOCDIR)/examples/
+	$(if $(HAVE_PYTHON),install -d $(DESTDIR)$(PYTHON_SITE)/dfle && \
+	    install -m 644 $(PY_FILES) $(DESTDIR)$(PYTHON_SITE)/dfle/ && \
+	    install -m 644 $(PY_EXT) $(DESTDIR)$(PYTHON_SITE)/dfle/)
 
 uninstall:
 	rm -f $(DESTDIR)$(PREFIX)/bin/dfle $(DESTDIR)$(PREFIX)/bin/dfle-mpi \
@@ -274,6 +313,7 @@ uninstall:
 	    $(LIBDIR)/libdfle.so.$(VERSION) $(LIBDIR)/libdfle.so.$(SOMAJOR) $(LIBDIR)/libdfle.so \
 	    $(LIBDIR)/pkgconfig/dfle.pc $(DESTDIR)$(PREFIX)/share/man/man1/dfle.1
 	rm -rf $(DESTDIR)$(PREFIX)/include/dfle $(DOCDIR)
+	$(if $(HAVE_PYTHON),rm -rf $(DESTDIR)$(PYTHON_SITE)/dfle)
 
 clean:
 	rm -rf build

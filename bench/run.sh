@@ -36,3 +36,7 @@ if [ -x "$(dirname "$DFLE")/dfle-mpi" ] && command -v mpirun > /dev/null; then
 fi
 "$DFLE" -q "$here/laws.lua"
 "$DFLE" -q "$here/invert.lua"
+# The Python package against the same calls from Lua, where it is built.
+if ls "$(dirname "$DFLE")"/python/dfle/_dfle*.so > /dev/null 2>&1 && [ -x /usr/bin/python3 ]; then
+    PYTHONPATH="$(dirname "$DFLE")/python" /usr/bin/python3 "$here/python.py"
+fi

@@ -19,16 +19,17 @@ rank() {
     case $1 in
     base) echo 0 ;; domain) echo 1 ;; routers | drainage) echo 2 ;; laws) echo 3 ;;
     model) echo 4 ;; solvers) echo 5 ;; dem) echo 6 ;; analysis) echo 7 ;; landscape) echo 8 ;;
-    io) echo 9 ;; drive) echo 10 ;; mpi) echo 11 ;; lua) echo 12 ;; cli) echo 13 ;; *) echo 99 ;;
+    io) echo 9 ;; drive) echo 10 ;; mpi) echo 11 ;; lua) echo 12 ;; cli) echo 13 ;; python) echo 14 ;; *) echo 99 ;;
     esac
 }
 # The Lua binding's subfolders, bottom first: the core every file uses,
 # the tracer, laws and routers written in Lua, the objects, the analysis
-# functions, the parallel calls' machinery and the calls themselves.
+# functions, the parallel calls' machinery, the calls themselves, and the
+# bridge through which a host without Lua (src/python/) drives the module.
 lua_rank() {
     case $1 in
     core) echo 0 ;; trace) echo 1 ;; define) echo 2 ;; objects | analysis) echo 3 ;;
-    drive) echo 4 ;; ensemble | invert) echo 5 ;; *) echo 99 ;;
+    drive) echo 4 ;; ensemble | invert) echo 5 ;; bridge) echo 6 ;; *) echo 99 ;;
     esac
 }
 header_layer() {
@@ -97,6 +98,11 @@ check() {
                     bad=1
                 fi
             done
+        fi
+        # Python's headers in the Python extension only.
+        if [ "$layer" != python ] && grep -q '^#include <\(Python\|numpy/[a-z_]*\)\.h>' "$text"; then
+            echo "not ok - $f ($layer) is not the Python extension but includes Python"
+            bad=1
         fi
         case $layer in
         lua | cli) ;;

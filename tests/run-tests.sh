@@ -41,6 +41,10 @@ run layers-self-test sh tests/check-layers.sh --self-test
 # Lua-level tests of the scripting API (ends with "N passed, N failed").
 run lua-tests $vg "$DFLE" -q tests/lua/run.lua "$DFLE"
 
+# The Python package (tests/python/, ends with "N passed, N failed"):
+# Debian's interpreter with numpy and pytest, or a clear skip.
+run python-tests sh tests/python/run.sh "$BUILD"
+
 # The installed tree (not in sanitizer or valgrind runs: it installs the
 # plain build's files and links a program against them).
 if [ -z "${SANITIZE:-}" ] && [ "${MEMCHECK:-0}" != 1 ]; then

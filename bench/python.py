@@ -1,0 +1,97 @@
+"""Python call overhead against the same work driven from Lua (make bench).
+
+Figures: the time from Python and from Lua, their ratio, and the
+difference per call crossing from Python into dfle (a constructor, a
+method lookup, a method call, a build callback with the calls it makes).
+
+Each item runs the same dfle calls from Python and from a Lua function
+in dfle's own state, interleaved, and prints the ratio of the times
+(median over rounds).
+"""
+import os
+import statistics
+import sys
+import tempfile
+import time
+
+import dfle
+
+ROUNDS = 5
+
+
+def timed(fn):
+    t = time.perf_counter()
+    fn()
+    return time.perf_counter() - t
+
+
+def compare(name, py, lu, target, calls):
+    py(), lu()  # warm up (compiled laws, caches)
+    ratios, tp, tl = [], [], []
+    for _ in range(ROUNDS):
+        a, b = timed(py), timed(lu)
+        tp.append(a)
+        tl.append(b)
+        ratios.append(a / b)
+    r = statistics.median(ratios)
+    per_call = 1e6 * (statistics.median(tp) - statistics.median(tl)) / calls
+    print("python: %-42s %8.3f ms Python, %8.3f ms Lua: %5.2fx, %5.2f us per Python call "
+          "(target <= %.0f us)%s"
+          % (name, 1e3 * statistics.median(tp), 1e3 * statistics.median(tl), r, per_call, target,
+             "" if per_call <= target else "  ABOVE TARGET"))
+
+
+# A direct steady state: build and run one small model, 20 times.
+def py_steady():
+    for _ in range(20):
+        m = dfle.model(channel=dfle.channel(dx=20, A_max=1e6), U=5e-4)
+        m.run_to_steady(method="direct")
+
+
+lua_steady = dfle.lua("""function()
+  for _ = 1, 20 do
+    local m = dfle.model{ channel = dfle.channel{ dx = 20, A_max = 1e6 }, U = 5e-4 }
+    m:run_to_steady{ method = "direct" }
+  end
+end""", "=bench")
+compare("direct steady state (20 models)", py_steady, lua_steady, 5, 20 * 4)
+
+# A landscape step on a 60 x 60 grid, 20 steps.
+ls = dfle.landscape(nx=60, ny=60, dx=30)
+
+
+def py_step():
+    for _ in range(20):
+        ls.step(100)
+
+
+lua_step = dfle.lua("""function(ls) for _ = 1, 20 do ls:step(100) end end""", "=bench")
+compare("landscape step (60 x 60, 20 steps)", py_step, lambda: lua_step(ls), 5, 20 * 2)
+
+# An ensemble of 1000 samples, with a Python and with a Lua build.
+tmp = tempfile.mkdtemp()
+n = int(os.environ.get("DFLE_BENCH_PY_N", "1000"))
+params = {"k_df": dfle.bounds(5e-5, 1e-3, log=True), "U": [1e-4, 1e-3]}
+counter = [0]
+
+
+def ensemble(build):
+    counter[0] += 1
+    out = os.path.join(tmp, "e%d.csv" % counter[0])
+    dfle.ensemble(params=params, n=n, seed=1, out=out, outputs=["S_df"], build=build)
+    os.unlink(out)
+
+
+def py_build(p):
+    return dfle.model(channel=dfle.channel(dx=100, A_max=1e6), U=p["U"],
+                      law=dfle.law.power(k_df=p["k_df"]))
+
+
+lua_build = dfle.lua("""function(p)
+  return dfle.model{ channel = dfle.channel{ dx = 100, A_max = 1e6 }, U = p.U,
+                     law = dfle.law.power{ k_df = p.k_df } }
+end""", "=bench")
+ROUNDS = 3
+compare("ensemble of %d samples, Python build" % n, lambda: ensemble(py_build),
+        lambda: ensemble(lua_build), 5, n * 4)
+sys.stdout.flush()

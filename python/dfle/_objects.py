@@ -1,0 +1,79 @@
+"""Python faces of dfle's object types: grids shaped (ny, nx), xarray,
+custom laws from Lua source."""
+import numpy as _np
+
+from . import _dfle
+
+_classes = None
+
+
+class Model(_dfle.LuaRef):
+    """dfle.model: fields are numpy float64 arrays along the channel (copies)."""
+
+    def to_xarray(self):
+        """The fields as an xarray.Dataset on the coordinate x [m] (needs xarray)."""
+        import xarray as xr
+        units = {"x": "m", "A": "m^2", "w": "m", "z": "m", "S": "1", "E_f": "m/yr",
+                 "E_df": "m/yr", "dzdt": "m/yr", "M": "m^3", "Q": "m^3/s", "h": "m",
+                 "v": "m/s", "t_p": "s", "tau": "Pa", "Theta": "1"}
+        x = self.get("x")
+        data = {f: ("x", self.get(f), {"units": units.get(f, "")})
+                for f in self.fields() if f != "x"}
+        return xr.Dataset(data, coords={"x": ("x", x, {"units": "m"})},
+                          attrs={"time_yr": self.time, "U_m_per_yr": self.U,
+                                 "model": repr(self)})
+
+
+class Landscape(_dfle.LuaRef):
+    """dfle.landscape: get() returns an (ny, nx) array, row 0 at the north."""
+
+    def get(self, name):
+        return _np.asarray(self._index("get")(name), dtype=float).reshape(self.ny, self.nx)
+
+    def to_xarray(self, fields=None):
+        """The fields as an xarray.Dataset on (y, x) cell centres [m] (needs xarray)."""
+        import xarray as xr
+        nx, ny, dx, dy = self.nx, self.ny, self.dx, self.dy
+        x = self.x0 + dx * (_np.arange(nx) + 0.5)
+        y = self.y0 - dy * (_np.arange(ny) + 0.5)
+        names = fields if fields is not None else list(self.fields())
+        ds = xr.Dataset({f: (("y", "x"), self.get(f)) for f in names},
+                        coords={"x": ("x", x, {"units": "m"}), "y": ("y", y, {"units": "m"})},
+                        attrs={"time_yr": self.time, "landscape": repr(self)})
+        return ds
+
+
+class Dem(_dfle.LuaRef):
+    """dfle.dem: a raster read through GDAL."""
+
+
+_SOURCES = ("rate", "factor", "integrand", "frequency", "route")
+
+
+def _with_sources(define, what):
+    def wrapped(**kw):
+        for k in _SOURCES:
+            if isinstance(kw.get(k), str):
+                kw[k] = _dfle.lua(kw[k], "=%s.%s" % (what, k))
+        return define(**kw)
+    wrapped.__doc__ = ("dfle.%s.define with the functions (%s) given as Lua source, "
+                       "compiled as in the Lua API." % (what, ", ".join(_SOURCES)))
+    return wrapped
+
+
+def _install(pkg, classes):
+    classes["dfle.model"] = Model
+    classes["dfle.landscape"] = Landscape
+    classes["dfle.dem"] = Dem
+    pkg.law["define"] = _with_sources(pkg.law["define"], "law")
+    pkg.router["define"] = _with_sources(pkg.router["define"], "router")
+
+
+def to_pandas(result):
+    """An ensemble's rows (result.data: one column per parameter, output,
+    status and reason) as a pandas.DataFrame indexed by sample (needs pandas)."""
+    import pandas as pd
+    data = result["data"]
+    cols = {k: list(data[k]) if not hasattr(data[k], "dtype") else data[k] for k in data.keys()}
+    df = pd.DataFrame(cols)
+    return df.set_index("index") if "index" in df else df
