@@ -19,6 +19,12 @@
 VERSION   := 0.1.0
 CC        ?= cc
 MPICC     ?= mpicc
+# Debian's interpreter, never another one first on PATH; its headers and
+# numpy's.  Without them `make python` fails and the tests skip Python.
+# (Set here: the test and bench rules' prerequisites read HAVE_PYTHON.)
+PYTHON    ?= /usr/bin/python3
+HAVE_PYTHON := $(shell $(PYTHON) -c 'import numpy, sysconfig; sysconfig.get_paths' 2>/dev/null && \
+                 test -f "$$($(PYTHON) -c 'import sysconfig; print(sysconfig.get_paths()["include"])')/Python.h" && echo yes)
 PKG_CONFIG ?= pkg-config
 LUA_PKG   ?= lua5.4
 BUILD     ?= build
@@ -246,11 +252,7 @@ test-mpi: all $(MPI_CLI)
 
 # --- Python (doc/python.md): only these rules need Python ---
 
-# Debian's interpreter, never another one first on PATH; its headers and
-# numpy's.  Without them `make python` fails and the tests skip Python.
-PYTHON    ?= /usr/bin/python3
-HAVE_PYTHON := $(shell $(PYTHON) -c 'import numpy, sysconfig; sysconfig.get_paths' 2>/dev/null && \
-                 test -f "$$($(PYTHON) -c 'import sysconfig; print(sysconfig.get_paths()["include"])')/Python.h" && echo yes)
+# PYTHON and HAVE_PYTHON are set near the top (prerequisites use them).
 PY_CFLAGS  = $(shell $(PYTHON) -c 'import sysconfig, numpy; print("-I" + sysconfig.get_paths()["include"], "-I" + numpy.get_include())')
 PY_SUFFIX  = $(shell $(PYTHON) -c 'import sysconfig; print(sysconfig.get_config_var("EXT_SUFFIX"))')
 PY_VERSION = $(shell $(PYTHON) -c 'import sys; print("%d.%d" % sys.version_info[:2])')
