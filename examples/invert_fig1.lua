@@ -87,6 +87,9 @@ for _, run in ipairs(runs) do
     seed = 1, lsq = not quick,
     out = ("%s/fig1_invert_%s_chain.csv"):format(outdir, run.tag),
   }
+  -- Ctrl-C: the whole steps are in the chain file; a cut chain has no
+  -- posterior, and running the command again resumes it.
+  if res.reason == "interrupted" then print(res) return end
   if not dfle.worker() then
     print(("%s catchment%s: %d cells, %.2f km^2, %d bins"):format(c.name,
           run.free_ke and " (k_e free)" or "", net.n, net.A_max / 1e6, #res.data.A))
