@@ -43,6 +43,12 @@ end
 local TRUTH = { U = 4e-4, k_df = 2e-4 }
 local DATA = synthetic(TRUTH, 0.1, 5)
 
+-- A chain file's text without its date line: a resumed file is written
+-- again, and the second may have ticked over.
+local function undated(text)
+    return (text:gsub("\n# date: [^\n]*", ""))
+end
+
 local function invert(extra)
     local spec = {
         data = DATA, channel = CH, build = build, workers = 1,
@@ -123,7 +129,7 @@ tests["chain file: rows, extension, a cut last line, another inversion refused"]
     T.eq(invert{ steps = 60, out = ext, lsq = false }.ran, 60)
     local res = invert{ steps = 100, out = ext, lsq = false }
     T.eq(res.ran, 40)
-    T.eq(T.read_file(ext), text)
+    T.eq(undated(T.read_file(ext)), undated(text))
     T.eq(res.summary.U.median, ref.summary.U.median)
     -- a finished file is read back: nothing runs
     T.eq(invert{ steps = 100, out = ext, lsq = false }.ran, 0)
@@ -133,10 +139,10 @@ tests["chain file: rows, extension, a cut last line, another inversion refused"]
     T.write_file(cut, keep)
     res = invert{ steps = 100, out = cut, lsq = false }
     T.ok(res.ran >= 1 and res.ran <= 2)
-    T.eq(T.read_file(cut), text)
+    T.eq(undated(T.read_file(cut)), undated(text))
     -- resume = false starts afresh
     T.eq(invert{ steps = 100, out = cut, lsq = false, resume = false }.ran, 100)
-    T.eq(T.read_file(cut), text)
+    T.eq(undated(T.read_file(cut)), undated(text))
     -- a file that is no chain is refused
     T.write_file(dir .. "/junk.csv", "some,thing\n1,2\n")
     T.errors_with(function() invert{ steps = 100, out = dir .. "/junk.csv", lsq = false } end,
