@@ -507,6 +507,20 @@ static void note_add(dfle_landscape_result *res, const char *text)
     snprintf(res->note + used, sizeof res->note - used, "%s%s", used > 0 ? "; " : "", text);
 }
 
+/* How much of `text` to quote in at most `max` characters: all of it, or
+ * its clauses ("; "-separated) that fit whole, so that a note never ends
+ * in the middle of a word. */
+static int whole_clauses(const char *text, int max)
+{
+    int n = (int)strlen(text), cut = 0;
+    if (n <= max)
+        return n;
+    for (int k = 0; k + 1 < max; k++)
+        if (text[k] == ';' && text[k + 1] == ' ')
+            cut = k;
+    return cut > 0 ? cut : max;
+}
+
 /* The direct method: rounds, the fixed-point check; *done when the
  * run ended there, else it goes on by implicit steps (fallback). */
 static int direct_then(ls_run *run, int *done, dfle_error *err)
@@ -572,8 +586,9 @@ static int direct_then(ls_run *run, int *done, dfle_error *err)
         if (!stalled)
             dfle_landscape_set_z(ls, z_save, NULL);
         free(z_save);
-        snprintf(res->note, sizeof res->note, "direct: %.300s; continued by implicit steps from "
-                 "%s", why.msg, stalled ? "the last round's surface" : "the start");
+        snprintf(res->note, sizeof res->note, "direct: %.*s; continued by implicit steps from "
+                 "%s", whole_clauses(why.msg, 300), why.msg,
+                 stalled ? "the last round's surface" : "the start");
     }
     res->fallback = 1;
     res->direct_rounds = run->st.steps;

@@ -1,9 +1,0 @@
-build-clang/obj/src/analysis/sensitivity_work.o: \
-  src/analysis/sensitivity_work.c src/analysis/sensitivity_internal.h \
-  include/dfle/sensitivity.h include/dfle/error.h
-
-src/analysis/sensitivity_internal.h:
-
-include/dfle/sensitivity.h:
-
-include/dfle/error.h:

@@ -1,3 +1,0 @@
-build-clang/obj/src/base/error.o: src/base/error.c include/dfle/error.h
-
-include/dfle/error.h:
