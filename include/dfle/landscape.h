@@ -13,7 +13,7 @@
  * Euler step is one O(n) sweep with no linear system.
  *
  *  - Channel cells (drainage area >= A_0) erode by the fluvial law,
- *    E_f = K A^m S^n (closed form for n = 1, Newton for n != 1), and
+ *    E_f = K A^m S^n (closed form for n = 1, Halley's iteration for n != 1), and
  *    by debris flows.  A channel head (a channel cell none of whose
  *    donors is one) releases a debris flow that travels down the
  *    receivers with the router's rules; where the flows of several heads

@@ -11,9 +11,9 @@
  * is one scalar equation.  With d = z_i' - z_r', d0 = z_i + U dt - z_r'
  * and F = K A^m dt / L^n it reads d + F d^n = d0:
  *   n = 1:  d = d0 / (1 + F), exactly;
- *   n != 1: Newton from min(d0, (d0/F)^(1/n)), an upper bound of the
- *           root, so for n > 1 (f convex) the iterates fall monotonically
- *           onto it; bracketed, so n < 1 converges too.
+ *   n != 1: Halley's iteration from min(d0, (d0/F)^(1/n)), an upper
+ *           bound of the root, kept inside the bracket (0, d0), so it
+ *           converges for any n > 0 (halley_step below).
  * d0 <= 0 (a cell below its receiver after uplift: along a path carved
  * through a depression) means no erosion: the cell rises with U, as the
  * model does for S <= 0.  A cell a debris flow reaches is solved by the

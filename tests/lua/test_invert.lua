@@ -106,6 +106,21 @@ tests["synthetic: result, summaries, point estimate, diagnostics"] = function()
     T.ok(m ~= nil)
 end
 
+tests["prior bounds: a posterior held by its prior's bound is flagged, warned and printed"] = function()
+    -- The data want U = 4e-4; a prior that ends at 2.5e-4 holds the
+    -- posterior against its upper bound.
+    local res = invert{ params = { U = { 1e-4, 2.5e-4, log = true },
+                                   k_df = { 5e-5, 1e-3, log = true } }, lsq = false }
+    T.eq(res.summary.U.bounded, "upper")
+    T.ok(res.summary.U.hi95 <= 2.5e-4)
+    T.has(table.concat(res.warnings, "\n"), "U is held by its prior's upper bound")
+    T.has(tostring(res), "bounded: upper")
+    -- a prior wide on both sides of the truth flags nothing for U
+    local wide = invert{ params = { U = { 1e-5, 1e-2, log = true },
+                                    k_df = { 5e-5, 1e-3, log = true } }, lsq = false }
+    T.eq(wide.summary.U.bounded, nil)
+end
+
 tests["chain file: rows, extension, a cut last line, another inversion refused"] = function()
     local dir, done = scratch()
     local ref = invert{ steps = 100, out = dir .. "/ref.csv", lsq = false }
