@@ -6,6 +6,8 @@
 #define DFLE_BENCH_H
 
 #include <math.h>
+#include <stddef.h>
+#include <stdint.h>
 #include <time.h>
 
 /* CPU seconds of this process: steadier than wall time on a loaded
@@ -15,6 +17,20 @@ static inline double cpu_seconds(void)
     struct timespec t;
     clock_gettime(CLOCK_PROCESS_CPUTIME_ID, &t);
     return (double)t.tv_sec + 1e-9 * (double)t.tv_nsec;
+}
+
+/* n values of uniform noise in [0, 1) from xorshift64 state *x (start
+ * it at BENCH_NOISE_SEED): the same surfaces every run, on every
+ * machine, so that benchmarks and fingerprints compare like with like. */
+#define BENCH_NOISE_SEED 0x9E3779B97F4A7C15ull
+static inline void bench_noise(double *z, size_t n, uint64_t *x)
+{
+    for (size_t i = 0; i < n; i++) {
+        *x ^= *x << 13;
+        *x ^= *x >> 7;
+        *x ^= *x << 17;
+        z[i] = (double)(*x >> 11) / 9007199254740992.0;
+    }
 }
 
 /* qsort order of doubles, ascending. */

@@ -75,7 +75,7 @@ int main(int argc, char **argv)
     size_t sides[16];
     int n_sides = 0, reps = argc > 1 ? atoi(argv[1]) : 5;
     double cells[16], carve_t[16], keep_t[16];
-    uint64_t x = 0x9E3779B97F4A7C15ull; /* xorshift64: the same noise every run */
+    uint64_t x = BENCH_NOISE_SEED; /* one stream over all grids */
 
     if (reps < 1)
         reps = 1;
@@ -97,12 +97,7 @@ int main(int argc, char **argv)
             fprintf(stderr, "drainage bench: no memory for %zu cells\n", n);
             return 1;
         }
-        for (size_t i = 0; i < n; i++) {
-            x ^= x << 13;
-            x ^= x >> 7;
-            x ^= x << 17;
-            z[i] = (double)(x >> 11) / 9007199254740992.0;
-        }
+        bench_noise(z, n, &x);
         if (time_routing(sides[k], z, DFLE_DRAINAGE_CARVE, reps, &carve) != 0 ||
             time_routing(sides[k], z, DFLE_DRAINAGE_KEEP, reps, &keep) != 0) {
             free(z);

@@ -91,7 +91,7 @@ typedef struct figures {
 static int run(size_t side, double n_exp, int steps, figures *f)
 {
     const size_t n = side * side;
-    uint64_t x = 0x9E3779B97F4A7C15ull; /* xorshift64: the same noise every run */
+    uint64_t x = BENCH_NOISE_SEED;
     double *z = malloc(n * sizeof *z);
     dfle_fluvial *fl = NULL;
     dfle_landscape *ls = NULL;
@@ -102,12 +102,7 @@ static int run(size_t side, double n_exp, int steps, figures *f)
 
     if (z == NULL)
         return 1;
-    for (size_t i = 0; i < n; i++) {
-        x ^= x << 13;
-        x ^= x >> 7;
-        x ^= x << 17;
-        z[i] = (double)(x >> 11) / 9007199254740992.0;
-    }
+    bench_noise(z, n, &x);
     dfle_landscape_opts_default(&o);
     o.nx = o.ny = side;
     o.dx = o.dy = 30.0;
