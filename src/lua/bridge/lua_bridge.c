@@ -368,17 +368,25 @@ static int tostring_p(lua_State *L)
     return 1;
 }
 
-int dfle_bridge_tostring(dfle_bridge *b, int idx)
+/* fn(value at idx) in protected mode, leaving its nresults results; on an
+ * error, its text (error_text) and -1.  Metamethods (__tostring,
+ * __close) may raise, so every call through one goes this way. */
+static int protected_on(dfle_bridge *b, int idx, lua_CFunction fn, int nresults)
 {
     lua_State *L = b->L;
     idx = lua_absindex(L, idx);
-    lua_pushcfunction(L, tostring_p);
+    lua_pushcfunction(L, fn);
     lua_pushvalue(L, idx);
-    if (lua_pcall(L, 1, 1, 0) != LUA_OK) {
+    if (lua_pcall(L, 1, nresults, 0) != LUA_OK) {
         error_text(L);
         return -1;
     }
     return 0;
+}
+
+int dfle_bridge_tostring(dfle_bridge *b, int idx)
+{
+    return protected_on(b, idx, tostring_p, 1);
 }
 
 static int close_p(lua_State *L)
@@ -393,13 +401,5 @@ static int close_p(lua_State *L)
 
 int dfle_bridge_close(dfle_bridge *b, int idx)
 {
-    lua_State *L = b->L;
-    idx = lua_absindex(L, idx);
-    lua_pushcfunction(L, close_p);
-    lua_pushvalue(L, idx);
-    if (lua_pcall(L, 1, 0, 0) != LUA_OK) {
-        error_text(L);
-        return -1;
-    }
-    return 0;
+    return protected_on(b, idx, close_p, 0);
 }
