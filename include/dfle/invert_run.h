@@ -44,8 +44,12 @@
  * inside its prior, whole steps without gaps, a walker that did not move
  * with the values of its step before, log_post - log_like equal to the
  * log prior (custom priors apart), and the last step's log_post and
- * log_like equal to what the evaluator gives at its positions now; a
- * file that fails is refused with its line named.
+ * log_like, and those of the row with the largest log_post, equal to
+ * what the evaluator gives at their positions now (a complete chain
+ * read back is checked so too, at the cost of walkers + 1 forward runs,
+ * before it is summarised); a file that fails is refused with its line
+ * named, and left as it is.  Rows in between are checked for
+ * consistency, not evaluated again.
  *
  * Walker health: after burn-in a walker whose median log posterior lies
  * far below the others' (by more than half the 1 - 1e-6 quantile of
