@@ -56,7 +56,10 @@
  * chi-square with d degrees of freedom: the drop at which a Gaussian
  * posterior has all but 1e-6 of its mass above), or whose acceptance is
  * below a quarter of the walkers' median and improbably so (binomial
- * p < 1e-6), is stranded: reported and warned by number.  With
+ * p < 1e-6), is stranded: reported and warned by number.  A chain of
+ * fewer than 50 steps after burn-in is not checked (the ensemble may
+ * still be walking in, and a walker that never moved in fewer steps is
+ * not improbable enough).  With
  * opts.move_stranded (default) the same test runs at steps burn/2 and
  * burn, on the steps since the previous check, and a stranded walker is
  * moved onto the position of a healthy one (a walker picked by its own
