@@ -69,9 +69,14 @@
  * its prior when the density of its samples within h of the bound is at
  * least a quarter of their density within h/2 of the median (h: a
  * tenth of the 95 % interval's width, in ln x for log-scaled
- * parameters), or when the point estimate (dfle_invert_set_point) lies
- * within 1e-3 of the prior's width of it: flagged (result.bounded) and
- * warned.
+ * parameters) and the share P of samples within h of the bound clearly
+ * exceeds the prior's own share P0 there (P > 2 P0 + 3 sqrt(P0 (1 - P0)
+ * / n), n the effective sample size, at least the walkers: a prior that
+ * piles at its bound, with data that say nothing, is not flagged), or
+ * when the point estimate (dfle_invert_set_point) lies within 1e-3 of
+ * the prior's width of it: flagged (result.bounded) and warned.  A
+ * marginal near both bounds that is no more there than its prior is
+ * warned of as not learned, and not flagged.
  */
 #ifndef DFLE_INVERT_RUN_H
 #define DFLE_INVERT_RUN_H
@@ -169,6 +174,13 @@ typedef struct dfle_invert_opts {
     const char *const *units;
     /* Move walkers stranded in burn-in back into the ensemble (1). */
     int move_stranded;
+    /* Optional: the log density (up to a constant) of the CUSTOM prior
+     * of parameter j at x, as the evaluator adds it, for the prior-bound
+     * rule (the prior's own mass near a bound); NULL: such a prior counts
+     * as flat over its support.  Called on the calling thread while a
+     * chain is summarised; -inf or NaN where it is zero. */
+    double (*custom_logpdf)(void *ud, size_t j, double x);
+    void *custom_ud;
 } dfle_invert_opts;
 
 /* walkers 0 (the default), burn default, seed 1, a = 2, resume, 1 worker,

@@ -98,4 +98,41 @@ tests["a chain shorter than 50 steps after burn-in is not checked for stranded w
     T.eq(enough.stranded[1].walker, 7)
 end
 
+tests["prior bounds: a cut posterior is flagged; a prior that piles at its bound is not"] = function()
+    -- the data want U = 2e-3: a prior that ends below cuts the posterior
+    local cut = invert{ params = { U = { 1e-4, 1.5e-3, log = true } }, steps = 200, burn = 50 }
+    T.eq(cut.summary.U.bounded, "upper")
+    T.ok(cut.summary.U.hi95 <= 1.5e-3)
+    T.has(table.concat(cut.warnings, "\n"), "U is held by its prior's upper bound (0.0015)")
+    -- the corner plot draws the bound, and notes it on U's marginal
+    local dir, done = T.scratch()
+    dfle.plot.corner(cut, dir .. "/cut.svg")
+    local _, notes = assert(T.read_file(dir .. "/cut.svg")):gsub("prior bound", "")
+    T.eq(notes, 1, "one note, on the diagonal")
+    -- parameters the model never sees: their posterior is their prior.
+    -- c: exponential (rate 1) on [0, 10], its density highest at 0; b:
+    -- log-uniform, flat in ln b up to both bounds.  Neither is flagged;
+    -- b is said to be not learned.
+    local res = invert{
+        params = { U = { 1e-4, 1e-2, log = true }, b = { 1, 100, log = true },
+                   c = { 0, 10, density = function(x) return -x end } },
+        sigma = 0.01, walkers = 16, steps = 600, burn = 150,
+    }
+    local w = table.concat(res.warnings, "\n")
+    T.eq(res.summary.c.bounded, nil, "c")
+    T.eq(res.summary.b.bounded, nil, "b")
+    T.eq(res.summary.U.bounded, nil, "U")
+    T.ok(not w:find("c is held") and not w:find("b is held"), w)
+    T.has(w, "b is not learned")
+    dfle.plot.corner(res, dir .. "/free.svg")
+    T.ok(not assert(T.read_file(dir .. "/free.svg")):find("prior bound"), "no bound drawn")
+    done()
+    -- the samples do pile at c = 0, as the prior does: about 1 - exp(-h)
+    -- of them within h of it, h a tenth of the 95 % interval
+    local h = 0.1 * (res.summary.c.hi95 - res.summary.c.lo95)
+    local near = 0
+    for i = 1, res.nsamples do if res.samples.c[i] <= h then near = near + 1 end end
+    T.close(near / res.nsamples, 1 - math.exp(-h), 0.3)
+end
+
 return tests
