@@ -241,6 +241,48 @@ tests["resume repairs a cut last line; refuses another version or other columns"
     done()
 end
 
+tests["CLI: an interrupt while a finished chain is checked gives no posterior"] = function()
+    -- The check of a complete chain runs the model again: SIGINT at its
+    -- first forward run stops the call with reason "interrupted" and no
+    -- summary (the chain is not checked yet), the file as it was.
+    local dir, done = T.scratch()
+    T.write_file(dir .. "/inv.lua", [=[
+local signal = arg[2] == "signal"
+local ch = dfle.channel{ dx = 20, A_max = 8e6 }
+local function build(p, c)
+  if signal then
+    N = (N or 0) + 1
+    if N == 1 then io.popen("kill -INT $PPID"):close() end
+  end
+  return dfle.model{ channel = c, U = p.U, law = dfle.law.power{ k_df = 2e-4, alpha = 6 } }
+end
+local data = { A = { 1e5, 3e5, 1e6, 3e6 }, S = { 0.45, 0.35, 0.25, 0.2 } }
+local res = dfle.invert{ data = data, channel = ch, build = build, lsq = false, sigma = 0.2,
+  params = { U = { 1e-4, 1e-2, log = true } }, walkers = 4, steps = 12, burn = 2, seed = 1,
+  out = arg[1] }
+print(("ran=%d reason=%s"):format(res.ran, res.reason))
+if res.summary then print("median", res.summary.U.median) end
+]=])
+    local q = T.shquote
+    local cmd = "cd " .. q(dir) .. " && " .. q(T.dfle) .. " -q -j 1 inv.lua c.csv"
+    local out, ok = T.sh(cmd)
+    T.ok(ok, out)
+    T.has(out, "ran=12 reason=complete", "median")
+    local text = T.read_file(dir .. "/c.csv")
+    local code
+    out, ok, code = T.sh(cmd .. " signal")
+    T.eq(ok, nil, out)
+    T.eq(code, 130, out)
+    T.has(out, "ran=0 reason=interrupted")
+    T.ok(not out:find("median"), "no posterior: " .. out)
+    T.eq(T.read_file(dir .. "/c.csv"), text, "the file as it was")
+    -- and run again, it is checked and read
+    out, ok = T.sh(cmd)
+    T.ok(ok, out)
+    T.has(out, "ran=0 reason=complete", "median")
+    done()
+end
+
 tests["out, data and the corner plot's path refuse a NUL byte"] = function()
     local dir, done = T.scratch()
     T.errors_with(function() invert(dir .. "/a\0b.csv") end,
