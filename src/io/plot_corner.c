@@ -258,7 +258,7 @@ static void put_bounds(FILE *f, const dfle_corner_opts *o, size_t j, const int *
         if (note) /* upright beside the line, on the side outside the prior */
             fprintf(f, "set label %d \"prior bound\" at first %.10g, graph 0.06 rotate by 90 "
                     "left offset character %.1f, 0 tc rgb '%s' font ',%.3g' front\n", tag, b[j],
-                    side == 0 ? -0.3 : 1.1, BOUND_RGB, 0.8 * o_font_pt);
+                    side == 0 ? -0.9 : 1.1, BOUND_RGB, 0.8 * o_font_pt);
     }
 }
 
