@@ -498,8 +498,16 @@ int ls_route(dfle_landscape *ls, dfle_error *err)
     ls->stable = (double)changes <= floor(ls->rcv_tol * (double)ls->n_data) ? ls->stable + 1 : 0;
     ls->routings++;
     ls->routed = 1;
-    if (ls->model != NULL && (st = shape_network(ls, err)) != DFLE_OK)
-        return st;
+    /* Areas, widths, lengths and heads follow from the receivers alone:
+     * where none changed (a landscape near its steady state) the network,
+     * and every cache the router and model keep for its version, stand. */
+    if (ls->model != NULL && (changes > 0 || !ls->shape_current)) {
+        ls->shape_current = 0;
+        if ((st = shape_network(ls, err)) != DFLE_OK)
+            return st;
+        ls->shape_current = 1;
+    }
+    ls->model_z_current = 0;
     return DFLE_OK;
 }
 
@@ -516,6 +524,18 @@ int ls_model_evaluate(dfle_landscape *ls, dfle_error *err)
         return err != NULL ? err->code : DFLE_ENUMERIC;
     ls->model_z_current = 1;
     return DFLE_OK;
+}
+
+int ls_model_route(dfle_landscape *ls, const double **S, const double **reach, dfle_error *err)
+{
+    double *zm;
+    if (ls->model_z_current)
+        return dfle_model_route(ls->model, S, reach, err); /* evaluated: returns its fields */
+    zm = dfle_model_z(ls->model);
+    for (size_t k = 0; k < ls->n_data; k++)
+        zm[k] = ls->z[ls->cell_of[k]];
+    dfle_model_invalidate_flow(ls->model);
+    return dfle_model_route(ls->model, S, reach, err);
 }
 
 double ls_reach(const dfle_landscape *ls, size_t c)

@@ -166,6 +166,9 @@ struct dfle_landscape {
     double *w_table;           /* k_w (j dx dy)^b for j < n_w cells     */
     size_t n_w;
     int model_z_current;       /* the model's z and flow match ours     */
+    int shape_current;         /* the model's network is that of the
+                                * receivers in rcv_prev: a routing that
+                                * changes none need not re-shape it     */
     size_t channel_cells, heads;
 };
 
@@ -181,6 +184,9 @@ void ls_cell_centre(const dfle_landscape *ls, size_t c, double *x, double *y);
 int ls_update_fields(dfle_landscape *ls, int first, dfle_error *err);
 /* Copy z into the model and evaluate it (routes the debris flows). */
 int ls_model_evaluate(dfle_landscape *ls, dfle_error *err);
+/* Copy z into the model and route the debris flows only (what the
+ * implicit step reads): S and reach by node (dfle_model_route). */
+int ls_model_route(dfle_landscape *ls, const double **S, const double **reach, dfle_error *err);
 /* The debris flows that go on at cell c (0 without a router). */
 double ls_reach(const dfle_landscape *ls, size_t c);
 /* E_f [m/yr] at cell c for slope S. */

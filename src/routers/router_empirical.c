@@ -26,6 +26,10 @@ typedef struct empirical {
     double *M, *Q, *t_p;
     double *h3_coef; /* 3 mu Q / (rho_b g w): h^3 = h3_coef / S  [m^3] */
     double *ln_h3_3; /* ln(h3_coef) / 3: h = exp(ln_h3_3 - ln S / 3)      */
+    /* The nodes a flow can reach (at or below a source), donors before
+     * receivers: on a landscape the channel cells, so a routing walks
+     * those and not the hillslopes. */
+    size_t *order, n_order;
 } empirical;
 
 void dfle_empirical_opts_default(dfle_empirical_opts *o)
@@ -43,7 +47,10 @@ void dfle_empirical_opts_default(dfle_empirical_opts *o)
 static void empirical_drop_cache(empirical *e)
 {
     free(e->M); /* one block: M, Q, t_p, h3_coef, ln_h3_3 */
+    free(e->order);
     e->M = e->Q = e->t_p = e->h3_coef = e->ln_h3_3 = NULL;
+    e->order = NULL;
+    e->n_order = 0;
     e->cached_for = 0;
     e->n = 0;
 }
@@ -60,6 +67,10 @@ static int empirical_fill_cache(empirical *e, const dfle_network *net,
     block = malloc(5 * n * sizeof *block);
     if (block == NULL)
         return dfle_error_set(err, DFLE_ENOMEM, "router.empirical: out of memory");
+    if ((e->order = malloc(n * sizeof *e->order)) == NULL) {
+        free(block);
+        return dfle_error_set(err, DFLE_ENOMEM, "router.empirical: out of memory");
+    }
     e->M = block;
     e->Q = block + n;
     e->t_p = block + 2 * n;
@@ -76,8 +87,11 @@ static int empirical_fill_cache(empirical *e, const dfle_network *net,
             e->M[i] = source[i];
         for (size_t k = n; k-- > 0;) {
             const size_t i = stack[k];
-            if (e->M[i] != 0 && recv[i] != i)
-                e->M[recv[i]] = 1.0;
+            if (e->M[i] != 0) {
+                e->order[e->n_order++] = i;
+                if (recv[i] != i)
+                    e->M[recv[i]] = 1.0;
+            }
         }
     }
     for (size_t i = 0; i < n; i++) {
@@ -181,7 +195,7 @@ static int empirical_route(void *state, const dfle_network *net,
 {
     empirical *e = state;
     const double *w = dfle_network_w(net);
-    const size_t *stack = dfle_network_stack(net), *recv = dfle_network_receivers(net);
+    const size_t *recv = dfle_network_receivers(net);
     const unsigned char *source = dfle_network_sources(net);
     size_t n = dfle_network_size(net), reached = 0, first_gap = n;
     double chk = 0.0;
@@ -210,10 +224,18 @@ static int empirical_route(void *state, const dfle_network *net,
             zero_node(flow, i);
         return isfinite(sum) ? DFLE_OK : check_finite(flow, S, err);
     }
-    for (size_t i = 0; i < n; i++)
-        flow->reach[i] = source[i];
-    for (size_t k = n; k-- > 0;) {
-        const size_t i = stack[k];
+    /* Nodes no flow can reach are zeroed once per network shape and
+     * flow; after that only the reachable ones are walked. */
+    if (flow->clean_for != e->cached_for) {
+        for (size_t i = 0; i < n; i++)
+            if (isnan(e->M[i]))
+                zero_node(flow, i);
+        flow->clean_for = e->cached_for;
+    }
+    for (size_t k = 0; k < e->n_order; k++)
+        flow->reach[e->order[k]] = source[e->order[k]];
+    for (size_t k = 0; k < e->n_order; k++) {
+        const size_t i = e->order[k];
         const double arriving = flow->reach[i];
         /* No flow on a flat or reverse slope, nor where tau < tau_y. */
         if (!(arriving > 0) || !(S[i] > 0) ||

@@ -354,5 +354,5 @@ int dfle_solver_node_slope(dfle_model *m, size_t i, double U_eff, double c, doub
      * (examples/landscape_synthetic.lua in its quick mode) carries
      * changes of 1e-10 in one slope into which cell drains where.  Moving
      * them to Newton is the landscape's own change to make and measure. */
-    return solve_node(m, i, U_eff, c, flows, guess, 0, S, goes_on, err);
+    return dfle_solve_node(m, i, U_eff, c, flows, guess, S, goes_on, err);
 }
