@@ -31,6 +31,8 @@ struct dfle_network {
     double *len, *A, *w, *x;
     unsigned char *source;
     unsigned char *channel; /* n bytes, allocated on first use */
+    unsigned char *seen;    /* n bytes: a given stack's check (first use) */
+    int x_unset;            /* x is all NaN (no shape gave one)          */
     int has_channel;        /* the shape gave a channel mask   */
     size_t n_base;
     int uniform_len, chain;
@@ -88,6 +90,7 @@ int dfle_network_new(size_t n, dfle_network **out, dfle_error *err)
         net->x[i] = NAN;
         net->source[i] = 0;
     }
+    net->x_unset = 1;
     net->version = stamp();
     *out = net;
     return DFLE_OK;
@@ -101,6 +104,7 @@ void dfle_network_free(dfle_network *net)
     free(net->len);
     free(net->source);
     free(net->channel);
+    free(net->seen);
     free(net);
 }
 
@@ -175,7 +179,6 @@ static void derive(dfle_network *net)
 int dfle_network_set(dfle_network *net, const dfle_network_shape *s, dfle_error *err)
 {
     const size_t n = net->n;
-    size_t *pos = NULL;
 
     if (s->receiver == NULL || s->length == NULL || s->A == NULL || s->w == NULL)
         return dfle_error_set(err, DFLE_EINVAL, "network: receiver, length, A and w are required");
@@ -192,26 +195,28 @@ int dfle_network_set(dfle_network *net, const dfle_network_shape *s, dfle_error 
                                   "(must be finite and > 0)", i + 1, s->length[i]);
     }
     if (s->stack != NULL) {
-        /* A given stack: a permutation with every node after its receiver. */
-        if ((pos = malloc(n * sizeof *pos)) == NULL)
+        /* A given stack: a permutation with every node after its
+         * receiver, that is, each node's receiver already seen when the
+         * node comes.  A byte a node kept with the network: a landscape
+         * gives a stack at every routing. */
+        unsigned char *seen = net->seen;
+        if (seen == NULL && (seen = net->seen = malloc(n)) == NULL)
             return dfle_error_set(err, DFLE_ENOMEM, "network: out of memory");
-        for (size_t i = 0; i < n; i++)
-            pos[i] = NO_NODE;
+        memset(seen, 0, n);
         for (size_t k = 0; k < n; k++) {
-            if (s->stack[k] >= n || pos[s->stack[k]] != NO_NODE) {
-                free(pos);
+            if (s->stack[k] >= n || seen[s->stack[k]])
                 return dfle_error_set(err, DFLE_EINVAL, "network: the stack is not a permutation "
                                       "of the nodes (entry %zu)", k + 1);
-            }
-            pos[s->stack[k]] = k;
+            seen[s->stack[k]] = 1;
         }
-        for (size_t i = 0; i < n; i++)
-            if (s->receiver[i] != i && pos[s->receiver[i]] > pos[i]) {
-                free(pos);
+        memset(seen, 0, n);
+        for (size_t k = 0; k < n; k++) {
+            const size_t i = s->stack[k], r = s->receiver[i];
+            if (r != i && !seen[r])
                 return dfle_error_set(err, DFLE_EINVAL, "network: in the stack node %zu comes "
-                                      "before its receiver %zu", i + 1, s->receiver[i] + 1);
-            }
-        free(pos);
+                                      "before its receiver %zu", i + 1, r + 1);
+            seen[i] = 1;
+        }
     }
     if (s->channel != NULL && net->channel == NULL && (net->channel = malloc(n)) == NULL)
         return dfle_error_set(err, DFLE_ENOMEM, "network: out of memory");
@@ -219,8 +224,12 @@ int dfle_network_set(dfle_network *net, const dfle_network_shape *s, dfle_error 
     memcpy(net->len, s->length, n * sizeof *net->len);
     memcpy(net->A, s->A, n * sizeof *net->A);
     memcpy(net->w, s->w, n * sizeof *net->w);
-    for (size_t i = 0; i < n; i++)
-        net->x[i] = s->x != NULL ? s->x[i] : NAN;
+    if (s->x != NULL)
+        memcpy(net->x, s->x, n * sizeof *net->x);
+    else if (!net->x_unset)
+        for (size_t i = 0; i < n; i++)
+            net->x[i] = NAN;
+    net->x_unset = s->x == NULL;
     index_donors(net);
     if (s->stack != NULL) {
         memcpy(net->stack, s->stack, n * sizeof *net->stack);
