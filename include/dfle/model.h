@@ -186,6 +186,10 @@ int dfle_model_evaluate(dfle_model *m, dfle_error *err);
  * dfle_model_evaluate.  *S and *reach (n each) stay valid until z or the
  * network changes. */
 int dfle_model_route(dfle_model *m, const double **S, const double **reach, dfle_error *err);
+/* Bytes the model holds now: its fields and flows, the arrays made on
+ * first use (the celerity's perturbed copies, the gathered views of a
+ * law on scattered nodes) and a population's (not the network's). */
+size_t dfle_model_memory(const dfle_model *m);
 int dfle_model_is_evaluated(const dfle_model *m);
 /* From the last evaluation: max over non-base nodes of |dz/dt| / U
  * (DBL_MAX when that overflows, for a U near the smallest double), the

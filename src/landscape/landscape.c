@@ -390,8 +390,8 @@ size_t dfle_landscape_memory(const dfle_landscape *ls)
     b += (ls->U.grid != NULL) * ls->n * sizeof(double);
     b += (ls->K_scale.grid != NULL) * ls->n * sizeof(double);
     b += (ls->df_scale.grid != NULL) * ls->n * sizeof(double);
-    if (ls->model != NULL)
-        b += (size_t)ls_model_bytes(ls->n, ls->n_data);
+    if (ls->model != NULL) /* what the model made so far, not all it may make */
+        b += dfle_model_memory(ls->model) + (size_t)ls_network_bytes(ls->n, ls->n_data);
     return b;
 }
 

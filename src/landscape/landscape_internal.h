@@ -247,9 +247,11 @@ int ls_verify(dfle_landscape *ls, const ls_judge *j, size_t steps, double dt, ls
               int *passed, size_t *taken, dfle_landscape_status *worst, dfle_error *err);
 
 /* landscape_memory.c */
-/* Bytes of the debris-flow model, its network and the landscape's
- * shape scratch for n cells, n_data of them data. */
+/* Bytes of the debris-flow model (every array its implicit and direct
+ * runs make), its network and the landscape's shape scratch for n cells, n_data of
+ * them data; of the network and the scratch alone. */
 double ls_model_bytes(size_t n, size_t n_data);
+double ls_network_bytes(size_t n, size_t n_data);
 /* Bytes this process can still have: the least of the memory available
  * (MemAvailable), a cgroup's limit less its use, and ulimit -v and -d
  * less what the process holds; which one, in words, into what.

@@ -323,8 +323,11 @@ double dfle_model_rate_ratio(const dfle_model *m)
 int dfle_model_celerity(dfle_model *m, const double **c_out, dfle_error *err)
 {
     const size_t n = m->n;
+    int st;
 
     assert(m->evaluated);
+    if ((st = dfle_model_pert_alloc(m, err)) != DFLE_OK)
+        return st;
     if (m->fl != NULL) {
         const double n_s = dfle_fluvial_n(m->fl);
         for (size_t i = 0; i < n; i++)
@@ -335,7 +338,6 @@ int dfle_model_celerity(dfle_model *m, const double **c_out, dfle_error *err)
     }
     if (m->rt != NULL && m->reached.n > 0) {
         int local = dfle_router_is_local(m->rt);
-        int st;
 
         for (size_t i = 0; i < n; i++)
             m->S_pert[i] = m->S[i] > 0 ? m->S[i] * (1.0 + CELERITY_EPS) : m->S[i];
