@@ -160,9 +160,7 @@ struct dfle_landscape {
     dfle_model *model;
     uint32_t *node_of;         /* n: cell -> node (LS_NONE on NoData)   */
     uint32_t *cell_of;         /* n_data: node -> cell                  */
-    size_t *s_rcv, *s_stack;   /* shape scratch, n_data each            */
-    double *s_len, *s_A, *s_w, *s_Ks, *s_dfs;
-    unsigned char *s_src, *s_chan;
+    double *s_Ks, *s_dfs;      /* n_data: the scales by node, or NULL   */
     double *w_table;           /* k_w (j dx dy)^b for j < n_w cells     */
     size_t n_w;
     int model_z_current;       /* the model's z and flow match ours     */
