@@ -52,6 +52,17 @@ local function time(build, label, n, target)
     best = math.min(best, os.clock() - t0)
   end
   report(label, best, r, ls, target)
+  return best, r.steps, ls.n
+end
+
+-- The least-squares slope of log y against log x.
+local function exponent(x, y)
+  local n, sx, sy, sxx, sxy = #x, 0, 0, 0, 0
+  for i = 1, n do
+    local lx, ly = math.log(x[i]), math.log(y[i])
+    sx, sy, sxx, sxy = sx + lx, sy + ly, sxx + lx * lx, sxy + lx * ly
+  end
+  return (n * sxy - sx * sy) / (n * sxx - sx * sx)
 end
 
 local function catchment()
@@ -93,9 +104,18 @@ if mode ~= "--no-table" then
   for _, n in ipairs{ 100, 200, 500, 1000 } do
     time(function() return rivers(n) end, ("rivers (K = 2e-5, n = 1), %d^2"):format(n), 1)
   end
-  for _, n in ipairs{ 200, 300, 500 } do
-    time(function() return debris(n) end, ("debris flows + rivers (Fig. 9), %d^2"):format(n), 1)
+  -- How the direct steady state of debris-flow landscapes grows with
+  -- the cells n, t ~ n^p (target p <= 1.2 from 100^2 to 500^2), split
+  -- into its rounds (~ n^q) and the CPU of a round (~ n^(p - q)).
+  local cells, cpu, rounds = {}, {}, {}
+  for _, n in ipairs{ 100, 200, 300, 500 } do
+    local t, k, c = time(function() return debris(n) end,
+                         ("debris flows + rivers (Fig. 9), %d^2"):format(n), 1)
+    cells[#cells + 1], cpu[#cpu + 1], rounds[#rounds + 1] = c, t, k
   end
+  local p, q = exponent(cells, cpu), exponent(cells, rounds)
+  print(("  debris flows + rivers, 100^2 to 500^2: CPU ~ n^%.2f (target <= 1.2, %s): rounds "
+         .. "~ n^%.2f, a round ~ n^%.2f"):format(p, p <= 1.2 and "met" or "NOT met", q, p - q))
   for _, rule in ipairs{ "any", "count" } do
     time(function() return synthetic(200, 150, rule, true) end,
          ("landscape_synthetic.lua 200 x 150, %s"):format(rule), 1)
