@@ -170,9 +170,10 @@ static size_t process_params(const void *state, dfle_param *out, size_t cap)
         {"rho_s", o->flow.rho_s, "kg/m^3", 0}, {"g", o->flow.g, "m/s^2", 0},
         {"cfl", o->flow.cfl, "", 0},      {"h_dry", o->flow.h_dry, "m", 0},
         {"n_ghost", o->n_ghost, "", 0},   {"reroute_dS", o->reroute_dS, "", 0},
+        {"reroute_dw", o->reroute_dw, "", 0},
         {"q_erode", o->q_erode, "m^2/s", 0}, {"q_rest", o->q_rest, "m^2/s", 0},
         {"volume_tol", o->volume_tol, "", 0}, {"t_max", o->t_max, "s", 0},
-        {"max_steps", o->max_steps, "", 0}, {"reroute_dw", o->reroute_dw, "", 0},
+        {"max_steps", o->max_steps, "", 0},
         {"gamma", o->gamma, "", 0},       {"frequency_scaling", o->frequency_scaling, "", 1},
     };
     return dfle_param_copy(p, sizeof p / sizeof p[0], out, cap);
