@@ -1,7 +1,8 @@
 /* test_router_process_network.c - the process-based router on a
  * drainage network: two heads joining (each flow as the 1D model on its
  * own path, combined by the rule), volume conservation of every flow,
- * paths of unequal cell lengths, and the re-routing rule per head. */
+ * paths of unequal cell lengths, and the re-routing rule per head (on
+ * the cells each flow felt). */
 #include <math.h>
 #include <stdlib.h>
 #include <string.h>
@@ -338,6 +339,83 @@ static void reroute_per_head(void **state)
     dfle_network_free(y.net);
 }
 
+/* The network's shape again, from y's arrays. */
+static void y_reshape(ynet *y)
+{
+    dfle_network_shape sh;
+    dfle_error err;
+    memset(&sh, 0, sizeof sh);
+    sh.receiver = y->recv, sh.length = y->len, sh.A = y->A, sh.w = y->w;
+    assert_ok(dfle_network_set(y->net, &sh, &err), &err);
+}
+
+/* Below the furthest cell a flow wetted its path does not matter: a
+ * shorter path (a receiver changed) with other widths and slopes there
+ * keeps every routing, and the kept sums are exactly what a fresh
+ * routing of the changed network gives.  On the cells a flow felt, a
+ * width moved by less than reroute_dw keeps it; by more re-routes. */
+static void reroute_only_where_felt(void **state)
+{
+    ynet y;
+    dfle_process_opts o;
+    dfle_router *rt, *fresh;
+    dfle_flow flow, flow2;
+    size_t wet_end = 0, cut = NN - 40;
+    double I0[NN];
+    dfle_error err;
+    (void)state;
+    y_build(&y, 5.0, 0);
+    dfle_process_opts_default(&o);
+    assert_ok(dfle_router_new_process(&o, &rt, &err), &err);
+    assert_int_equal(dfle_flow_init(&flow, NN, NULL), DFLE_OK);
+    assert_int_equal(dfle_flow_init(&flow2, NN, NULL), DFLE_OK);
+    route_y(&y, rt, &flow);
+    const dfle_process_report *rep = dfle_router_process_report(rt);
+    assert_int_equal(rep->heads_routed, 2);
+    for (size_t i = 0; i < NN; i++)
+        if (flow.h[i] > 0 || flow.M[i] > 0)
+            wet_end = i + 1;
+    assert_true(wet_end > JUNCTION && wet_end + 3 < cut); /* both rest on the trunk */
+    memcpy(I0, flow.integral, sizeof I0);
+
+    y.recv[cut] = NN - 1; /* skips the cells below cut */
+    for (size_t i = cut; i < NN; i++) {
+        y.w[i] *= 1.5;
+        y.S[i] = 0.5;
+    }
+    y_reshape(&y);
+    /* The cell below cut is a head now, of a flow of its own: the one
+     * routed; a and b keep theirs. */
+    route_y(&y, rt, &flow);
+    assert_int_equal(rep->heads, 3);
+    assert_int_equal(rep->heads_routed, 1);
+    assert_ok(dfle_router_new_process(&o, &fresh, &err), &err);
+    route_y(&y, fresh, &flow2);
+    assert_int_equal(dfle_router_process_report(fresh)->heads_routed, 3);
+    for (size_t i = 0; i < cut; i++) {
+        assert_close(flow.integral[i], I0[i], 0, 0);
+        assert_close(flow2.integral[i], I0[i], 0, 0);
+        assert_close(flow.reach[i], flow2.reach[i], 0, 0);
+    }
+
+    y.w[NA + 2] *= 1.0 + 0.5 * o.reroute_dw; /* on b's path, below the threshold */
+    y_reshape(&y);
+    route_y(&y, rt, &flow);
+    assert_int_equal(rep->heads_routed, 0);
+    for (size_t i = 0; i < NN; i++)
+        assert_close(flow.integral[i], flow2.integral[i], 0, 0);
+    y.w[NA + 2] *= 1.0 + o.reroute_dw; /* 1.5 dw since b's routing, and more */
+    y_reshape(&y);
+    route_y(&y, rt, &flow);
+    assert_int_equal(rep->heads_routed, 1);
+    assert_true(flow.integral[NA + 2] != I0[NA + 2]);
+    dfle_flow_release(&flow);
+    dfle_flow_release(&flow2);
+    dfle_router_free(rt);
+    dfle_router_free(fresh);
+    dfle_network_free(y.net);
+}
+
 static int refuses(void *s, double h, double v, double lambda, double *g, dfle_error *err)
 {
     (void)s, (void)h, (void)v, (void)lambda, (void)g;
@@ -376,6 +454,7 @@ int main(void)
         cmocka_unit_test(combine_rules_on_the_model),
         cmocka_unit_test(unequal_cells_keep_volume),
         cmocka_unit_test(reroute_per_head),
+        cmocka_unit_test(reroute_only_where_felt),
         cmocka_unit_test(failing_integrand_names_the_head),
     };
     return cmocka_run_group_tests(tests, NULL, NULL);

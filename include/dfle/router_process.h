@@ -49,6 +49,11 @@ typedef struct dfle_process_opts {
      * 1000 (1e-6 A)^gamma / M0, a debris-flow frequency growing with A. */
     int frequency_scaling; /* 0 or 1                                (0)     */
     double gamma;          /* exponent of the scaling [-]           (0)     */
+    /* On a network: a width on a head's path that moved by less than
+     * this fraction since its last routing keeps that routing (a
+     * hillslope cell that changes receiver moves its area between
+     * channels at every step, and with it the widths below). */
+    double reroute_dw;     /* relative, > 0                         (0.05)  */
 } dfle_process_opts;
 
 /* Fig. 6 defaults: M0 = 200, eta = 60, mu_2 = 0.62, D = 5e-6, mu_s =

@@ -50,6 +50,7 @@ void dfle_process_opts_default(dfle_process_opts *o)
     o->max_steps = 1e6;
     o->frequency_scaling = 0;
     o->gamma = 0.0;
+    o->reroute_dw = 0.1;
 }
 
 const char *dfle_process_end_name(int end)
@@ -169,6 +170,7 @@ static size_t process_params(const void *state, dfle_param *out, size_t cap)
         {"rho_s", o->flow.rho_s, "kg/m^3", 0}, {"g", o->flow.g, "m/s^2", 0},
         {"cfl", o->flow.cfl, "", 0},      {"h_dry", o->flow.h_dry, "m", 0},
         {"n_ghost", o->n_ghost, "", 0},   {"reroute_dS", o->reroute_dS, "", 0},
+        {"reroute_dw", o->reroute_dw, "", 0},
         {"q_erode", o->q_erode, "m^2/s", 0}, {"q_rest", o->q_rest, "m^2/s", 0},
         {"volume_tol", o->volume_tol, "", 0}, {"t_max", o->t_max, "s", 0},
         {"max_steps", o->max_steps, "", 0},
@@ -212,7 +214,7 @@ int dfle_router_new_process(const dfle_process_opts *o, dfle_router **out, dfle_
         {"M0", o->M0, 0},           {"reroute_dS", o->reroute_dS, 0},
         {"q_erode", o->q_erode, 1}, {"q_rest", o->q_rest, 1},
         {"volume_tol", o->volume_tol, 1}, {"t_max", o->t_max, 0},
-        {"max_steps", o->max_steps, 0},
+        {"max_steps", o->max_steps, 0}, {"reroute_dw", o->reroute_dw, 0},
         {"gamma", o->gamma, 1},
     };
     for (size_t i = 0; i < sizeof pos / sizeof pos[0]; i++)

@@ -16,12 +16,23 @@
  *
  * The re-routing rule (Sect. 2.2), per head: each head's last routing is
  * kept with the slopes, lengths and widths of its path, and a head is
- * routed again only when its path is another one (a receiver, length or
- * width on it changed) or a slope on it has moved by reroute_dS or more
- * since that head's last routing.  Between routings the kept sums stand
- * and the law applies the current slope (Eq. 11).  So a change in one
- * tributary re-routes only the flows that cross it, and the work follows
- * the total length of the paths routed again, not the grid.
+ * routed again only when its path is another one (a receiver or length
+ * on it changed), a width on it moved by the fraction reroute_dw or a
+ * slope by reroute_dS or more since that head's last routing.  Between
+ * routings the kept sums stand and the law applies the current slope
+ * (Eq. 11).  So a change in one tributary re-routes only the flows that
+ * cross it, and the work follows the total length of the paths routed
+ * again, not the grid.
+ *
+ * Only the cells a flow could feel are compared: those it wetted and
+ * the two below its furthest wet cell (a step's window is the wet
+ * cells and one more on each side; the reconstruction at that dry
+ * cell's lower face reads the next).  A flow that stopped halfway down
+ * its path routes to the same numbers whatever the path does below
+ * them, and on a landscape the paths' lower reaches change receiver
+ * and width at every step (hillslope cells trading area between
+ * channels), which re-routed every head crossing them without a
+ * difference to any flow.
  */
 #include "routers/router_process_internal.h"
 
@@ -37,6 +48,7 @@ typedef struct head {
     size_t node;       /* the source */
     size_t off, len;   /* its path in the path arrays */
     size_t runout_end; /* of its flow: the nodes [0, runout_end) of its path */
+    size_t felt;       /* the nodes [0, felt) its routing depends on     */
 } head;
 
 /* One generation of paths: heads and their paths, concatenated. */
@@ -156,6 +168,7 @@ static int build_paths(const dfle_network *net, paths *p, dfle_error *err)
         h->node = s;
         h->off = p->total;
         h->runout_end = 0;
+        h->felt = 0;
         for (;;) {
             const int base = recv[i] == i;
             if (paths_reserve(p, p->total + 1) != 0)
@@ -176,20 +189,42 @@ nomem:
                           "%zu heads", p->n_heads);
 }
 
-/* 1 if head h of `now` can keep the routing of head o of `old`: the same
- * path (nodes, lengths, widths) and no slope on it moved by dS or more. */
+/* 1 if head h of `now` can keep the routing of head o of `old`: on the
+ * cells o's flow felt, the same nodes and lengths, no width moved by the
+ * fraction dw and no slope by dS or more. */
 static int can_keep(const paths *now, const head *h, const paths *old, const head *o,
-                    const double *S, double dS)
+                    const double *S, double dS, double dw)
 {
-    if (h->len != o->len)
+    /* A flow that felt its whole path left at its base level: a path
+     * that goes on from there is another one. */
+    if (h->len < o->felt || (o->felt == o->len && h->len != o->len))
         return 0;
-    for (size_t j = 0; j < h->len; j++) {
+    for (size_t j = 0; j < o->felt; j++) {
         const size_t a = h->off + j, b = o->off + j;
         if (now->node[a] != old->node[b] || now->len[a] != old->len[b] ||
-            now->w[a] != old->w[b] || !(fabs(S[now->node[a]] - old->S[b]) < dS))
+            !(fabs(now->w[a] - old->w[b]) < dw * old->w[b]) ||
+            !(fabs(S[now->node[a]] - old->S[b]) < dS))
             return 0;
     }
     return 1;
+}
+
+/* Head h of `now` takes the kept routing of head o of `old` (can_keep):
+ * the kept arrays and slopes node for node; below the cells the flow
+ * felt, where the two paths may part, each array goes on with o's
+ * value there (what a flow leaves on cells it never reached) and the
+ * slopes with those of now, for the next comparison. */
+static void keep_routing(paths *now, head *h, const paths *old, const head *o, const double *S)
+{
+    const double *from = old->kept + KEPT_ARRAYS * o->off;
+    double *to = now->kept + KEPT_ARRAYS * h->off;
+    for (size_t a = 0; a < KEPT_ARRAYS; a++)
+        for (size_t j = 0; j < h->len; j++)
+            to[a * h->len + j] = from[a * o->len + (j < o->len ? j : o->len - 1)];
+    for (size_t j = 0; j < h->len; j++)
+        now->S[h->off + j] = j < o->felt ? old->S[o->off + j] : S[now->node[h->off + j]];
+    h->runout_end = o->runout_end;
+    h->felt = o->felt;
 }
 
 static int scratch_reserve(process_network *c, size_t len)
@@ -246,6 +281,12 @@ static int route_head(process_network *c, const dfle_process_opts *o, const dfle
         return st;
     }
     h->runout_end = f.runout_end;
+    /* The cells it wetted (a depth or a volume passed) and two below. */
+    h->felt = 0;
+    for (size_t j = 0; j < h->len; j++)
+        if (f.h[j] > 0 || f.M[j] > 0)
+            h->felt = j + 1;
+    h->felt = h->felt + 2 < h->len ? h->felt + 2 : h->len;
     return DFLE_OK;
 }
 
@@ -336,13 +377,11 @@ int dfle_process_route_network(process_network **cache, const dfle_process_opts 
         head *h = &c->next.heads[k];
         const size_t ko = c->head_of[h->node];
         const head *old = ko != (size_t)-1 ? &c->cur.heads[ko] : NULL;
-        if (old != NULL && can_keep(&c->next, h, &c->cur, old, S, o->reroute_dS)) {
+        if (old != NULL &&
+            can_keep(&c->next, h, &c->cur, old, S, o->reroute_dS, o->reroute_dw)) {
             /* Its last routing stands: the kept sums, and the slopes it was
              * routed over (the rule compares with those, not with these). */
-            memcpy(c->next.kept + KEPT_ARRAYS * h->off, c->cur.kept + KEPT_ARRAYS * old->off,
-                   KEPT_ARRAYS * h->len * sizeof *c->next.kept);
-            memcpy(c->next.S + h->off, c->cur.S + old->off, h->len * sizeof *c->next.S);
-            h->runout_end = old->runout_end;
+            keep_routing(&c->next, h, &c->cur, old, S);
             continue;
         }
         process_path_result r;

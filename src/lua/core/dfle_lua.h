@@ -435,6 +435,14 @@ void dfle_lua_open_law_define(lua_State *L); /* dfle.law.define, into the law ta
  * runs as Lua) and return 1; return 0 for any other law. */
 int dfle_lua_law_compiled(lua_State *L, dfle_law *law);
 void dfle_lua_open_model(lua_State *L);
+/* dfle.model{ network = <dem:network{...}>, k_w =, b = } (lua_dem_network.c):
+ * when the options table at opts has a network, push the model's network
+ * object built from it (widths k_w A^b), set *out and return 1; else
+ * return 0 (raising on k_w or b without a network).  After the model is
+ * made, dfle_lua_model_network_z starts it from the DEM's elevations. */
+void dfle_lua_open_network(lua_State *L);
+int dfle_lua_model_network(lua_State *L, int opts, const dfle_network **out);
+int dfle_lua_model_network_z(lua_State *L, int opts, dfle_model *m);
 void dfle_lua_open_analysis(lua_State *L);
 void dfle_lua_open_plot(lua_State *L);
 void dfle_lua_open_chi(lua_State *L); /* after plot: dfle.chi, dfle.concavity, their plots */

@@ -31,6 +31,7 @@ int luaopen_dfle(lua_State *L)
     dfle_lua_open_router(L);
     dfle_lua_open_law(L);
     dfle_lua_open_model(L);
+    dfle_lua_open_network(L);
     dfle_lua_open_analysis(L);
     dfle_lua_open_plot(L);
     dfle_lua_open_chi(L); /* after plot: adds dfle.plot.chi, ... */

@@ -75,7 +75,8 @@ static void *udata_ptr(lua_State *L, int idx)
 
 static int l_model_new(lua_State *L)
 {
-    static const char *const component_keys[] = {"channel", "fluvial", "router", "law", NULL};
+    static const char *const component_keys[] = {"channel", "fluvial", "router", "law",
+                                                 "network", "k_w", "b", "combine", NULL};
     dfle_model_opts o;
     dfle_lua_model *u;
     dfle_error err;
@@ -84,7 +85,7 @@ static int l_model_new(lua_State *L)
 
     /* U may be a number [m/yr] or a function of model time [yr]. */
     static const char *const component_keys_U[] = {"channel", "fluvial", "router", "law", "U",
-                                                   NULL};
+                                                   "network", "k_w", "b", "combine", NULL};
     int U_fn;
 
     dfle_model_opts_default(&o);
@@ -108,7 +109,16 @@ static int l_model_new(lua_State *L)
     }
 
     base = lua_gettop(L);
-    push_component(L, 1, "channel", DFLE_LUA_CHANNEL, default_channel, 0);
+    if (!dfle_lua_model_network(L, 1, &o.network))
+        push_component(L, 1, "channel", DFLE_LUA_CHANNEL, default_channel, 0);
+    if (lua_istable(L, 1) && lua_getfield(L, 1, "combine") != LUA_TNIL) {
+        static const char *const rules[] = {"any", "count", NULL};
+        if (o.network == NULL)
+            luaL_error(L, "dfle.model: 'combine' is for a network (network =): on a channel "
+                          "flows do not meet");
+        o.df_combine = luaL_checkoption(L, -1, NULL, rules) == 0 ? DFLE_DF_ANY : DFLE_DF_COUNT;
+    }
+    lua_settop(L, base + 1);
     push_component(L, 1, "fluvial", DFLE_LUA_FLUVIAL, default_fluvial, 1);
     push_component(L, 1, "router", DFLE_LUA_ROUTER, default_router, 1);
     if (lua_isnil(L, base + 3)) {
@@ -120,11 +130,11 @@ static int l_model_new(lua_State *L)
         push_component(L, 1, "law", DFLE_LUA_LAW, default_law, 0);
     }
 
-    o.channel = udata_ptr(L, base + 1);
+    o.channel = o.network != NULL ? NULL : udata_ptr(L, base + 1);
     o.fluvial = udata_ptr(L, base + 2);
     o.router = udata_ptr(L, base + 3);
     o.law = udata_ptr(L, base + 4);
-    if (o.channel == NULL || (lua_isuserdata(L, base + 2) && o.fluvial == NULL) ||
+    if ((o.channel == NULL && o.network == NULL) || (lua_isuserdata(L, base + 2) && o.fluvial == NULL) ||
         (lua_isuserdata(L, base + 3) && o.router == NULL) ||
         (lua_isuserdata(L, base + 4) && o.law == NULL))
         luaL_error(L, "dfle.model: a component has been closed");
@@ -140,6 +150,8 @@ static int l_model_new(lua_State *L)
     }
     if (dfle_model_new(&o, &u->m, &err) != DFLE_OK)
         return dfle_lua_raise(L, &err);
+    if (o.network != NULL)
+        dfle_lua_model_network_z(L, 1, u->m);
     /* The components now serve this model: a __gc or close of one of
      * them waits until the model is gone (model_release). */
     for (int k = UV_CHANNEL; k <= UV_LAW; k++)

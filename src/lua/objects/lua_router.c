@@ -48,7 +48,7 @@ static int l_router_process(lua_State *L)
         {"cfl", &o.flow.cfl},    {"h_dry", &o.flow.h_dry},     {"n_ghost", &n_ghost},
         {"reroute_dS", &o.reroute_dS}, {"q_erode", &o.q_erode}, {"q_rest", &o.q_rest},
         {"volume_tol", &o.volume_tol}, {"t_max", &o.t_max},    {"gamma", &o.gamma},
-        {"max_steps", &o.max_steps},
+        {"max_steps", &o.max_steps}, {"reroute_dw", &o.reroute_dw},
     };
 
     dfle_process_opts_default(&o);
