@@ -55,8 +55,8 @@ print(("inversion (empirical, %d nodes, dx = 5 m): %d walkers x %d steps on %d w
       :format(ch.n, walkers, steps, workers))
 print(("  %d forward runs in %.1f s: %.0f runs/s (target: 10^5 runs in < 60 s)")
       :format(res.evaluations, res.elapsed, res.evaluations / res.elapsed))
-print(("  CPU: %.1f s in all, %.3f ms of forward model per run; %.1f %% outside the forward model;" ..
-       " %.1f s on %d idle cores")
+print(("  CPU: %.1f s in all, %.3f ms of forward model per run; %.1f %% outside the forward model" ..
+       " (target: < 10 %%); %.1f s on %d idle cores")
       :format(cpu, 1e3 * res.forward_seconds / res.evaluations,
               100 * math.max(0, 1 - res.forward_seconds / cpu), cpu / workers, workers))
 print(("  wall: %.1f %% of the workers' time outside the forward model (waiting included)")

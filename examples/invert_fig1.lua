@@ -118,6 +118,14 @@ for _, run in ipairs(runs) do
           :format(s.median * 1e3, s.lo68 * 1e3, s.hi68 * 1e3, s.lo95 * 1e3, s.hi95 * 1e3,
                   corr("U", "k_df"), corr("U", "gamma"), corr("k_df", "gamma"),
                   run.free_ke and (", ln U - ln k_e %.2f"):format(corr("U", "k_e")) or ""))
+    -- A marginal piled against a prior bound is the prior's, not the data's.
+    for _, name in ipairs(res.names) do
+      local b = res.summary[name].bounded
+      if b ~= nil then
+        print(("  %s: held by the %s prior bound%s (the interval is the prior's there)")
+              :format(name, b == "both" and "lower and upper" or b, b == "both" and "s" or ""))
+      end
+    end
     rows[#rows + 1] = { run, res }
     dfle.plot.corner(res, ("%s/fig1_invert_%s_corner.png"):format(outdir, run.tag), {
       params = run.free_ke and { "U", "k_e", "k_df", "gamma", "sigma" }
