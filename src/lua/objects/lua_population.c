@@ -22,6 +22,7 @@
 
 #include "dfle/model_events.h"
 #include "dfle/router_population.h"
+#include "lua/objects/lua_events.h"
 
 #define FN "router.population"
 
@@ -189,6 +190,45 @@ void dfle_lua_open_router_population(lua_State *L)
     lua_setfield(L, -2, "quadrature");
 }
 
+void dfle_lua_read_events_opts(lua_State *L, int idx, const char *fn, int hold_default,
+                               dfle_events_opts *o)
+{
+    static const char *const other[] = {"hold", NULL};
+    double seed = 1;
+    const dfle_lua_param params[] = {{"years", &o->years}, {"dt", &o->dt}, {"seed", &seed}};
+
+    *o = (dfle_events_opts){.years = NAN, .dt = 1.0, .seed = 1, .hold = hold_default};
+    luaL_checktype(L, idx, LUA_TTABLE);
+    dfle_lua_read_params(L, idx, fn, params, 3, other);
+    if (isnan(o->years))
+        luaL_error(L, "dfle.%s: parameter 'years' is required", fn);
+    o->seed = (unsigned long)dfle_lua_check_whole(L, seed, fn, "seed", 0, 4294967295.0);
+    if (lua_getfield(L, idx, "hold") != LUA_TNIL) {
+        if (!lua_isboolean(L, -1))
+            luaL_error(L, "dfle.%s: parameter 'hold' must be a boolean, got %s", fn,
+                       dfle_lua_typename(L, -1));
+        o->hold = lua_toboolean(L, -1);
+    }
+    lua_pop(L, 1);
+}
+
+void dfle_lua_push_events_result(lua_State *L, const dfle_events_result *res, const double *sum,
+                                 const double *sum2, size_t n)
+{
+    lua_createtable(L, 0, 5);
+    lua_pushinteger(L, (lua_Integer)res->events), lua_setfield(L, -2, "events");
+    lua_pushinteger(L, (lua_Integer)res->steps), lua_setfield(L, -2, "steps");
+    lua_pushnumber(L, res->years), lua_setfield(L, -2, "years");
+    lua_createtable(L, (int)n, 0);
+    for (size_t i = 0; i < n; i++)
+        lua_pushnumber(L, sum[i] / res->years), lua_rawseti(L, -2, (lua_Integer)i + 1);
+    lua_setfield(L, -2, "mean");
+    lua_createtable(L, (int)n, 0);
+    for (size_t i = 0; i < n; i++)
+        lua_pushnumber(L, sqrt(sum2[i]) / res->years), lua_rawseti(L, -2, (lua_Integer)i + 1);
+    lua_setfield(L, -2, "se");
+}
+
 /* m:run_events{years =, dt =, seed =, hold = false}: debris flows of
  * the model's population as events in time (model_events.h).  Returns
  * {events, steps, years, mean = {rate per node [m/yr]}, se = {its
@@ -196,46 +236,20 @@ void dfle_lua_open_router_population(lua_State *L)
 int dfle_lua_model_run_events(lua_State *L)
 {
     dfle_model *m = dfle_lua_check_model(L, 1);
-    static const char *const other[] = {"hold", NULL};
-    dfle_events_opts o = {.years = NAN, .dt = 1.0, .seed = 1, .hold = 0};
-    double seed = 1;
-    const dfle_lua_param params[] = {{"years", &o.years}, {"dt", &o.dt}, {"seed", &seed}};
     const size_t n = dfle_model_size(m);
+    dfle_events_opts o;
     dfle_events_result res;
     dfle_error err;
     double *sum;
     int st;
 
-    luaL_checktype(L, 2, LUA_TTABLE);
-    dfle_lua_read_params(L, 2, "model:run_events", params, 3, other);
-    if (isnan(o.years))
-        luaL_error(L, "dfle.model:run_events: parameter 'years' is required");
-    o.seed = (unsigned long)dfle_lua_check_whole(L, seed, "model:run_events", "seed", 0,
-                                                 4294967295.0);
-    if (lua_getfield(L, 2, "hold") != LUA_TNIL) {
-        if (!lua_isboolean(L, -1))
-            luaL_error(L, "dfle.model:run_events: parameter 'hold' must be a boolean, got %s",
-                       dfle_lua_typename(L, -1));
-        o.hold = lua_toboolean(L, -1);
-    }
-    lua_pop(L, 1);
+    dfle_lua_read_events_opts(L, 2, "model:run_events", 0, &o);
     sum = lua_newuserdatauv(L, 2 * n * sizeof *sum, 0);
     dfle_lua_begin_use(L, 1, "dfle.model:run_events");
     st = dfle_run_events(m, &o, &res, sum, sum + n, &err);
     dfle_lua_end_use(L, 1);
     if (st != DFLE_OK)
         return dfle_lua_raise(L, &err);
-    lua_createtable(L, 0, 5);
-    lua_pushinteger(L, (lua_Integer)res.events), lua_setfield(L, -2, "events");
-    lua_pushinteger(L, (lua_Integer)res.steps), lua_setfield(L, -2, "steps");
-    lua_pushnumber(L, res.years), lua_setfield(L, -2, "years");
-    lua_createtable(L, (int)n, 0);
-    for (size_t i = 0; i < n; i++)
-        lua_pushnumber(L, sum[i] / res.years), lua_rawseti(L, -2, (lua_Integer)i + 1);
-    lua_setfield(L, -2, "mean");
-    lua_createtable(L, (int)n, 0);
-    for (size_t i = 0; i < n; i++)
-        lua_pushnumber(L, sqrt(sum[n + i]) / res.years), lua_rawseti(L, -2, (lua_Integer)i + 1);
-    lua_setfield(L, -2, "se");
+    dfle_lua_push_events_result(L, &res, sum, sum + n, n);
     return 1;
 }
