@@ -18,6 +18,7 @@ preload=$(sed -n 's/^#define DFLE_\(GDAL\|NETCDF\)_SONAME "\(.*\)"$/\2/p' \
           "$BIN/../gen/extlib_names.h" 2> /dev/null | tr '\n' ' ')
 "$BIN/startup" "$DFLE" "$preload" "$(command -v lua5.4)"
 "$DFLE" -q "$here/steady_state.lua"
+"$DFLE" -q "$here/population.lua"
 "$BIN/direct"
 "$BIN/process"
 "$DFLE" -q "$here/process.lua"

@@ -38,7 +38,7 @@ header_layer() {
     flow.h | flow1d.h | router*.h) echo routers ;; drainage.h) echo drainage ;;
     lua.h) echo lua ;; fluvial.h | law*.h) echo laws ;; model.h) echo model ;;
     model_events.h) echo model ;;
-    solver.h) echo solvers ;; dem.h | crs.h) echo dem ;; landscape.h) echo landscape ;;
+    solver.h) echo solvers ;; dem.h | crs.h) echo dem ;; landscape.h | landscape_events.h) echo landscape ;;
     analysis.h | analytical.h | sampling.h | sensitivity.h | chi.h) echo analysis ;;
     stream.h | prior.h | mcmc.h | mcmc_diag.h | lsq.h | likelihood.h) echo analysis ;;
     csv.h | ensemble.h | plot.h | raster.h | netcdf.h | vector.h) echo io ;;

@@ -26,9 +26,11 @@ extern "C" {
 #endif
 
 /* E[0..n) [m]: the erosion of one debris flow of the model's population
- * with volume factor f (> 0), routed over the model's current profile.
- * DFLE_EINVAL if the model's router is not a population. */
-int dfle_model_event_erosion(dfle_model *m, double f, double *E, dfle_error *err);
+ * with volume factor f, and factors g_mu, g_tau on mu and tau_y (all
+ * > 0), routed over the model's current profile.  DFLE_EINVAL if the
+ * model's router is not a population. */
+int dfle_model_event_erosion(dfle_model *m, double f, double g_mu, double g_tau, double *E,
+                             dfle_error *err);
 
 /* The population of the model's router, or NULL. */
 const struct dfle_population *dfle_model_population(const dfle_model *m);

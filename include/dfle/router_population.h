@@ -12,7 +12,11 @@
  *   E_df = lambda sum_j w_j E_df(flow with f_j)
  *
  * over q quadrature flows (f_j, w_j, sum w_j = 1), each routed with its
- * own runout.  With a population, k_df is the erosion of one event
+ * own runout.  The flows' mobility may vary too: factors on the member
+ * router's viscosity mu and yield strength tau_y, each with its own
+ * distribution (independent of the volume and of each other), make the
+ * quadrature the tensor product of the three (q_V q_mu q_tau flows;
+ * a zero-width distribution adds no nodes).  With a population, k_df is the erosion of one event
  * (k_df's m/yr times 1 yr/event) and lambda brings the frequency back:
  * lambda = 1 and a zero-width distribution give the characteristic flow
  * exactly.
@@ -77,11 +81,21 @@ double dfle_dist_moment(const dfle_dist *d, double k);
  * log-normal takes a second uniform u2 for Box-Muller). */
 double dfle_dist_draw(const dfle_dist *d, double u, double u2);
 
+/* 1 if d has zero width (one value): sigma = 0, f_min = f_max, or a
+ * table of one value. */
+int dfle_dist_is_point(const dfle_dist *d);
+
 typedef struct dfle_population_opts {
     dfle_dist volume;  /* the volume factor's distribution                */
     double frequency;  /* lambda: debris flows per year, > 0 (1)           */
     size_t order;      /* quadrature order q, 1..64 (8); tables use theirs */
+    dfle_dist mu;      /* factor on the router's viscosity mu (zero width: fixed) */
+    dfle_dist tau_y;   /* factor on its yield strength tau_y (zero width)  */
+    size_t mobility_order; /* quadrature order of mu and tau_y, 1..64 (8)  */
 } dfle_population_opts;
+
+/* Most flows a population may have (the product of the three orders). */
+#define DFLE_POPULATION_MAX_FLOWS 4096
 
 void dfle_population_opts_default(dfle_population_opts *o);
 
@@ -101,18 +115,22 @@ size_t dfle_population_size(const dfle_population *p);
 dfle_router *dfle_population_member(const dfle_population *p, size_t j);
 double dfle_population_rate(const dfle_population *p, size_t j);
 double dfle_population_factor(const dfle_population *p, size_t j);
+/* Member j's factors on mu and tau_y (1 where these do not vary). */
+double dfle_population_mu_factor(const dfle_population *p, size_t j);
+double dfle_population_tau_y_factor(const dfle_population *p, size_t j);
 double dfle_population_frequency(const dfle_population *p);
 const dfle_population_opts *dfle_population_get_opts(const dfle_population *p);
+
+/* A router for one flow of the population with factors f on the volume,
+ * g_mu on mu and g_tau on tau_y (all > 0): the base router with M0 f,
+ * mu g_mu and tau_y g_tau.  The caller frees it. */
+int dfle_population_new_flow(const dfle_population *p, double f, double g_mu, double g_tau,
+                             dfle_router **out, dfle_error *err);
 
 /* Fold member j's routed flow `mf` into the population's summary `sum`
  * (cleared by the caller for j = 0): reach gains rate_j * mf->reach, the
  * other fields become rate-weighted means over the members going on;
  * runout_end is the largest.  Call for j = 0 .. size-1 in turn. */
-/* A router for one flow of the population with volume factor f (> 0):
- * the base router with M0 times f.  The caller frees it. */
-int dfle_population_new_flow(const dfle_population *p, double f, dfle_router **out,
-                             dfle_error *err);
-
 void dfle_population_accumulate(const dfle_population *p, size_t j, const dfle_flow *mf,
                                 dfle_flow *sum);
 

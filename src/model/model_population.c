@@ -215,7 +215,8 @@ int dfle_model_pop_node_erosion(dfle_model *m, size_t i, double S, double lnS, d
     return DFLE_OK;
 }
 
-int dfle_model_event_erosion(dfle_model *m, double f, double *E, dfle_error *err)
+int dfle_model_event_erosion(dfle_model *m, double f, double g_mu, double g_tau, double *E,
+                             dfle_error *err)
 {
     model_population *mp = m->pop;
     dfle_router *rt;
@@ -227,7 +228,7 @@ int dfle_model_event_erosion(dfle_model *m, double f, double *E, dfle_error *err
                               "router (dfle.router.population)");
     if (!m->evaluated && (st = dfle_model_evaluate(m, err)) != DFLE_OK)
         return st;
-    if ((st = dfle_population_new_flow(mp->pop, f, &rt, err)) != DFLE_OK)
+    if ((st = dfle_population_new_flow(mp->pop, f, g_mu, g_tau, &rt, err)) != DFLE_OK)
         return st;
     mp->flow.integrand = dfle_law_get_ops(m->law)->integrand;
     mp->flow.integrand_state = dfle_law_state(m->law);

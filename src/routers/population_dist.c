@@ -239,3 +239,18 @@ double dfle_dist_draw(const dfle_dist *d, double u, double u2)
         return NAN;
     }
 }
+
+int dfle_dist_is_point(const dfle_dist *d)
+{
+    switch (d->kind) {
+    case DFLE_DIST_LOGNORMAL:
+        return d->sigma == 0;
+    case DFLE_DIST_POWER_LAW:
+    case DFLE_DIST_UNIFORM:
+        return d->f_min == d->f_max;
+    case DFLE_DIST_TABLE:
+        return d->n == 1;
+    default:
+        return 0;
+    }
+}

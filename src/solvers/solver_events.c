@@ -6,8 +6,8 @@
  * drawn from the population's distribution and routed over the profile
  * at the start of the step; then z += dt (U - E_f) - (the events'
  * depths).  The generator is drawn in the order of time only (the count
- * of a step, then two uniforms per event), so a run is fixed by its
- * seed.
+ * of a step, then two uniforms per event for its volume, and two for
+ * each of mu and tau_y where they vary), so a run is fixed by its seed.
  */
 #include <math.h>
 #include <stdlib.h>
@@ -56,7 +56,10 @@ static int events_advance(void *self, double dt_limit, double *dt_out, dfle_erro
     events_run *r = self;
     dfle_model *m = r->m;
     const size_t n = dfle_model_size(m);
-    const dfle_dist *dist = &dfle_population_get_opts(r->pop)->volume;
+    const dfle_population_opts *po = dfle_population_get_opts(r->pop);
+    /* Mobility that does not vary draws nothing: the stream of a
+     * volume-only population is the same with or without these. */
+    const int vary_mu = !dfle_dist_is_point(&po->mu), vary_tau = !dfle_dist_is_point(&po->tau_y);
     double dt = fmin(r->o->dt, dt_limit);
     unsigned count;
     int st;
@@ -68,7 +71,17 @@ static int events_advance(void *self, double dt_limit, double *dt_out, dfle_erro
         r->depth[i] = 0.0;
     for (unsigned e = 0; e < count; e++) {
         const double u1 = gsl_rng_uniform_pos(r->rng), u2 = gsl_rng_uniform_pos(r->rng);
-        if ((st = dfle_model_event_erosion(m, dfle_dist_draw(dist, u1, u2), r->E, err)) != DFLE_OK)
+        const double f = dfle_dist_draw(&po->volume, u1, u2);
+        double g_mu = 1.0, g_tau = 1.0;
+        if (vary_mu) {
+            const double v1 = gsl_rng_uniform_pos(r->rng), v2 = gsl_rng_uniform_pos(r->rng);
+            g_mu = dfle_dist_draw(&po->mu, v1, v2);
+        }
+        if (vary_tau) {
+            const double v1 = gsl_rng_uniform_pos(r->rng), v2 = gsl_rng_uniform_pos(r->rng);
+            g_tau = dfle_dist_draw(&po->tau_y, v1, v2);
+        }
+        if ((st = dfle_model_event_erosion(m, f, g_mu, g_tau, r->E, err)) != DFLE_OK)
             return st;
         for (size_t i = 0; i < n; i++) {
             r->depth[i] += r->E[i];

@@ -427,7 +427,7 @@ void dfle_lua_open_router_define(lua_State *L);
  * the table on the top of the stack. */
 void dfle_lua_open_router_population(lua_State *L);
 /* m:run_events{...} (lua_population.c). */
-int dfle_lua_model_run_events(lua_State *L); /* dfle.router.define, into the router table */
+int dfle_lua_model_run_events(lua_State *L);
 void dfle_lua_open_law(lua_State *L);
 void dfle_lua_open_law_define(lua_State *L); /* dfle.law.define, into the law table */
 /* law:compiled() of a dfle.law.define law: push { factor =, rate =,

@@ -28,6 +28,7 @@
 #include "dfle/raster.h"
 
 #include "lua/objects/lua_landscape.h"
+#include "lua/objects/lua_events.h"
 
 static lua_ls *check_ls(lua_State *L, int arg)
 {
@@ -481,7 +482,7 @@ void dfle_lua_open_landscape(lua_State *L)
         {"run", l_run}, {"run_to_steady", l_run_to_steady}, {"step", l_step},
         {"get", l_get}, {"fields", l_fields}, {"set_z", dfle_lua_ls_set_z},
         {"write_geotiff", dfle_lua_ls_write_geotiff}, {"plot", l_plot}, {"slope_area", l_slope_area},
-        {"dem", l_dem}, {NULL, NULL}};
+        {"dem", l_dem}, {"run_events", dfle_lua_ls_run_events}, {NULL, NULL}};
     static const dfle_lua_type type = {
         .name = DFLE_LUA_LANDSCAPE, .free = ls_free, .describe = describe, .methods = methods,
         .property = l_property, .closable = 1, .release = release,
