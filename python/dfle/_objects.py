@@ -8,7 +8,16 @@ _classes = None
 
 
 class Model(_dfle.LuaRef):
-    """dfle.model: fields are numpy float64 arrays along the channel (copies)."""
+    """dfle.model: fields are numpy float64 arrays along the channel.
+
+    get("x"), get("A"), get("w") and get("z") are read-only views of the
+    model's memory (they follow runs and set_z, and keep the model
+    alive); every other field is a copy, evaluated when asked.
+    """
+
+    def get(self, name):
+        v = self._field(name)
+        return v if v is not None else self._index("get")(name)
 
     def to_xarray(self):
         """The fields as an xarray.Dataset on the coordinate x [m] (needs xarray)."""
@@ -25,10 +34,18 @@ class Model(_dfle.LuaRef):
 
 
 class Landscape(_dfle.LuaRef):
-    """dfle.landscape: get() returns an (ny, nx) array, row 0 at the north."""
+    """dfle.landscape: get() returns an (ny, nx) array, row 0 at the north.
+
+    get("z") is a read-only view of the elevations (it follows runs and
+    set_z, and keeps the landscape alive); every other field is a copy,
+    evaluated when asked.
+    """
 
     def get(self, name):
-        return _np.asarray(self._index("get")(name), dtype=float).reshape(self.ny, self.nx)
+        v = self._field(name)
+        if v is None:
+            v = _np.asarray(self._index("get")(name), dtype=float).reshape(self.ny, self.nx)
+        return v
 
     def to_xarray(self, fields=None):
         """The fields as an xarray.Dataset on (y, x) cell centres [m] (needs xarray)."""

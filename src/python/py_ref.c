@@ -47,7 +47,7 @@ static void ref_dealloc(PyObject *o)
     PyObject_GC_UnTrack(o);
     if (r->weak != NULL)
         PyObject_ClearWeakRefs(o);
-    dfpy_release_ref(r->ref);
+    dfpy_release_ref(r->ref, r->held);
     r->ref = -1;
     Py_CLEAR(r->self);
     Py_TYPE(o)->tp_free(o);
@@ -67,7 +67,7 @@ static int ref_clear(PyObject *o)
 }
 
 /* Issue the warnings the call left, keeping an exception it raised. */
-static PyObject *finish(PyObject *res)
+PyObject *dfpy_finish(PyObject *res)
 {
     if (res == NULL) {
         PyObject *t, *v, *tb;
@@ -119,7 +119,7 @@ PyObject *dfpy_ref_call(PyObject *fn, PyObject *args, PyObject *kwargs)
 done:
     dfle_bridge_settop(b, top);
     dfpy_leave();
-    return finish(res);
+    return dfpy_finish(res);
 }
 
 static PyObject *ref_call(PyObject *o, PyObject *args, PyObject *kwargs)
@@ -173,7 +173,7 @@ static PyObject *lua_index(PyObject *o, const char *key, PyObject *missing)
 done:
     dfle_bridge_settop(b, top);
     dfpy_leave();
-    return finish(res);
+    return dfpy_finish(res);
 }
 
 static PyObject *ref_getattro(PyObject *o, PyObject *name)
@@ -326,6 +326,7 @@ static PyObject *ref_lua_type(PyObject *o, void *closure)
 
 static PyMethodDef ref_methods[] = {
     {"_index", ref_index_method, METH_O, "The Lua value o[key] (methods bound to o)."},
+    {"_field", dfpy_ref_field, METH_O, "The field of a model or landscape as numpy (None: ask get)."},
     {"keys", ref_keys, METH_NOARGS, "The keys of a Lua table."},
     {"close", ref_close, METH_NOARGS, "Free the object now (Lua's __close)."},
     {"__enter__", ref_enter, METH_NOARGS, NULL},

@@ -98,11 +98,25 @@ dfle_bridge *dfpy_bridge(void)
     return bridge;
 }
 
+/* Let go of ref (the lock held); unhold what a view held first. */
+static void release_now(int ref, int held)
+{
+    if (held) {
+        int top = dfle_bridge_top(bridge);
+        if (dfle_bridge_check(bridge, 4)) {
+            dfle_bridge_push_ref(bridge, ref);
+            dfle_bridge_unhold(bridge, top + 1);
+        }
+        dfle_bridge_settop(bridge, top);
+    }
+    dfle_bridge_unref(bridge, ref);
+}
+
 static void drain_pending(void)
 {
     pthread_mutex_lock(&pending_lock);
-    for (size_t i = 0; i < npending; i++)
-        dfle_bridge_unref(bridge, pending[i]);
+    for (size_t i = 0; i < npending; i++) /* negative: a held one */
+        release_now(pending[i] < 0 ? -pending[i] : pending[i], pending[i] < 0);
     npending = 0;
     pthread_mutex_unlock(&pending_lock);
 }
@@ -121,13 +135,13 @@ void dfpy_enter(void)
 
 void dfpy_leave(void) { pthread_mutex_unlock(&lock); }
 
-void dfpy_release_ref(int ref)
+void dfpy_release_ref(int ref, int held)
 {
     if (bridge == NULL || ref <= 0) /* 0: a handle never given a value */
         return;
     pthread_once(&lock_once, init_lock);
     if (pthread_mutex_trylock(&lock) == 0) {
-        dfle_bridge_unref(bridge, ref);
+        release_now(ref, held);
         pthread_mutex_unlock(&lock);
         return;
     }
@@ -142,7 +156,7 @@ void dfpy_release_ref(int ref)
         pending = p;
         cap_pending = cap;
     }
-    pending[npending++] = ref;
+    pending[npending++] = held ? -ref : ref;
     pthread_mutex_unlock(&pending_lock);
 }
 

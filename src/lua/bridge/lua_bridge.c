@@ -15,15 +15,7 @@
 
 #include "dfle/lua.h"
 
-struct dfle_bridge {
-    lua_State *main;
-    lua_State *L; /* the frame being worked on: main, or a callback's */
-    void (*warn)(void *ud, const char *msg);
-    void *warn_ud;
-    char *wbuf; /* a warning's pieces until its last one */
-    size_t wlen, wcap;
-    int wcont;
-};
+#include "lua/bridge/lua_bridge_internal.h"
 
 /* A callback's payload, the upvalue of its closure. */
 typedef struct host_fn {

@@ -134,4 +134,31 @@ int dfle_bridge_tostring(dfle_bridge *b, int idx);
 /* Close the object at idx (its __close: what `local x <close>` does). */
 int dfle_bridge_close(dfle_bridge *b, int idx);
 
+/* --- fields read where they lie (lua_bridge_field.c) --- */
+
+/* A field of a dfle.model (n values along the channel) or a
+ * dfle.landscape (ny rows of nx, row 0 at the north). */
+typedef struct dfle_bridge_field {
+    const double *v;
+    size_t n, nx, ny;
+    int ndim; /* 1: a model's, 2: a landscape's                          */
+    /* 1: v is the object's own memory, always current (a model's x, A,
+     * w, z; a landscape's z): valid while the object lives, which the
+     * host that keeps it ensures by holding the object.  0: the field
+     * evaluated now, valid until the host changes the stack: copy it. */
+    int live;
+} dfle_bridge_field;
+
+/* The field `name` of the object at idx, as its get() would evaluate it
+ * (the same checks and messages).  Pushes one value in every case (what
+ * keeps a copy valid, or the message).  Returns 1 with f filled, 0 when
+ * the object or the name is not one this reads (the host calls the
+ * object's get, which says why), -1 on an error (message on top). */
+int dfle_bridge_get_field(dfle_bridge *b, int idx, const char *name, dfle_bridge_field *f);
+/* Hold the model or landscape at idx while a view of its memory lives:
+ * closing or collecting it only dooms it until the last unhold.
+ * Anything else is ignored.  0, or -1 if Lua ran out of memory. */
+int dfle_bridge_hold(dfle_bridge *b, int idx);
+void dfle_bridge_unhold(dfle_bridge *b, int idx);
+
 #endif

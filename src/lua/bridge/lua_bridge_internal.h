@@ -1,0 +1,24 @@
+/*
+ * lua_bridge_internal.h - the bridge's state, shared by the files of
+ * src/lua/bridge/ (not installed, not seen by hosts).
+ */
+#ifndef DFLE_LUA_BRIDGE_INTERNAL_H
+#define DFLE_LUA_BRIDGE_INTERNAL_H
+
+#include <stddef.h>
+
+#include <lua.h>
+
+#include "lua/bridge/lua_bridge.h"
+
+struct dfle_bridge {
+    lua_State *main;
+    lua_State *L; /* the frame being worked on: main, or a callback's */
+    void (*warn)(void *ud, const char *msg);
+    void *warn_ud;
+    char *wbuf; /* a warning's pieces until its last one */
+    size_t wlen, wcap;
+    int wcont;
+};
+
+#endif
