@@ -75,7 +75,7 @@ for _name in _module.keys():
         _export(_name)
 
 from . import _objects  # noqa: E402  (classes of the object types, custom laws)
-from ._objects import Model, Landscape, Dem, to_pandas  # noqa: E402,F401
+from ._objects import Model, Landscape, Dem, Ensemble, to_pandas  # noqa: E402,F401
 
 _objects._install(__import__(__name__), _classes)
 

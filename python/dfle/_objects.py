@@ -64,6 +64,58 @@ class Dem(_dfle.LuaRef):
     """dfle.dem: a raster read through GDAL."""
 
 
+class Ensemble(_dfle.LuaRef):
+    """The result of dfle.ensemble or dfle.gather: result.data holds one
+    column per input, output, status and reason (numpy arrays and lists)."""
+
+    def to_pandas(self):
+        """The rows as a pandas.DataFrame indexed by sample (needs pandas)."""
+        return to_pandas(self)
+
+    def to_xarray(self):
+        """The rows as an xarray.Dataset on the dimension sample, laid out
+        as the file result.write_netcdf(path) writes: index, the inputs and
+        the outputs (float64, with their units where dfle knows them, in
+        UDUNITS's syntax, or as dfle_units where it has none),
+        status and reason (str), the design and the rows file as
+        attributes (needs xarray)."""
+        import xarray as xr
+        data = self["data"]
+        inputs, outputs = list(self["inputs"]), list(self["outputs"])
+        variables = {"index": ("sample", _np.asarray(data["index"], dtype=float),
+                               {"units": "1",
+                                "long_name": "sample index (row of the design, from 1)"})}
+        for names, long_name in ((inputs, "input parameter"), (outputs, "output")):
+            for name in names:
+                attrs = {"long_name": long_name}
+                unit = _dfle.known_unit(name)
+                if unit is not None:     # as the file says it: UDUNITS's syntax
+                    cf = _dfle.udunits(unit)
+                    attrs["units" if cf is not None else "dfle_units"] = cf or unit
+                variables[name] = ("sample", _np.asarray(data[name], dtype=float), attrs)
+        variables["status"] = ("sample", _np.array(list(data["status"]), dtype=str),
+                               {"long_name": "ok or failed"})
+        variables["reason"] = ("sample", _np.array(list(data["reason"]), dtype=str),
+                               {"long_name": "why a sample failed"})
+        attrs = {"title": "dfle ensemble: one steady-state model per sample",
+                 "source": "dfle " + _dfle.version, "dfle_version": _dfle.version}
+        rows = self["file"] if "file" in self.keys() else None
+        if isinstance(rows, str):
+            try:
+                with open(rows, encoding="utf-8", errors="replace") as f:
+                    first = f.readline().rstrip("\r\n")
+                if first.startswith("# "):
+                    attrs["dfle_design"] = first[2:]
+            except OSError:
+                pass
+            attrs["dfle_rows_file"] = rows
+        for key in ("n", "count", "ok", "failed", "complete"):
+            if key in self.keys():
+                v = self[key]
+                attrs["dfle_" + key] = int(v) if isinstance(v, bool) else v
+        return xr.Dataset(variables, attrs=attrs)
+
+
 _SOURCES = ("rate", "factor", "integrand", "frequency", "route")
 
 
@@ -82,6 +134,7 @@ def _install(pkg, classes):
     classes["dfle.model"] = Model
     classes["dfle.landscape"] = Landscape
     classes["dfle.dem"] = Dem
+    classes["dfle.ensemble"] = Ensemble
     pkg.law["define"] = _with_sources(pkg.law["define"], "law")
     pkg.router["define"] = _with_sources(pkg.router["define"], "router")
 

@@ -21,7 +21,9 @@ PyObject *dfpy_ref_new(dfle_bridge *b, int idx, PyObject *self)
 
     if (idx < 0)
         idx = dfle_bridge_top(b) + idx + 1;
-    if (kind == DFLE_BRIDGE_OBJECT && dfpy_classes != NULL) {
+    /* Objects, and results with methods (a table whose metatable has a
+     * __name, dfle.ensemble), get the class registered for their type. */
+    if ((kind == DFLE_BRIDGE_OBJECT || kind == DFLE_BRIDGE_TABLE) && dfpy_classes != NULL) {
         PyObject *c = PyDict_GetItemString(dfpy_classes, dfle_bridge_typename(b, idx));
         if (c != NULL && PyType_Check(c) && PyType_IsSubtype((PyTypeObject *)c, &dfpy_ref_type))
             cls = (PyTypeObject *)c;

@@ -155,6 +155,9 @@ typedef struct dfle_bridge_field {
  * the object or the name is not one this reads (the host calls the
  * object's get, which says why), -1 on an error (message on top). */
 int dfle_bridge_get_field(dfle_bridge *b, int idx, const char *name, dfle_bridge_field *f);
+/* The unit dfle's files give a parameter or output of that name
+ * ("m/yr" for U), or NULL when it has none it knows. */
+const char *dfle_bridge_known_unit(const char *name);
 /* Hold the model or landscape at idx while a view of its memory lives:
  * closing or collecting it only dooms it until the last unhold.
  * Anything else is ignored.  0, or -1 if Lua ran out of memory. */

@@ -2,7 +2,8 @@
  * lua_bridge_field.c - fields of models and landscapes read where they
  * lie (lua_bridge.h: dfle_bridge_get_field), so a host makes one copy,
  * or none, instead of going through a Lua table of numbers: an array
- * view of the object's own memory, kept valid by holding the object.
+ * view of the object's own memory, kept valid by holding the object;
+ * and the units the files give them.
  */
 #include <string.h>
 
@@ -101,6 +102,8 @@ int dfle_bridge_get_field(dfle_bridge *b, int idx, const char *name, dfle_bridge
     }
     return q.known;
 }
+
+const char *dfle_bridge_known_unit(const char *name) { return dfle_lua_known_unit(name); }
 
 static int hold_p(lua_State *L)
 {
