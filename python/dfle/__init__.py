@@ -16,6 +16,7 @@ dfle.Warning.  See doc/python.md.
 import threading as _threading
 
 from . import _dfle
+from . import _parallel
 
 __all__ = ["Error", "Warning", "Table", "LuaRef", "lua", "version"]
 
@@ -58,7 +59,7 @@ def lua(source, name="=lua"):
     It runs in dfle's Lua state (the module is the global `dfle` there),
     so a law made of such functions runs compiled, as in the Lua API.
     """
-    return _dfle.lua(source, name)
+    return _parallel.remember(_dfle.lua(source, name), source, name)
 
 
 _module = _dfle.module()

@@ -137,6 +137,9 @@ def _install(pkg, classes):
     classes["dfle.ensemble"] = Ensemble
     pkg.law["define"] = _with_sources(pkg.law["define"], "law")
     pkg.router["define"] = _with_sources(pkg.router["define"], "router")
+    from . import _parallel
+    pkg.ensemble = _parallel.wrap(pkg.ensemble, "ensemble")
+    pkg.invert = _parallel.wrap(pkg.invert, "invert")
 
 
 def to_pandas(result):

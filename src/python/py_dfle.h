@@ -10,6 +10,7 @@
  *  - py_convert.c: values between Python and Lua;
  *  - py_ref.c: the LuaRef type (objects, functions, tables with methods);
  *  - py_field.c: fields as numpy arrays (views of the object's memory);
+ *  - py_parallel.c: ensembles and inversions on worker states;
  *  - py_module.c: the module.
  *
  * Locking: the Lua state is used by one thread at a time, under a
@@ -83,6 +84,10 @@ PyObject *dfpy_ref_new(dfle_bridge *b, int idx, PyObject *self);
 PyObject *dfpy_ref_call(PyObject *fn, PyObject *args, PyObject *kwargs);
 /* Issue the warnings a call left, keeping an exception it raised. */
 PyObject *dfpy_finish(PyObject *res);
+
+/* --- py_parallel.c --- */
+/* _dfle.parallel(fn, script, spec): fn(spec) with worker states. */
+PyObject *dfpy_parallel(PyObject *self, PyObject *args);
 
 /* --- py_field.c --- */
 /* o._field(name): the field as a numpy array, or None when the object

@@ -104,6 +104,8 @@ static PyMethodDef mod_methods[] = {
     {"lua", mod_lua, METH_VARARGS, "lua(source, name='=lua'): a Lua function from its source."},
     {"known_unit", mod_known_unit, METH_O, "known_unit(name): the unit dfle's files give name, or None."},
     {"udunits", mod_udunits, METH_O, "udunits(unit): the unit as dfle's NetCDF files write it, or None."},
+    {"parallel", dfpy_parallel, METH_VARARGS,
+     "parallel(fn, script, spec): fn(spec) with worker states that run script."},
     {"_setup", mod_setup, METH_VARARGS, NULL},
     {NULL, NULL, 0, NULL}};
 

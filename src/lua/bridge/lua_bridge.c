@@ -89,6 +89,7 @@ void dfle_bridge_free(dfle_bridge *b)
         return;
     if (b->main != NULL)
         lua_close(b->main);
+    free(b->worker_script);
     free(b->wbuf);
     free(b);
 }

@@ -134,6 +134,20 @@ int dfle_bridge_tostring(dfle_bridge *b, int idx);
 /* Close the object at idx (its __close: what `local x <close>` does). */
 int dfle_bridge_close(dfle_bridge *b, int idx);
 
+/* --- parallel calls (lua_bridge_workers.c) --- */
+
+/* Worker states for the next dfle.ensemble or dfle.invert call, which
+ * the host makes between begin and end: each runs `script` (Lua source
+ * of a chunk that makes the same call, with a spec that must identify
+ * the same run: the workers check), in a state of its own on a thread
+ * of the driver's pool.  The call counts of the main state are carried
+ * over, so the script's call is taken for the main state's next one.
+ * Without begin, a call runs in the main state only (its build or
+ * measure may be host code, which no other state can call).
+ * begin: 0, or -1 if memory runs out. */
+int dfle_bridge_begin_parallel(dfle_bridge *b, const char *script, size_t len);
+void dfle_bridge_end_parallel(dfle_bridge *b);
+
 /* --- fields read where they lie (lua_bridge_field.c) --- */
 
 /* A field of a dfle.model (n values along the channel) or a

@@ -10,6 +10,7 @@
 #include <lua.h>
 
 #include "lua/bridge/lua_bridge.h"
+#include "lua/drive/lua_parallel.h"
 
 struct dfle_bridge {
     lua_State *main;
@@ -19,6 +20,11 @@ struct dfle_bridge {
     char *wbuf; /* a warning's pieces until its last one */
     size_t wlen, wcap;
     int wcont;
+    /* Worker states of the parallel call running now (lua_bridge_workers.c). */
+    dfle_lua_host host;
+    char *worker_script;
+    size_t worker_len;
+    lua_Integer calls[DFLE_LUA_PAR_KINDS]; /* the main state's counts before it */
 };
 
 #endif
