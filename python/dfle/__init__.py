@@ -13,6 +13,7 @@ named parameters, with the same names, units and defaults::
 Errors raise dfle.Error with the Lua API's message; warnings are
 dfle.Warning.  See doc/python.md.
 """
+import gc as _gc
 import threading as _threading
 
 from . import _dfle
@@ -49,6 +50,9 @@ class Table(dict):
 
 _classes = {}
 _dfle._setup(Error, Warning, Table, _classes, _threading.main_thread().ident)
+# Cycles through Lua (a callable that refers to the object using it)
+# become visible to the collector's full runs.
+_gc.callbacks.append(_dfle._gc)
 
 
 def lua(source, name="=lua"):

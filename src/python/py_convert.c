@@ -34,6 +34,7 @@ void dfpy_keep_callback_error(void);
 static void release_callable(void *ud)
 {
     PyGILState_STATE g = PyGILState_Ensure();
+    dfpy_live_callbacks--;
     Py_DECREF((PyObject *)ud);
     PyGILState_Release(g);
 }
@@ -252,6 +253,7 @@ int dfpy_push(dfle_bridge *b, PyObject *v, int depth)
         return push_sequence(b, v, depth);
     } else if (PyCallable_Check(v)) {
         Py_INCREF(v);
+        dfpy_live_callbacks++;
         dfle_bridge_push_callback(b, call_callable, v, release_callable);
     } else if (PyMapping_Check(v) && PyObject_HasAttrString(v, "keys")) {
         PyObject *d = PyDict_New();

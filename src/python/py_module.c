@@ -106,6 +106,7 @@ static PyMethodDef mod_methods[] = {
     {"udunits", mod_udunits, METH_O, "udunits(unit): the unit as dfle's NetCDF files write it, or None."},
     {"parallel", dfpy_parallel, METH_VARARGS,
      "parallel(fn, script, spec): fn(spec) with worker states that run script."},
+    {"_gc", dfpy_gc_phase, METH_VARARGS, "gc.callbacks' hook: cycles through Lua."},
     {"_setup", mod_setup, METH_VARARGS, NULL},
     {NULL, NULL, 0, NULL}};
 

@@ -55,16 +55,27 @@ static void ref_dealloc(PyObject *o)
     Py_TYPE(o)->tp_free(o);
 }
 
+/* What the handle holds: its method's object, its type, and the Python
+ * callables that only its Lua value keeps alive (py_gc.c). */
 static int ref_traverse(PyObject *o, visitproc visit, void *arg)
 {
     Py_VISIT(((dfpy_ref *)o)->self);
     Py_VISIT(Py_TYPE(o));
-    return 0;
+    return dfpy_gc_visit(((dfpy_ref *)o)->ref, visit, arg);
 }
 
+/* The collector breaks a cycle here: the Lua value is let go of too
+ * (a cycle through Lua ends when Lua collects it). */
 static int ref_clear(PyObject *o)
 {
-    Py_CLEAR(((dfpy_ref *)o)->self);
+    dfpy_ref *r = (dfpy_ref *)o;
+    Py_CLEAR(r->self);
+    if (r->ref > 0) {
+        dfpy_release_ref(r->ref, r->held);
+        r->ref = -1;
+        r->held = 0;
+        dfpy_gc_cleared();
+    }
     return 0;
 }
 

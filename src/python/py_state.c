@@ -135,6 +135,19 @@ void dfpy_enter(void)
 
 void dfpy_leave(void) { pthread_mutex_unlock(&lock); }
 
+int dfpy_try_enter_idle(void)
+{
+    pthread_once(&lock_once, init_lock);
+    if (bridge == NULL || pthread_mutex_trylock(&lock) != 0)
+        return 0;
+    if (calls > 0) { /* this thread, inside a call: Lua frames are running */
+        pthread_mutex_unlock(&lock);
+        return 0;
+    }
+    drain_pending();
+    return 1;
+}
+
 void dfpy_release_ref(int ref, int held)
 {
     if (bridge == NULL || ref <= 0) /* 0: a handle never given a value */

@@ -148,6 +148,23 @@ int dfle_bridge_close(dfle_bridge *b, int idx);
 int dfle_bridge_begin_parallel(dfle_bridge *b, const char *script, size_t len);
 void dfle_bridge_end_parallel(dfle_bridge *b);
 
+/* --- the host's collector (lua_bridge_gc.c) --- */
+
+/* fn(ud, owners, n, callback_ud) for each host callback (its ud as
+ * given to dfle_bridge_push_callback) that only host references keep
+ * alive: Lua's roots do not reach it, the n references `owners` do, so
+ * it goes once all of them are let go of and the state collected.
+ * Returns how many callbacks, or -1 when it cannot tell (inside a
+ * callback, a coroutine, no memory): then none is anyone's.  Call it
+ * with nothing running. */
+typedef void (*dfle_bridge_owned_fn)(void *ud, const int *owners, int n, void *callback_ud);
+int dfle_bridge_owned_callbacks(dfle_bridge *b, dfle_bridge_owned_fn fn, void *ud);
+/* Stop (pause 1) or restart Lua's collector: while the host's collector
+ * works from what dfle_bridge_owned_callbacks said, no callback may go. */
+void dfle_bridge_gc_pause(dfle_bridge *b, int pause);
+/* A full collection: the callbacks of values let go of are released. */
+void dfle_bridge_collect(dfle_bridge *b);
+
 /* --- fields read where they lie (lua_bridge_field.c) --- */
 
 /* A field of a dfle.model (n values along the channel) or a
