@@ -73,7 +73,10 @@ def _lua(v, depth=0):
             return "assert(load(%s, %s, \"t\"))()" % (_string("return " + source), _string(name))
         raise _NotLua()
     if isinstance(v, _np.ndarray):
-        v = v.ravel().tolist()
+        # As the array would go to Lua: integers for integer and bool
+        # arrays, else float64, read in C order.
+        kind = _np.int64 if v.dtype.kind in "biu" else _np.float64
+        v = _np.ascontiguousarray(v, dtype=kind).ravel().tolist()
     if isinstance(v, dict):
         return "{" + ", ".join("%s = %s" % (_key(k), _lua(x, depth + 1)) for k, x in v.items()) + "}"
     if isinstance(v, (list, tuple)):
@@ -99,7 +102,7 @@ def wrap(fn, call):
             return fn(*args, **kw)     # as the Lua API takes it, and says why not
         source = script(call, spec)
         if source is None:
-            return fn(**spec)
+            return fn(*args, **kw)
         return _dfle.parallel(fn, source, dict(spec))
     parallel.__name__ = call
     parallel.__doc__ = (
