@@ -62,6 +62,38 @@ static void on_warning(void *ud, const char *msg)
     pthread_mutex_unlock(&warn_lock);
 }
 
+/* The stack level of the user's code: the innermost frames that are the
+ * package's own Python (a wrapper such as dfle.ensemble's) are skipped,
+ * so a warning names the line that called dfle. */
+static int user_level(void)
+{
+    PyFrameObject *f = PyEval_GetFrame();
+    int level = 1;
+    Py_XINCREF(f);
+    while (f != NULL) {
+        PyObject *g = PyFrame_GetGlobals(f), *name;
+        PyFrameObject *back;
+        int ours = 0;
+        name = g != NULL ? PyDict_GetItemString(g, "__name__") : NULL;
+        if (name != NULL && PyUnicode_Check(name)) {
+            const char *s = PyUnicode_AsUTF8(name);
+            if (s == NULL)
+                PyErr_Clear();
+            else
+                ours = strcmp(s, "dfle") == 0 || strncmp(s, "dfle.", 5) == 0;
+        }
+        Py_XDECREF(g);
+        if (!ours)
+            break;
+        level++;
+        back = PyFrame_GetBack(f);
+        Py_DECREF(f);
+        f = back;
+    }
+    Py_XDECREF(f);
+    return level;
+}
+
 int dfpy_flush_warnings(void)
 {
     int st = 0;
@@ -76,7 +108,8 @@ int dfpy_flush_warnings(void)
         pthread_mutex_unlock(&warn_lock);
         if (msg == NULL)
             return st;
-        if (st == 0 && PyErr_WarnEx(dfpy_warning ? dfpy_warning : PyExc_UserWarning, msg, 1) < 0)
+        if (st == 0 && PyErr_WarnEx(dfpy_warning ? dfpy_warning : PyExc_UserWarning, msg,
+                                    user_level()) < 0)
             st = -1; /* an error filter: the rest are dropped */
         free(msg);
     }
