@@ -83,7 +83,6 @@ def test_warnings_name_the_callers_line(tmp_path):
     import warnings
     with warnings.catch_warnings(record=True) as ws:
         warnings.simplefilter("always")
-        dfle.model(U=5, channel=dfle.channel(dx=50))     # 5 m/yr: implausible
         truth = dfle.model(U=4e-4, channel=dfle.channel(dx=50))
         truth.run_to_steady()
         # Through dfle.invert's wrapper: this short chain strands walkers.
@@ -92,6 +91,5 @@ def test_warnings_name_the_callers_line(tmp_path):
                     walkers=8, steps=30, burn=10, seed=1, workers=2,
                     out=str(tmp_path / "chain.csv"))
     ours = [w for w in ws if issubclass(w.category, dfle.Warning)]
-    assert any("U = 5 m/yr" in str(w.message) for w in ours)
     assert any("dfle.invert" in str(w.message) for w in ours), [str(w.message) for w in ws]
     assert {w.filename for w in ours} == {__file__}   # not the package's wrappers
