@@ -25,6 +25,7 @@ preload=$(sed -n 's/^#define DFLE_\(GDAL\|NETCDF\)_SONAME "\(.*\)"$/\2/p' \
 "$BIN/drainage"
 "$BIN/landscape"
 "$DFLE" -q "$here/landscape.lua"
+"$DFLE" -q "$here/landscape_df.lua"
 "$DFLE" -q "$here/landscape_process.lua"
 "$DFLE" -q "$here/fit.lua"
 "$DFLE" -q "$here/methods.lua"

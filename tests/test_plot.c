@@ -153,7 +153,9 @@ static void test_corner(void **state)
     const char *labels[3] = {"{/:Italic U}", "{/Symbol g}", "k_{df}"};
     int logs[3] = {1, 0, 1};
     double truth[3] = {3e-4, 0.5, NAN};
-    dfle_corner_opts o = {labels, logs, truth, 20};
+    /* gamma held by an upper bound at 0.8: a line and a note */
+    double blo[3] = {NAN, NAN, NAN}, bhi[3] = {NAN, 0.8, NAN};
+    dfle_corner_opts o = {labels, logs, truth, 20, blo, bhi};
     dfle_plot_opts po = {.title = "Corner", .width = 12};
     dfle_error err = {0};
     uint64_t st = 88172645463325252ULL;
@@ -174,6 +176,17 @@ static void test_corner(void **state)
     assert_ok(dfle_plot_corner(in_dir(fx, "corner.png"), &po, &o, 3, N, x, &err), &err);
     assert_png(fx->path);
     assert_ok(dfle_plot_corner(in_dir(fx, "corner.svg"), NULL, NULL, 2, N, x, &err), &err);
+    assert_ok(dfle_plot_corner(in_dir(fx, "bound.svg"), &po, &o, 3, N, x, &err), &err);
+    {
+        FILE *f = fopen(fx->path, "r");
+        static char text[1 << 20];
+        size_t len = f != NULL ? fread(text, 1, sizeof text - 1, f) : 0;
+        if (f != NULL)
+            fclose(f);
+        text[len] = '\0';
+        assert_non_null(strstr(text, "prior bound"));
+        assert_null(strstr(strstr(text, "prior bound") + 1, "prior bound")); /* once */
+    }
     assert_int_equal(dfle_plot_corner(in_dir(fx, "c0.png"), &po, &o, 0, N, x, &err), DFLE_EINVAL);
     assert_int_equal(dfle_plot_corner(in_dir(fx, "c1.png"), &po, &o, 3, 1, x, &err), DFLE_EINVAL);
     assert_msg_contains(err.msg, "at least 2 samples");

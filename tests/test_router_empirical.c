@@ -213,6 +213,81 @@ static void parameters_without_a_finite_flow_are_named(void **state)
     free(S);
 }
 
+/* A random tree of n nodes: node i > 0 drains to an earlier node, node 0
+ * is the base level; A counts the nodes upstream (1e3 m^2 each). */
+static void random_tree(size_t n, unsigned *seed, size_t *recv, double *A, double *w,
+                        unsigned char *src, double *S)
+{
+    for (size_t i = 0; i < n; i++) {
+        recv[i] = i == 0 ? 0 : (size_t)(rand_r(seed) % i);
+        A[i] = 1e3;
+        S[i] = 0.05 + 0.55 * rand_r(seed) / (double)RAND_MAX;
+    }
+    for (size_t i = n; i-- > 1;)
+        A[recv[i]] += A[i];
+    for (size_t i = 0; i < n; i++) {
+        w[i] = 0.5 + 1e-3 * sqrt(A[i]);
+        src[i] = rand_r(seed) % 3 == 0; /* any node may start flows */
+    }
+}
+
+/* The router keeps its area terms from one shape of a network to the
+ * next and zeroes only nodes that stopped being reachable: every routing
+ * after a re-shaping must equal, bit for bit, that of a new router into
+ * a new flow. */
+static void reshaped_network_routes_as_a_new_router(void **state)
+{
+    enum { N = 300 };
+    fixture *f = *state;
+    dfle_network *net;
+    dfle_router *kept;
+    dfle_flow flow;
+    size_t recv[N];
+    double A[N], w[N], S[N], len[N];
+    unsigned char src[N];
+    unsigned seed = 7;
+    dfle_error err;
+    int darkened = 0;
+
+    for (size_t i = 0; i < N; i++)
+        len[i] = 10.0;
+    assert_ok(dfle_network_new(N, &net, &err), &err);
+    assert_ok(dfle_router_new_empirical(&f->o, &kept, &err), &err);
+    assert_ok(dfle_flow_init(&flow, N, &err), &err);
+    for (int round = 0; round < 12; round++) {
+        dfle_network_shape sh = {.receiver = recv, .length = len, .A = A, .w = w,
+                                 .source = src};
+        dfle_router *fresh;
+        dfle_flow ref;
+        unsigned char was[N];
+        if (round == 0 || round % 4 == 0) {
+            random_tree(N, &seed, recv, A, w, src, S);
+        } else {
+            /* A few sources off and on, a few slopes moved: areas stay. */
+            memcpy(was, src, N);
+            for (int k = 0; k < 20; k++)
+                src[rand_r(&seed) % N] ^= 1;
+            for (int k = 0; k < 30; k++)
+                S[rand_r(&seed) % N] *= 0.5 + rand_r(&seed) / (double)RAND_MAX;
+            for (size_t i = 0; i < N; i++)
+                darkened |= was[i] && !src[i];
+        }
+        assert_ok(dfle_network_set(net, &sh, &err), &err);
+        assert_ok(dfle_router_route(kept, net, S, &flow, &err), &err);
+        assert_ok(dfle_router_new_empirical(&f->o, &fresh, &err), &err);
+        assert_ok(dfle_flow_init(&ref, N, &err), &err);
+        assert_ok(dfle_router_route(fresh, net, S, &ref, &err), &err);
+        assert_int_equal(flow.runout_end, ref.runout_end);
+        assert_memory_equal(flow.M, ref.M, 8 * N * sizeof *flow.M); /* M .. reach */
+        dfle_flow_release(&ref);
+        dfle_router_free(fresh);
+    }
+    assert_true(darkened); /* the zeroing of nodes no longer reachable ran */
+    dfle_flow_release(&flow);
+    dfle_router_free(kept);
+    dfle_network_free(net);
+}
+
 int main(void)
 {
     const struct CMUnitTest tests[] = {
@@ -223,6 +298,7 @@ int main(void)
         cmocka_unit_test(cache_follows_the_channel),
         cmocka_unit_test(bad_parameters_are_named),
         cmocka_unit_test(parameters_without_a_finite_flow_are_named),
+        cmocka_unit_test(reshaped_network_routes_as_a_new_router),
     };
     return cmocka_run_group_tests(tests, setup, teardown);
 }

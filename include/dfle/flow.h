@@ -49,6 +49,14 @@ typedef struct dfle_flow {
     int (*integrand)(void *law_state, double h, double v, double lambda, double *g,
                      dfle_error *err);
     void *integrand_state; /* first argument of integrand               */
+
+    /* Kept by routers (router.h), 0 everywhere else: the network version
+     * for which every node no flow can reach (none of its upstream nodes
+     * a source) is known to hold zeros, so a router may skip those nodes;
+     * clean_by is the ops table of the router that last routed this
+     * flow (dfle_router_route clears clean_for when another one does). */
+    unsigned long long clean_for;
+    const void *clean_by;
 } dfle_flow;
 
 /* How the bulk flow at one node answers that node's own slope S: the
@@ -81,7 +89,7 @@ void dfle_flow_bind(dfle_flow *flow, double *block, size_t n);
 /* Release the arrays (flow may be zeroed or NULL); idempotent. */
 void dfle_flow_release(dfle_flow *flow);
 
-/* Zero every array and set runout_end = 0. */
+/* Zero every array and set runout_end = 0 (and clean_for). */
 void dfle_flow_clear(dfle_flow *flow);
 
 #ifdef __cplusplus

@@ -44,15 +44,22 @@
  * inside its prior, whole steps without gaps, a walker that did not move
  * with the values of its step before, log_post - log_like equal to the
  * log prior (custom priors apart), and the last step's log_post and
- * log_like equal to what the evaluator gives at its positions now; a
- * file that fails is refused with its line named.
+ * log_like, and those of the row with the largest log_post, equal to
+ * what the evaluator gives at their positions now (a complete chain
+ * read back is checked so too, at the cost of walkers + 1 forward runs,
+ * before it is summarised); a file that fails is refused with its line
+ * named, and left as it is.  Rows in between are checked for
+ * consistency, not evaluated again.
  *
  * Walker health: after burn-in a walker whose median log posterior lies
  * far below the others' (by more than half the 1 - 1e-6 quantile of
  * chi-square with d degrees of freedom: the drop at which a Gaussian
  * posterior has all but 1e-6 of its mass above), or whose acceptance is
  * below a quarter of the walkers' median and improbably so (binomial
- * p < 1e-6), is stranded: reported and warned by number.  With
+ * p < 1e-6), is stranded: reported and warned by number.  A chain of
+ * fewer than 50 steps after burn-in is not checked (the ensemble may
+ * still be walking in, and a walker that never moved in fewer steps is
+ * not improbable enough).  With
  * opts.move_stranded (default) the same test runs at steps burn/2 and
  * burn, on the steps since the previous check, and a stranded walker is
  * moved onto the position of a healthy one (a walker picked by its own
@@ -62,9 +69,14 @@
  * its prior when the density of its samples within h of the bound is at
  * least a quarter of their density within h/2 of the median (h: a
  * tenth of the 95 % interval's width, in ln x for log-scaled
- * parameters), or when the point estimate (dfle_invert_set_point) lies
- * within 1e-3 of the prior's width of it: flagged (result.bounded) and
- * warned.
+ * parameters) and the share P of samples within h of the bound clearly
+ * exceeds the prior's own share P0 there (P > 2 P0 + 3 sqrt(P0 (1 - P0)
+ * / n), n the effective sample size, at least the walkers: a prior that
+ * piles at its bound, with data that say nothing, is not flagged), or
+ * when the point estimate (dfle_invert_set_point) lies within 1e-3 of
+ * the prior's width of it: flagged (result.bounded) and warned.  A
+ * marginal near both bounds that is no more there than its prior is
+ * warned of as not learned, and not flagged.
  */
 #ifndef DFLE_INVERT_RUN_H
 #define DFLE_INVERT_RUN_H
@@ -162,6 +174,13 @@ typedef struct dfle_invert_opts {
     const char *const *units;
     /* Move walkers stranded in burn-in back into the ensemble (1). */
     int move_stranded;
+    /* Optional: the log density (up to a constant) of the CUSTOM prior
+     * of parameter j at x, as the evaluator adds it, for the prior-bound
+     * rule (the prior's own mass near a bound); NULL: such a prior counts
+     * as flat over its support.  Called on the calling thread while a
+     * chain is summarised; -inf or NaN where it is zero. */
+    double (*custom_logpdf)(void *ud, size_t j, double x);
+    void *custom_ud;
 } dfle_invert_opts;
 
 /* walkers 0 (the default), burn default, seed 1, a = 2, resume, 1 worker,

@@ -177,6 +177,19 @@ void dfle_model_advance_time(dfle_model *m, double dt);
  * step produces; a NaN or Inf fails with DFLE_ENUMERIC naming the node,
  * field and time.  dfle_model_is_evaluated says whether that is needed. */
 int dfle_model_evaluate(dfle_model *m, dfle_error *err);
+/* The slopes and the debris flow alone, for a caller that solves each
+ * node itself (a landscape's implicit step reads S and the flows' reach,
+ * then asks dfle_solver_node_slope per node).  With a local router,
+ * without a population, that is one routing: E_f, the law's E_df and
+ * dz/dt are not computed and the model is left unevaluated, so a field
+ * asked for later is evaluated in full.  Otherwise this is
+ * dfle_model_evaluate.  *S and *reach (n each) stay valid until z or the
+ * network changes. */
+int dfle_model_route(dfle_model *m, const double **S, const double **reach, dfle_error *err);
+/* Bytes the model holds now: its fields and flows, the arrays made on
+ * first use (the celerity's perturbed copies, the gathered views of a
+ * law on scattered nodes) and a population's (not the network's). */
+size_t dfle_model_memory(const dfle_model *m);
 int dfle_model_is_evaluated(const dfle_model *m);
 /* From the last evaluation: max over non-base nodes of |dz/dt| / U
  * (DBL_MAX when that overflows, for a U near the smallest double), the

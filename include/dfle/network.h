@@ -64,6 +64,24 @@ typedef struct dfle_network_shape {
  * leaving the network as it was. */
 int dfle_network_set(dfle_network *net, const dfle_network_shape *shape, dfle_error *err);
 
+/* The network's own arrays, writable (n each; channel NULL unless asked
+ * for), for a caller that makes a new shape at every step and would
+ * otherwise copy it in (a landscape at each routing): fill receiver,
+ * stack (every node after its receiver), length, A, w, source and
+ * channel, then dfle_network_commit, which checks them as
+ * dfle_network_set does and derives the rest (x is left unset).  A shape
+ * that fails the checks cannot be left as it was: the network is then
+ * unshaped (every node its own base level) and the error names the
+ * first bad node. */
+typedef struct dfle_network_edit_view {
+    size_t *receiver, *stack;
+    double *length, *A, *w;
+    unsigned char *source, *channel;
+} dfle_network_edit_view;
+int dfle_network_edit(dfle_network *net, int with_channel, dfle_network_edit_view *view,
+                      dfle_error *err);
+int dfle_network_commit(dfle_network *net, dfle_error *err);
+
 size_t dfle_network_size(const dfle_network *net);
 const size_t *dfle_network_receivers(const dfle_network *net);
 const double *dfle_network_length(const dfle_network *net);

@@ -285,6 +285,10 @@ typedef struct dfle_corner_opts {
     const int *logaxis;         /* d flags: logarithmic axis, or NULL   */
     const double *truth;        /* d values marked in vermillion (NaN: none), or NULL */
     size_t nbins;               /* histogram bins; 0 = 30               */
+    /* d prior bounds that hold the posterior (NaN: none), or NULL: each
+     * drawn as a line, the side outside the prior shaded, and noted
+     * "prior bound" on the diagonal */
+    const double *bound_lo, *bound_hi;
 } dfle_corner_opts;
 
 int dfle_plot_corner(const char *path, const dfle_plot_opts *opts,

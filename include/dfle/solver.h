@@ -165,9 +165,9 @@ int dfle_solver_run(dfle_model *m, const dfle_run_opts *opts, dfle_run_result *r
 
 /* The scalar root solve the implicit and direct solvers make at every
  * node, for a caller that sweeps a network itself (a landscape), on the
- * path that differences E (doc/solvers.md: the results of a landscape
- * stay as they were; the solvers take Newton steps with dE/d ln S where
- * the router and law give it): the slope S of node i with
+ * path the solvers take (doc/solvers.md: Newton steps with dE/d ln S
+ * where a router routed every step and the law give it, values alone
+ * otherwise): the slope S of node i with
  *   U_eff = E(S) + c S,   E = dfle_model_node_erosion(m, i, S, flows),
  * c = L/dt and U_eff = U + (z_old - z_receiver_new)/dt for a backward-
  * Euler step, c = 0 and U_eff = U for a steady state.  Started from

@@ -31,6 +31,9 @@ struct dfle_network {
     double *len, *A, *w, *x;
     unsigned char *source;
     unsigned char *channel; /* n bytes, allocated on first use */
+    unsigned char *seen;    /* n bytes: a given stack's check (first use) */
+    int x_unset;            /* x is all NaN (no shape gave one)          */
+    int editing;            /* dfle_network_edit: 1, 2 with a channel mask */
     int has_channel;        /* the shape gave a channel mask   */
     size_t n_base;
     int uniform_len, chain;
@@ -88,6 +91,7 @@ int dfle_network_new(size_t n, dfle_network **out, dfle_error *err)
         net->x[i] = NAN;
         net->source[i] = 0;
     }
+    net->x_unset = 1;
     net->version = stamp();
     *out = net;
     return DFLE_OK;
@@ -101,6 +105,7 @@ void dfle_network_free(dfle_network *net)
     free(net->len);
     free(net->source);
     free(net->channel);
+    free(net->seen);
     free(net);
 }
 
@@ -172,55 +177,93 @@ static void derive(dfle_network *net)
     }
 }
 
-int dfle_network_set(dfle_network *net, const dfle_network_shape *s, dfle_error *err)
+/* The checks of a shape: receivers are nodes, lengths, areas and
+ * widths finite and positive, and a given stack a permutation with every
+ * node after its receiver (so no cycle either). */
+static int check_shape(dfle_network *net, const size_t *recv, const double *len, const double *A,
+                       const double *w, const size_t *stack, dfle_error *err)
 {
     const size_t n = net->n;
-    size_t *pos = NULL;
-
-    if (s->receiver == NULL || s->length == NULL || s->A == NULL || s->w == NULL)
-        return dfle_error_set(err, DFLE_EINVAL, "network: receiver, length, A and w are required");
     for (size_t i = 0; i < n; i++) {
-        const size_t r = s->receiver[i];
+        const size_t r = recv[i];
         if (r >= n)
             return dfle_error_set(err, DFLE_EINVAL, "network: node %zu drains to %zu, not a node "
                                   "(n = %zu)", i + 1, r + 1, n);
-        if (!(isfinite(s->A[i]) && s->A[i] > 0) || !(isfinite(s->w[i]) && s->w[i] > 0))
+        if (!(isfinite(A[i]) && A[i] > 0) || !(isfinite(w[i]) && w[i] > 0))
             return dfle_error_set(err, DFLE_EINVAL, "network: node %zu has A = %g m^2, w = %g m "
-                                  "(both must be finite and > 0)", i + 1, s->A[i], s->w[i]);
-        if (r != i && !(isfinite(s->length[i]) && s->length[i] > 0))
+                                  "(both must be finite and > 0)", i + 1, A[i], w[i]);
+        if (r != i && !(isfinite(len[i]) && len[i] > 0))
             return dfle_error_set(err, DFLE_EINVAL, "network: node %zu has flow length %g m "
-                                  "(must be finite and > 0)", i + 1, s->length[i]);
+                                  "(must be finite and > 0)", i + 1, len[i]);
     }
-    if (s->stack != NULL) {
-        /* A given stack: a permutation with every node after its receiver. */
-        if ((pos = malloc(n * sizeof *pos)) == NULL)
+    if (stack != NULL) {
+        /* Each node's receiver already seen when the node comes.  A byte
+         * a node kept with the network: a landscape gives a stack at
+         * every routing. */
+        unsigned char *seen = net->seen;
+        if (seen == NULL && (seen = net->seen = malloc(n)) == NULL)
             return dfle_error_set(err, DFLE_ENOMEM, "network: out of memory");
-        for (size_t i = 0; i < n; i++)
-            pos[i] = NO_NODE;
+        memset(seen, 0, n);
         for (size_t k = 0; k < n; k++) {
-            if (s->stack[k] >= n || pos[s->stack[k]] != NO_NODE) {
-                free(pos);
+            if (stack[k] >= n || seen[stack[k]])
                 return dfle_error_set(err, DFLE_EINVAL, "network: the stack is not a permutation "
                                       "of the nodes (entry %zu)", k + 1);
-            }
-            pos[s->stack[k]] = k;
+            seen[stack[k]] = 1;
         }
-        for (size_t i = 0; i < n; i++)
-            if (s->receiver[i] != i && pos[s->receiver[i]] > pos[i]) {
-                free(pos);
+        memset(seen, 0, n);
+        for (size_t k = 0; k < n; k++) {
+            const size_t i = stack[k], r = recv[i];
+            if (r != i && !seen[r])
                 return dfle_error_set(err, DFLE_EINVAL, "network: in the stack node %zu comes "
-                                      "before its receiver %zu", i + 1, s->receiver[i] + 1);
-            }
-        free(pos);
+                                      "before its receiver %zu", i + 1, r + 1);
+            seen[i] = 1;
+        }
     }
+    return DFLE_OK;
+}
+
+/* A valid network with no shape (every node its own base level), for
+ * when a shape already written into it fails its checks. */
+static void unshape(dfle_network *net)
+{
+    for (size_t i = 0; i < net->n; i++) {
+        net->recv[i] = net->stack[i] = i;
+        if (!(isfinite(net->len[i]) && net->len[i] > 0))
+            net->len[i] = 1.0;
+        if (!(isfinite(net->A[i]) && net->A[i] > 0))
+            net->A[i] = 1.0;
+        if (!(isfinite(net->w[i]) && net->w[i] > 0))
+            net->w[i] = 1.0;
+        net->source[i] = 0;
+    }
+    net->has_channel = 0;
+    index_donors(net);
+    derive(net);
+    net->version = stamp();
+}
+
+int dfle_network_set(dfle_network *net, const dfle_network_shape *s, dfle_error *err)
+{
+    const size_t n = net->n;
+    int st;
+
+    if (s->receiver == NULL || s->length == NULL || s->A == NULL || s->w == NULL)
+        return dfle_error_set(err, DFLE_EINVAL, "network: receiver, length, A and w are required");
+    if ((st = check_shape(net, s->receiver, s->length, s->A, s->w, s->stack, err)) != DFLE_OK)
+        return st;
     if (s->channel != NULL && net->channel == NULL && (net->channel = malloc(n)) == NULL)
         return dfle_error_set(err, DFLE_ENOMEM, "network: out of memory");
+    net->editing = 0;
     memcpy(net->recv, s->receiver, n * sizeof *net->recv);
     memcpy(net->len, s->length, n * sizeof *net->len);
     memcpy(net->A, s->A, n * sizeof *net->A);
     memcpy(net->w, s->w, n * sizeof *net->w);
-    for (size_t i = 0; i < n; i++)
-        net->x[i] = s->x != NULL ? s->x[i] : NAN;
+    if (s->x != NULL)
+        memcpy(net->x, s->x, n * sizeof *net->x);
+    else if (!net->x_unset)
+        for (size_t i = 0; i < n; i++)
+            net->x[i] = NAN;
+    net->x_unset = s->x == NULL;
     index_donors(net);
     if (s->stack != NULL) {
         memcpy(net->stack, s->stack, n * sizeof *net->stack);
@@ -233,13 +276,7 @@ int dfle_network_set(dfle_network *net, const dfle_network_shape *s, dfle_error 
         while (seen != NULL && bad < n && seen[bad])
             bad++;
         free(seen);
-        /* Leave a valid (unshaped) network rather than a broken one. */
-        for (size_t i = 0; i < n; i++)
-            net->recv[i] = net->stack[i] = i;
-        net->has_channel = 0;
-        index_donors(net);
-        derive(net);
-        net->version = stamp();
+        unshape(net); /* valid, rather than a broken one */
         return dfle_error_set(err, DFLE_EINVAL, "network: node %zu never reaches a base level "
                               "(its receivers form a cycle)", bad + 1);
     }
@@ -249,6 +286,51 @@ int dfle_network_set(dfle_network *net, const dfle_network_shape *s, dfle_error 
     if (net->has_channel)
         for (size_t i = 0; i < n; i++)
             net->channel[i] = s->channel[i] != 0;
+    derive(net);
+    net->version = stamp();
+    return DFLE_OK;
+}
+
+int dfle_network_edit(dfle_network *net, int with_channel, dfle_network_edit_view *v,
+                      dfle_error *err)
+{
+    if (with_channel && net->channel == NULL && (net->channel = malloc(net->n)) == NULL)
+        return dfle_error_set(err, DFLE_ENOMEM, "network: out of memory");
+    v->receiver = net->recv;
+    v->stack = net->stack;
+    v->length = net->len;
+    v->A = net->A;
+    v->w = net->w;
+    v->source = net->source;
+    v->channel = with_channel ? net->channel : NULL;
+    net->editing = with_channel ? 2 : 1;
+    return DFLE_OK;
+}
+
+int dfle_network_commit(dfle_network *net, dfle_error *err)
+{
+    const size_t n = net->n;
+    int st;
+
+    if (!net->editing)
+        return dfle_error_set(err, DFLE_ESTATE, "network: commit without an edit");
+    if ((st = check_shape(net, net->recv, net->len, net->A, net->w, net->stack, err)) != DFLE_OK) {
+        net->editing = 0;
+        unshape(net);
+        return st;
+    }
+    if (!net->x_unset)
+        for (size_t i = 0; i < n; i++)
+            net->x[i] = NAN;
+    net->x_unset = 1;
+    index_donors(net);
+    for (size_t i = 0; i < n; i++)
+        net->source[i] = net->source[i] != 0;
+    net->has_channel = net->editing == 2;
+    if (net->has_channel)
+        for (size_t i = 0; i < n; i++)
+            net->channel[i] = net->channel[i] != 0;
+    net->editing = 0;
     derive(net);
     net->version = stamp();
     return DFLE_OK;

@@ -440,8 +440,8 @@ int inv_open_chain(inv_run *R, dfle_error *err)
         dfle_error e;
         if (dfle_ens_table_read(path, &t, &e) != DFLE_OK) {
             st = dfle_error_set(err, DFLE_EINVAL,
-                                "invert: %s is not a chain of dfle.invert (%s); remove it, pass "
-                                "resume = false, or choose another 'out'", path, e.msg);
+                                "invert: %s is not a chain of dfle.invert, or was damaged (%s); "
+                                "remove it, pass resume = false, or choose another 'out'", path, e.msg);
             goto done;
         }
         if (t->nrows > 0 && t->index[t->nrows - 1] > n)
@@ -454,7 +454,30 @@ int inv_open_chain(inv_run *R, dfle_error *err)
             dfle_ens_table_free(t);
             goto done;
         }
-        if (strcmp(t->meta, meta) != 0 || strcmp(t->header, header) != 0) {
+        if (strncmp(t->meta, "# dfle.invert v2 ", 17) != 0) {
+            /* not ours, or a format this dfle does not know */
+            int other = strncmp(t->meta, "# dfle.invert v", 15) == 0;
+            st = dfle_error_set(err, DFLE_EINVAL,
+                                "invert: %s:1: '%.60s' is not %s: remove the file, pass resume "
+                                "= false, or choose another 'out'", path, t->meta,
+                                other ? "a chain format this dfle reads (v2)"
+                                      : "the first line of a chain of dfle.invert");
+            dfle_ens_table_free(t);
+            goto done;
+        }
+        if (strcmp(t->meta, meta) == 0 && strcmp(t->header, header) != 0) {
+            size_t line = 2;
+            for (const char *c = t->comments; c != NULL && *c != '\0'; c++)
+                line += *c == '\n';
+            line += t->comments != NULL && t->comments[0] != '\0';
+            st = dfle_error_set(err, DFLE_EINVAL,
+                                "invert: %s:%zu: the columns '%.200s' are not this chain's "
+                                "('%.200s'): the file was edited; remove it, pass resume = "
+                                "false, or choose another 'out'", path, line, t->header, header);
+            dfle_ens_table_free(t);
+            goto done;
+        }
+        if (strcmp(t->meta, meta) != 0) {
             char why[400];
             difference(t->meta, meta, why, sizeof why);
             st = dfle_error_set(err, DFLE_EINVAL,

@@ -197,7 +197,9 @@ int inv_health_report(inv_run *R)
     }
     /* what follows says a number is not what it seems: shown at run time */
     r->first_alert = r->nwarnings;
-    n = N > burn ? inv_stranded(r, burn + 1, N, &h) : 0;
+    /* On fewer steps than INV_HEALTH_MIN_STEPS the ensemble may still be
+     * walking in, and a walker that never moved is not yet improbable. */
+    n = N >= burn + INV_HEALTH_MIN_STEPS ? inv_stranded(r, burn + 1, N, &h) : 0;
     if (n > 0 && (r->stranded = calloc(n, sizeof *r->stranded)) == NULL)
         n = 0, bad = -1;
     for (size_t k = 0; k < K && n > 0; k++) {

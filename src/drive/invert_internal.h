@@ -75,6 +75,12 @@ typedef struct inv_health {
     double drop;          /* the drop that strands (d's chi-square)   */
     double *scratch;      /* max(K, steps + 1)                        */
 } inv_health;
+/* Steps after burn-in below which no walker is called stranded: at
+ * the walkers' median acceptance of 0.25, a walker that never moves in
+ * 50 steps has probability 0.75^50 = 6e-7, the first count the 1e-6
+ * binomial test can call improbable; fewer steps may also be the
+ * ensemble still walking in from the prior. */
+#define INV_HEALTH_MIN_STEPS 50
 int inv_health_init(inv_health *h, size_t K, size_t d, size_t steps);
 void inv_health_free(inv_health *h);
 /* Flag the walkers stranded over steps s0 .. s1 (1 <= s0 <= s1) of r;

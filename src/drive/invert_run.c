@@ -308,41 +308,65 @@ done:
     return st;
 }
 
+/* What a resume says when a row read back does not give, at its
+ * position, the log densities the file has for it. */
+static int refuse_row(loop *lp, size_t s, size_t k, size_t i, dfle_error *err)
+{
+    inv_run *R = lp->R;
+    const dfle_invert_result *r = R->r;
+    const size_t at = s * r->walkers + k;
+    char place[300];
+    inv_row_place(R, s, k, place, sizeof place);
+    if (lp->b.st[i] != DFLE_PROPOSAL_ACCEPTED)
+        return dfle_error_set(err, DFLE_EINVAL,
+                              "invert: %s: step %zu, walker %zu: the file gives this row a "
+                              "non-zero posterior, but its position now has zero posterior "
+                              "(%.*s): the file was edited, or the model or data changed; "
+                              "remove it, pass resume = false, or choose another 'out'",
+                              place, s, k + 1, DFLE_INVERT_MSG, lp->b.msgs + i * DFLE_INVERT_MSG);
+    if (fabs(lp->b.lp[i] - r->log_post[at]) > 1e-9 * (1 + fabs(lp->b.lp[i])) ||
+        fabs(lp->b.ll[i] - r->log_like[at]) > 1e-9 * (1 + fabs(lp->b.ll[i])))
+        return dfle_error_set(err, DFLE_EINVAL,
+                              "invert: %s: step %zu, walker %zu: log_post %.10g and log_like "
+                              "%.10g in the file, but its position gives %.10g and %.10g "
+                              "now: the file was edited, or the model or data changed; "
+                              "remove it, pass resume = false, or choose another 'out'",
+                              place, s, k + 1, r->log_post[at], r->log_like[at], lp->b.lp[i],
+                              lp->b.ll[i]);
+    return DFLE_OK;
+}
+
 /* A chain read back continues from its last step: its walkers' log
  * densities are evaluated again (the sampler needs them exact, and they
  * must be what the file says: a file edited, or a model changed since,
- * would continue a chain of another posterior). */
+ * would continue a chain of another posterior).  So is the row with the
+ * largest log_post (it becomes the result's best sample): an edit that
+ * raised one row's log densities together would else freeze its walker
+ * and be reported as the best fit.  A complete chain is checked the
+ * same way before it is summarised. */
 static int recompute_last(loop *lp, dfle_error *err)
 {
     inv_run *R = lp->R;
     dfle_invert_result *r = R->r;
     const size_t K = r->walkers, d = r->d, s = r->have - 1;
+    size_t best = 0;
     int st;
 
+    for (size_t i = 1; i < r->have * K; i++)
+        if (r->log_post[i] > r->log_post[best])
+            best = i;
+    if (best < s * K) {
+        memcpy(lp->y, r->x + best * d, d * sizeof *lp->y);
+        if ((st = evaluate(lp, 1, err)) != DFLE_OK ||
+            (st = refuse_row(lp, best / K, best % K, 0, err)) != DFLE_OK)
+            return st;
+    }
     memcpy(lp->y, r->x + s * K * d, K * d * sizeof *lp->y);
     if ((st = evaluate(lp, K, err)) != DFLE_OK)
         return st;
     for (size_t k = 0; k < K; k++) {
-        const size_t at = s * K + k;
-        char place[300];
-        inv_row_place(R, s, k, place, sizeof place);
-        if (lp->b.st[k] != DFLE_PROPOSAL_ACCEPTED)
-            return dfle_error_set(err, DFLE_EINVAL,
-                                  "invert: %s: step %zu, walker %zu: the chain continues from "
-                                  "here, but its position now has zero posterior (%.*s): the "
-                                  "file was edited, or the model or data changed; remove it, "
-                                  "pass resume = false, or choose another 'out'",
-                                  place, s, k + 1, DFLE_INVERT_MSG,
-                                  lp->b.msgs + k * DFLE_INVERT_MSG);
-        if (fabs(lp->b.lp[k] - r->log_post[at]) > 1e-9 * (1 + fabs(lp->b.lp[k])) ||
-            fabs(lp->b.ll[k] - r->log_like[at]) > 1e-9 * (1 + fabs(lp->b.ll[k])))
-            return dfle_error_set(err, DFLE_EINVAL,
-                                  "invert: %s: step %zu, walker %zu: log_post %.10g and log_like "
-                                  "%.10g in the file, but its position gives %.10g and %.10g "
-                                  "now: the file was edited, or the model or data changed; "
-                                  "remove it, pass resume = false, or choose another 'out'",
-                                  place, s, k + 1, r->log_post[at], r->log_like[at],
-                                  lp->b.lp[k], lp->b.ll[k]);
+        if ((st = refuse_row(lp, s, k, k, err)) != DFLE_OK)
+            return st;
         lp->cur_lp[k] = lp->b.lp[k];
         lp->cur_ll[k] = lp->b.ll[k];
     }
@@ -634,7 +658,9 @@ int dfle_invert_run(dfle_invert *inv, const dfle_evaluator *ev, dfle_error *err)
     unsummarize(R->r);
     R->r->ran = 0;
     R->r->interrupted = 0;
-    if (R->o.steps > 0 && R->r->have < R->o.steps + 1) {
+    /* A chain read back whole is checked as a resumed one is (its last
+     * step and best row evaluated again) before it is summarised. */
+    if (R->o.steps > 0 && (R->r->have < R->o.steps + 1 || R->line != NULL)) {
         if ((st = dfle_evaluator_check(ev, err)) != DFLE_OK)
             return st;
         st = sample(R, ev, err);
@@ -646,7 +672,8 @@ int dfle_invert_run(dfle_invert *inv, const dfle_evaluator *ev, dfle_error *err)
                                 R->o.out != NULL ? "; the whole steps are in " : "",
                                 R->o.out != NULL ? R->o.out : "",
                                 R->o.out != NULL ? ", and running again resumes it" : "");
-        } else if (st != DFLE_OK && R->o.out != NULL) {
+        } else if (st != DFLE_OK && st != DFLE_EINVAL && R->o.out != NULL) {
+            /* (a file refused, DFLE_EINVAL, says what to do itself) */
             char msg[DFLE_ERROR_MSG_MAX];
             dfle_drive_prefix(err, "invert");
             dfle_drive_copy(msg, sizeof msg, err != NULL ? err->msg : "failed");

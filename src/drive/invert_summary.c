@@ -83,7 +83,9 @@ int inv_summarize(inv_run *R)
     double tau_use;
     int windowed = 1;
 
-    r->complete = N >= 1 && r->have == N + 1;
+    /* (a complete chain read back and interrupted while its last step
+     * was evaluated again is not yet checked: no posterior either) */
+    r->complete = N >= 1 && r->have == N + 1 && !r->interrupted;
     if (!r->complete) {
         int bad = N < 1            ? 0
                   : r->interrupted ? inv_warn(r, "interrupted after step %zu of %zu: a cut "

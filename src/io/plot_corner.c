@@ -11,7 +11,9 @@
  * sampled in ln x gets round contours where its posterior is log-normal.
  * A corner plot is where trade-offs between parameters show (the paper's
  * Sect. 4.3: k_df, gamma and U), so the pairs get the space and the
- * diagonal gets the numbers.
+ * diagonal gets the numbers.  A prior bound that holds the posterior is
+ * drawn where it cuts the samples, with the side outside the prior
+ * shaded: the edge of the marginal there is the prior's, not the data's.
  */
 #include "dfle/plot.h"
 
@@ -113,12 +115,28 @@ static void put_axis_label(FILE *f, int tag, const char *buf, int lines, double 
                            y - (rot != 0 ? 0 : 1.6 * fr->font_pt), rot, 0, fr);
 }
 
-/* The axis range of parameter j in axis units, padded 4 %. */
+#define BOUND_RGB "#4d4d4d"
+#define OUTSIDE_RGB "#d4d4d4"
+
+/* Bound b of parameter j (bound_lo or bound_hi) is drawn. */
+static int bound_shown(const double *b, size_t j, int lg)
+{
+    return b != NULL && isfinite(b[j]) && (!lg || b[j] > 0);
+}
+
+/* The axis range of parameter j in axis units, padded 4 %, holding the
+ * bounds blo, bhi drawn (NaN: none). */
 static void axis_range(size_t n, size_t d, const double *x, size_t j, int lg, double truth,
-                       double *lo, double *hi)
+                       double blo, double bhi, double *lo, double *hi)
 {
     *lo = HUGE_VAL;
     *hi = -HUGE_VAL;
+    if (isfinite(blo) && (!lg || blo > 0))
+        *lo = *hi = to_axis(blo, lg);
+    if (isfinite(bhi) && (!lg || bhi > 0)) {
+        *lo = fmin(*lo, to_axis(bhi, lg));
+        *hi = fmax(*hi, to_axis(bhi, lg));
+    }
     for (size_t i = 0; i < n; i++) {
         double v = x[i * d + j];
         if (isfinite(v) && (!lg || v > 0)) {
@@ -141,6 +159,12 @@ static void axis_range(size_t n, size_t d, const double *x, size_t j, int lg, do
         *lo -= 0.04 * span;
         *hi += 0.04 * span;
     }
+    /* A bound keeps an eighth of the axis outside it, where its note
+     * goes (and which is shaded: outside the prior). */
+    if (isfinite(bhi) && (!lg || bhi > 0) && *hi - to_axis(bhi, lg) < 0.125 * (*hi - *lo))
+        *hi = (to_axis(bhi, lg) - 0.125 * *lo) / (1 - 0.125);
+    if (isfinite(blo) && (!lg || blo > 0) && to_axis(blo, lg) - *lo < 0.125 * (*hi - *lo))
+        *lo = (to_axis(blo, lg) - 0.125 * *hi) / (1 - 0.125);
     /* A truth near an end of the samples stands a tenth of the axis
      * clear of the frame, so that its line is not read as the frame (or
      * as drawn clamped to it). */
@@ -208,6 +232,36 @@ static int truth_shown(const dfle_corner_opts *o, size_t j, const int *lg)
     return o->truth != NULL && isfinite(o->truth[j]) && (!lg[j] || o->truth[j] > 0);
 }
 
+/* Parameter j's prior bounds on the x axis (tags 6, 7) or the y axis
+ * (8, 9) of a panel: a line, the side outside the prior shaded behind
+ * the samples, and on the diagonal (note) the words "prior bound". */
+static void put_bounds(FILE *f, const dfle_corner_opts *o, size_t j, const int *lg, int y,
+                       int note, double o_font_pt)
+{
+    for (int side = 0; side < 2; side++) {
+        const double *b = side == 0 ? o->bound_lo : o->bound_hi;
+        const int tag = (y ? 8 : 6) + side;
+        const char *edge = side == 0 ? "graph 0" : "graph 1";
+        if (!bound_shown(b, j, lg[j]))
+            continue;
+        if (y) {
+            fprintf(f, "set object %d rect from graph 0, %s to graph 1, first %.10g fc rgb '%s' "
+                    "fs solid 0.7 noborder behind\n", tag, edge, b[j], OUTSIDE_RGB);
+            fprintf(f, "set arrow %d from graph 0, first %.10g to graph 1, first %.10g nohead "
+                    "lc rgb '%s' lw 2 dt 2 front\n", tag, b[j], b[j], BOUND_RGB);
+        } else {
+            fprintf(f, "set object %d rect from %s, graph 0 to first %.10g, graph 1 fc rgb '%s' "
+                    "fs solid 0.7 noborder behind\n", tag, edge, b[j], OUTSIDE_RGB);
+            fprintf(f, "set arrow %d from first %.10g, graph 0 to first %.10g, graph 1 nohead "
+                    "lc rgb '%s' lw 2 dt 2 front\n", tag, b[j], b[j], BOUND_RGB);
+        }
+        if (note) /* upright beside the line, on the side outside the prior */
+            fprintf(f, "set label %d \"prior bound\" at first %.10g, graph 0.06 rotate by 90 "
+                    "left offset character %.1f, 0 tc rgb '%s' font ',%.3g' front\n", tag, b[j],
+                    side == 0 ? -0.9 : 1.1, BOUND_RGB, 0.8 * o_font_pt);
+    }
+}
+
 /* Parameter j's axis label: the caller's, or "x_{j}". */
 static const char *axis_label(const dfle_corner_opts *o, size_t j, char *buf, size_t cap)
 {
@@ -259,7 +313,9 @@ int dfle_plot_corner(const char *path, const dfle_plot_opts *opts,
     }
     for (size_t j = 0; j < d; j++) {
         lg[j] = o->logaxis != NULL && o->logaxis[j];
-        axis_range(n, d, x, j, lg[j], o->truth != NULL ? o->truth[j] : NAN, &lo[j], &hi[j]);
+        axis_range(n, d, x, j, lg[j], o->truth != NULL ? o->truth[j] : NAN,
+                   o->bound_lo != NULL ? o->bound_lo[j] : NAN,
+                   o->bound_hi != NULL ? o->bound_hi[j] : NAN, &lo[j], &hi[j]);
     }
     /* The panels' size sets the ticks, whose labels set the margins. */
     gap = 1.2 * fs; /* room for the end labels of neighbouring panels */
@@ -372,7 +428,7 @@ int dfle_plot_corner(const char *path, const dfle_plot_opts *opts,
             fprintf(r.f, "set lmargin at screen %.5f\nset rmargin at screen %.5f\n"
                     "set tmargin at screen %.5f\nset bmargin at screen %.5f\n",
                     L0 / fr.w_pt, (L0 + w) / fr.w_pt, T0 / fr.h_pt, (T0 - w) / fr.h_pt);
-            fputs("unset arrow\nunset label\nunset title\n", r.f);
+            fputs("unset arrow\nunset label\nunset title\nunset object\n", r.f);
             fprintf(r.f, "set grid xtics ytics back lc rgb '#e4e4e4' lw 1\n");
             dfle_gp_axis_put(r.f, "x", &tx[j], i == d - 1);
             if (i == 0 && j == 0 && title != NULL)
@@ -417,6 +473,7 @@ int dfle_plot_corner(const char *path, const dfle_plot_opts *opts,
                 if (truth_shown(o, j, lg))
                     fprintf(r.f, "set arrow 4 from %.10g, graph 0 to %.10g, graph 1 nohead lc "
                             "rgb '%s' lw 3 front\n", o->truth[j], o->truth[j], DFLE_GP_FIT);
+                put_bounds(r.f, o, j, lg, 0, 1, fs);
                 fprintf(r.f, "plot $h%zu using 1:2 with filledcurves y1=0 fs transparent solid "
                         "0.35 noborder lc rgb '#0072B2', $h%zu using 1:2 with lines lw 2.4 lc rgb "
                         "'#0a4a78'\n", j, j);
@@ -435,6 +492,8 @@ int dfle_plot_corner(const char *path, const dfle_plot_opts *opts,
                     fprintf(r.f, "set arrow 5 from graph 0, first %.10g to graph 1, first %.10g "
                             "nohead lc rgb '%s' lw 2.5 front\n", o->truth[i], o->truth[i],
                             DFLE_GP_FIT);
+                put_bounds(r.f, o, j, lg, 0, 0, fs);
+                put_bounds(r.f, o, i, lg, 1, 0, fs);
                 fprintf(r.f, "plot $s using %zu:%zu with points pt 7 ps %.3g lc rgb '#A00072B2'",
                         j + 1, i + 1, dfle_gp_ps(&fr, 1.4));
                 /* contours of (x_j, x_i): the grid was (a = j, b = i) */

@@ -173,9 +173,8 @@ void dfle_landscape_free(dfle_landscape *ls)
     free(ls->df_scale.grid);
     free(ls->node_of);
     free(ls->cell_of);
-    free(ls->s_rcv);
-    free(ls->s_len);
-    free(ls->s_chan);
+    free(ls->s_Ks);
+    free(ls->s_dfs);
     free(ls->w_table);
     free(ls);
 }
@@ -215,20 +214,16 @@ static int make_model(dfle_landscape *ls, dfle_error *err)
 
     ls->node_of = malloc(n * sizeof *ls->node_of);
     ls->cell_of = malloc(nd * sizeof *ls->cell_of);
-    ls->s_rcv = malloc(2 * nd * sizeof *ls->s_rcv);
-    ls->s_len = malloc(5 * nd * sizeof *ls->s_len);
-    ls->s_chan = malloc(2 * nd);
-    if (ls->node_of == NULL || ls->cell_of == NULL || ls->s_rcv == NULL || ls->s_len == NULL ||
-        ls->s_chan == NULL)
+    /* The erodibility scales by node, where they are not 1. */
+    if (ls->K_scale.grid != NULL || ls->K_scale.value != 1.0)
+        ls->s_Ks = malloc(nd * sizeof *ls->s_Ks);
+    if (ls->df_scale.grid != NULL || ls->df_scale.value != 1.0)
+        ls->s_dfs = malloc(nd * sizeof *ls->s_dfs);
+    if (ls->node_of == NULL || ls->cell_of == NULL ||
+        (ls->s_Ks == NULL && (ls->K_scale.grid != NULL || ls->K_scale.value != 1.0)) ||
+        (ls->s_dfs == NULL && (ls->df_scale.grid != NULL || ls->df_scale.value != 1.0)))
         return dfle_error_set(err, DFLE_ENOMEM, "landscape: out of memory for the debris-flow "
                               "network (%zu cells)", nd);
-    ls->s_stack = ls->s_rcv + nd;
-    ls->s_A = ls->s_len + nd;
-    ls->s_w = ls->s_len + 2 * nd;
-    ls->s_Ks = ls->K_scale.grid != NULL || ls->K_scale.value != 1.0 ? ls->s_len + 3 * nd : NULL;
-    ls->s_dfs = ls->df_scale.grid != NULL || ls->df_scale.value != 1.0 ? ls->s_len + 4 * nd
-                                                                         : NULL;
-    ls->s_src = ls->s_chan + nd;
     ls->n_w = nd < LS_W_TABLE ? nd + 1 : LS_W_TABLE;
     if ((ls->w_table = malloc(ls->n_w * sizeof *ls->w_table)) == NULL)
         return dfle_error_set(err, DFLE_ENOMEM, "landscape: out of memory for the debris-flow "
@@ -390,8 +385,9 @@ size_t dfle_landscape_memory(const dfle_landscape *ls)
     b += (ls->U.grid != NULL) * ls->n * sizeof(double);
     b += (ls->K_scale.grid != NULL) * ls->n * sizeof(double);
     b += (ls->df_scale.grid != NULL) * ls->n * sizeof(double);
-    if (ls->model != NULL)
-        b += (size_t)ls_model_bytes(ls->n, ls->n_data);
+    if (ls->model != NULL) /* what the model made so far, not all it may make */
+        b += dfle_model_memory(ls->model) + (size_t)ls_network_bytes(ls->n, ls->n_data) +
+             ((ls->s_Ks != NULL) + (ls->s_dfs != NULL)) * ls->n_data * sizeof(double);
     return b;
 }
 
@@ -414,7 +410,8 @@ static double width(const dfle_landscape *ls, double A)
     return ls->o.k_w * pow(A, ls->o.b);
 }
 
-/* The network of the data cells from the routing just done. */
+/* The network of the data cells from the routing just done, written
+ * into the network's own arrays (no copy of a shape a routing). */
 static int shape_network(dfle_landscape *ls, dfle_error *err)
 {
     const uint32_t *rcv = dfle_drainage_receivers(ls->dr), *off;
@@ -424,39 +421,32 @@ static int shape_network(dfle_landscape *ls, dfle_error *err)
     const double A0 = ls->o.A0;
     size_t n_stack, heads = 0, chan = 0;
     const uint32_t *stack = dfle_drainage_stack(ls->dr, &n_stack);
-    dfle_network_shape sh;
+    dfle_network_edit_view v;
     int st;
 
+    if ((st = dfle_network_edit(ls->net, 1, &v, err)) != DFLE_OK)
+        return st;
     for (size_t k = 0; k < ls->n_data; k++) {
         const size_t c = ls->cell_of[k];
         const int is_chan = A[c] >= A0;
         int head = is_chan;
-        ls->s_rcv[k] = ls->node_of[rcv[c]];
-        ls->s_len[k] = dir[c] < 8 ? ls->len[dir[c]] : 1.0;
-        ls->s_A[k] = A[c];
-        ls->s_w[k] = width(ls, A[c]);
+        v.receiver[k] = ls->node_of[rcv[c]];
+        v.length[k] = dir[c] < 8 ? ls->len[dir[c]] : 1.0;
+        v.A[k] = A[c];
+        v.w[k] = width(ls, A[c]);
         for (uint32_t j = off[c]; head && j < off[c + 1]; j++)
             head = !(A[don[j]] >= A0);
-        ls->s_chan[k] = (unsigned char)is_chan;
-        ls->s_src[k] = (unsigned char)head;
+        v.channel[k] = (unsigned char)is_chan;
+        v.source[k] = (unsigned char)head;
         heads += (size_t)head;
         chan += (size_t)is_chan;
     }
     for (size_t k = 0; k < n_stack; k++)
-        ls->s_stack[k] = ls->node_of[stack[k]];
-    memset(&sh, 0, sizeof sh);
-    sh.receiver = ls->s_rcv;
-    sh.length = ls->s_len;
-    sh.A = ls->s_A;
-    sh.w = ls->s_w;
-    sh.source = ls->s_src;
-    sh.stack = ls->s_stack;
-    sh.channel = ls->s_chan;
-    if ((st = dfle_network_set(ls->net, &sh, err)) != DFLE_OK)
+        v.stack[k] = ls->node_of[stack[k]];
+    if ((st = dfle_network_commit(ls->net, err)) != DFLE_OK)
         return st;
     ls->heads = heads;
     ls->channel_cells = chan;
-    ls->model_z_current = 0;
     return DFLE_OK;
 }
 
@@ -498,8 +488,16 @@ int ls_route(dfle_landscape *ls, dfle_error *err)
     ls->stable = (double)changes <= floor(ls->rcv_tol * (double)ls->n_data) ? ls->stable + 1 : 0;
     ls->routings++;
     ls->routed = 1;
-    if (ls->model != NULL && (st = shape_network(ls, err)) != DFLE_OK)
-        return st;
+    /* Areas, widths, lengths and heads follow from the receivers alone:
+     * where none changed (a landscape near its steady state) the network,
+     * and every cache the router and model keep for its version, stand. */
+    if (ls->model != NULL && (changes > 0 || !ls->shape_current)) {
+        ls->shape_current = 0;
+        if ((st = shape_network(ls, err)) != DFLE_OK)
+            return st;
+        ls->shape_current = 1;
+    }
+    ls->model_z_current = 0;
     return DFLE_OK;
 }
 
@@ -516,6 +514,18 @@ int ls_model_evaluate(dfle_landscape *ls, dfle_error *err)
         return err != NULL ? err->code : DFLE_ENUMERIC;
     ls->model_z_current = 1;
     return DFLE_OK;
+}
+
+int ls_model_route(dfle_landscape *ls, const double **S, const double **reach, dfle_error *err)
+{
+    double *zm;
+    if (ls->model_z_current)
+        return dfle_model_route(ls->model, S, reach, err); /* evaluated: returns its fields */
+    zm = dfle_model_z(ls->model);
+    for (size_t k = 0; k < ls->n_data; k++)
+        zm[k] = ls->z[ls->cell_of[k]];
+    dfle_model_invalidate_flow(ls->model);
+    return dfle_model_route(ls->model, S, reach, err);
 }
 
 double ls_reach(const dfle_landscape *ls, size_t c)

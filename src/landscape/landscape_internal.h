@@ -160,12 +160,13 @@ struct dfle_landscape {
     dfle_model *model;
     uint32_t *node_of;         /* n: cell -> node (LS_NONE on NoData)   */
     uint32_t *cell_of;         /* n_data: node -> cell                  */
-    size_t *s_rcv, *s_stack;   /* shape scratch, n_data each            */
-    double *s_len, *s_A, *s_w, *s_Ks, *s_dfs;
-    unsigned char *s_src, *s_chan;
+    double *s_Ks, *s_dfs;      /* n_data: the scales by node, or NULL   */
     double *w_table;           /* k_w (j dx dy)^b for j < n_w cells     */
     size_t n_w;
     int model_z_current;       /* the model's z and flow match ours     */
+    int shape_current;         /* the model's network is that of the
+                                * receivers in rcv_prev: a routing that
+                                * changes none need not re-shape it     */
     size_t channel_cells, heads;
 };
 
@@ -181,6 +182,9 @@ void ls_cell_centre(const dfle_landscape *ls, size_t c, double *x, double *y);
 int ls_update_fields(dfle_landscape *ls, int first, dfle_error *err);
 /* Copy z into the model and evaluate it (routes the debris flows). */
 int ls_model_evaluate(dfle_landscape *ls, dfle_error *err);
+/* Copy z into the model and route the debris flows only (what the
+ * implicit step reads): S and reach by node (dfle_model_route). */
+int ls_model_route(dfle_landscape *ls, const double **S, const double **reach, dfle_error *err);
 /* The debris flows that go on at cell c (0 without a router). */
 double ls_reach(const dfle_landscape *ls, size_t c);
 /* E_f [m/yr] at cell c for slope S. */
@@ -241,9 +245,11 @@ int ls_verify(dfle_landscape *ls, const ls_judge *j, size_t steps, double dt, ls
               int *passed, size_t *taken, dfle_landscape_status *worst, dfle_error *err);
 
 /* landscape_memory.c */
-/* Bytes of the debris-flow model, its network and the landscape's
- * shape scratch for n cells, n_data of them data. */
+/* Bytes of the debris-flow model (every array its implicit and direct
+ * runs make), its network and the landscape's shape scratch for n cells, n_data of
+ * them data; of the network and the scratch alone. */
 double ls_model_bytes(size_t n, size_t n_data);
+double ls_network_bytes(size_t n, size_t n_data);
 /* Bytes this process can still have: the least of the memory available
  * (MemAvailable), a cgroup's limit less its use, and ulimit -v and -d
  * less what the process holds; which one, in words, into what.

@@ -37,19 +37,28 @@
  * receivers 4, dz/dt 4, directions 1). */
 #define RUN_BYTES (8.0 + 17.0)
 
+/* The network (7 indices, 4 doubles, 3 bytes a node; a shape is
+ * written into it, not copied) and the landscape's cell <-> node maps
+ * (the erodibility scales by node are counted with the fields). */
+double ls_network_bytes(size_t n, size_t n_data)
+{
+    const double nd = (double)n_data;
+    return nd * (7 * sizeof(size_t) + 4 * sizeof(double) + 3) + (double)n * sizeof(uint32_t) +
+           nd * sizeof(uint32_t);
+}
+
 double ls_model_bytes(size_t n, size_t n_data)
 {
     const double nd = (double)n_data;
-    /* The model's arrays (13 doubles, 2 indices, two flows, its gathered
-     * views: model.c) and the network's (7 indices, 4 doubles, 2 bytes),
-     * and the shape scratch of the landscape (cell <-> node, receivers,
-     * stack, 5 doubles, 2 bytes). */
-    double b = nd * (13 * sizeof(double) + 2 * sizeof(size_t) +
-                     2 * DFLE_FLOW_ARRAYS * sizeof(double) + (5 + DFLE_FLOW_ARRAYS) * sizeof(double));
-    b += nd * (7 * sizeof(size_t) + 4 * sizeof(double) + 2);
-    b += (double)n * sizeof(uint32_t) +
-         nd * (sizeof(uint32_t) + 2 * sizeof(size_t) + 5 * sizeof(double) + 2);
-    return b;
+    /* The model's fields (9 doubles, an index, a flow: model.c), the
+     * gathered views its law reads on scattered nodes (5 doubles and a
+     * flow), made on first use, then the network's. */
+    double b = nd * (9 * sizeof(double) + sizeof(size_t) + DFLE_FLOW_ARRAYS * sizeof(double));
+    b += nd * (5 + DFLE_FLOW_ARRAYS) * sizeof(double);
+    /* Not counted: the celerity's perturbed copies (4 doubles, an index,
+     * a flow: 112 bytes a data cell) that only the explicit method,
+     * a reference, makes. */
+    return b + ls_network_bytes(n, n_data);
 }
 
 size_t dfle_landscape_memory_estimate(const dfle_landscape_opts *o, size_t n_data)
@@ -61,8 +70,13 @@ size_t dfle_landscape_memory_estimate(const dfle_landscape_opts *o, size_t n_dat
     b += (o->U.grid != NULL || o->U.fn != NULL) * n * sizeof(double);
     b += (o->K_scale.grid != NULL || o->K_scale.fn != NULL) * n * sizeof(double);
     b += (o->df_scale.grid != NULL || o->df_scale.fn != NULL) * n * sizeof(double);
-    if (o->router != NULL)
+    if (o->router != NULL) {
         b += ls_model_bytes(o->nx * o->ny, n_data);
+        /* the scales by node the model reads */
+        b += ((o->K_scale.grid != NULL || o->K_scale.fn != NULL || o->K_scale.value != 1.0) +
+              (o->df_scale.grid != NULL || o->df_scale.fn != NULL || o->df_scale.value != 1.0)) *
+             (double)n_data * sizeof(double);
+    }
     b += RUN_BYTES * n;
     return b < (double)SIZE_MAX ? (size_t)b : SIZE_MAX;
 }

@@ -251,6 +251,7 @@ int ls_verify(dfle_landscape *ls, const ls_judge *j, size_t steps, double dt, ls
     if (st == DFLE_OK)
         st = ls_route(ls, err);
     memcpy(ls->rcv_prev, sv->rcv_prev, n * sizeof *ls->rcv_prev);
+    ls->shape_current = 0; /* the network is this routing's, not rcv_prev's */
     memcpy(ls->dzdt, sv->dzdt, n * sizeof *ls->dzdt);
     memcpy(ls->rcv_hash, hash, sizeof hash);
     ls->rcv_hashes = hashes;

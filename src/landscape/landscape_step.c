@@ -305,7 +305,7 @@ int ls_implicit_step(dfle_landscape *ls, double dt, const ls_judge *j,
 {
     const uint32_t *rcv, *stack;
     const unsigned char *dir;
-    const double *A, *Sm = NULL;
+    const double *A, *Sm = NULL, *reach = NULL; /* by node */
     const double A0 = ls->o.A0, K = ls->K, mexp = ls->m_exp, nexp = ls->n_exp;
     const double Sc = ls->o.S_c, ca = ls->cell_area;
     const int hill = ls->o.hillslope, n_one = nexp == 1.0;
@@ -327,11 +327,8 @@ int ls_implicit_step(dfle_landscape *ls, double dt, const ls_judge *j,
         return st_;
     z_before = ls->z_undo;
     t1 = cpu_seconds();
-    if (ls->model != NULL) {
-        if ((st_ = ls_model_evaluate(ls, err)) != DFLE_OK)
-            return st_;
-        Sm = dfle_model_field(ls->model, DFLE_FIELD_S, err);
-    }
+    if (ls->model != NULL && (st_ = ls_model_route(ls, &Sm, &reach, err)) != DFLE_OK)
+        return st_;
     rcv = dfle_drainage_receivers(ls->dr);
     dir = dfle_drainage_dir(ls->dr);
     A = dfle_drainage_area(ls->dr);
@@ -393,7 +390,7 @@ int ls_implicit_step(dfle_landscape *ls, double dt, const ls_judge *j,
         }
         cell_begin(&w, z, c, r, &x);
         if (x.channel) {
-            const double flows = ls->model != NULL ? ls_reach(ls, c) : 0.0;
+            const double flows = reach != NULL ? reach[ls->node_of[c]] : 0.0;
             if (flows > 0) {
                 const size_t node = ls->node_of[c];
                 const double uz = x.zn;

@@ -65,13 +65,15 @@ const char *dfle_field_unit(int f)
     return f >= 0 && f < DFLE_FIELD_COUNT ? field_info[f].unit : NULL;
 }
 
-enum { MODEL_ARRAYS = 13 };
+/* The fields every model uses; the celerity's perturbed copies come
+ * with its first call (dfle_model_pert_alloc): the implicit and direct
+ * solvers and a landscape's implicit steps never ask for them. */
+enum { MODEL_ARRAYS = 9, PERT_ARRAYS = 4 };
 
 static int model_alloc(dfle_model *m, dfle_error *err)
 {
     size_t n = m->n;
     double *block = calloc(MODEL_ARRAYS * n, sizeof *block);
-    int st;
 
     if (block == NULL)
         return dfle_error_set(err, DFLE_ENOMEM, "model: out of memory for %zu nodes", n);
@@ -82,21 +84,49 @@ static int model_alloc(dfle_model *m, dfle_error *err)
     m->dzdt = block + 4 * n;
     m->F = block + 5 * n;
     m->S_routed = block + 6 * n;
-    m->S_pert = block + 7 * n;
-    m->E_pert = block + 8 * n;
-    m->F_pert = block + 9 * n;
-    m->celerity = block + 10 * n;
-    m->inv_len = block + 11 * n;
-    m->KAm = block + 12 * n;
-    m->reached.node = malloc(2 * n * sizeof *m->reached.node);
+    m->inv_len = block + 7 * n;
+    m->KAm = block + 8 * n;
+    m->reached.node = malloc(n * sizeof *m->reached.node);
     if (m->reached.node == NULL)
         return dfle_error_set(err, DFLE_ENOMEM, "model: out of memory for %zu nodes", n);
-    m->reached_pert.node = m->reached.node + n;
     dfle_flow_bind(&m->node, m->node_block, 1);
-    st = dfle_flow_init(&m->flow, n, err);
-    if (st == DFLE_OK)
-        st = dfle_flow_init(&m->flow_pert, n, err);
-    return st;
+    return dfle_flow_init(&m->flow, n, err);
+}
+
+int dfle_model_pert_alloc(dfle_model *m, dfle_error *err)
+{
+    const size_t n = m->n;
+    double *block;
+    if (m->S_pert != NULL)
+        return DFLE_OK;
+    block = calloc(PERT_ARRAYS * n, sizeof *block);
+    m->reached_pert.node = malloc(n * sizeof *m->reached_pert.node);
+    if (block == NULL || m->reached_pert.node == NULL ||
+        dfle_flow_init(&m->flow_pert, n, NULL) != DFLE_OK) {
+        free(block);
+        free(m->reached_pert.node);
+        m->reached_pert.node = NULL;
+        return dfle_error_set(err, DFLE_ENOMEM, "model: out of memory for the celerity of %zu "
+                              "nodes", n);
+    }
+    m->S_pert = block;
+    m->E_pert = block + n;
+    m->F_pert = block + 2 * n;
+    m->celerity = block + 3 * n;
+    return DFLE_OK;
+}
+
+size_t dfle_model_memory(const dfle_model *m)
+{
+    const size_t n = m->n;
+    size_t b = sizeof *m + n * (MODEL_ARRAYS * sizeof(double) + sizeof(size_t)) +
+               DFLE_FLOW_ARRAYS * n * sizeof(double);
+    if (m->S_pert != NULL)
+        b += n * (PERT_ARRAYS * sizeof(double) + sizeof(size_t)) +
+             DFLE_FLOW_ARRAYS * n * sizeof(double);
+    if (m->g_block != NULL)
+        b += (5 + DFLE_FLOW_ARRAYS) * n * sizeof(double);
+    return b + dfle_model_pop_memory(m);
 }
 
 void dfle_model_sync_domain(dfle_model *m)
@@ -156,6 +186,8 @@ void dfle_model_free(dfle_model *m)
     dfle_model_pop_free(m);
     free(m->z); /* the field block starts at z */
     free(m->reached.node);
+    free(m->S_pert); /* the perturbed block starts at S_pert */
+    free(m->reached_pert.node);
     free(m->g_block);
     dfle_network_free(m->own_net);
     free(m);

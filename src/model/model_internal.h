@@ -83,6 +83,10 @@ double dfle_model_df_scale(const dfle_model *m, size_t i);
  * solvers); pop_node_erosion the E_df part of a one-node erosion. */
 int dfle_model_pop_new(dfle_model *m, dfle_error *err);
 void dfle_model_pop_free(dfle_model *m);
+/* Bytes the population's arrays hold (0 without one). */
+size_t dfle_model_pop_memory(const dfle_model *m);
+/* The celerity's perturbed copies of the fields, made on first use. */
+int dfle_model_pert_alloc(dfle_model *m, dfle_error *err);
 int dfle_model_pop_erosion(dfle_model *m, const double *S, dfle_flow *sum, reached_set *r,
                            double *F, double *E, int commit, dfle_error *err);
 int dfle_model_pop_node_erosion(dfle_model *m, size_t i, double S, double lnS, double *E,

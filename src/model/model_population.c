@@ -67,6 +67,16 @@ int dfle_model_pop_new(dfle_model *m, dfle_error *err)
     return DFLE_OK; /* arrive and pass are set for the first shape seen (sync_shape) */
 }
 
+size_t dfle_model_pop_memory(const dfle_model *m)
+{
+    const model_population *mp = m->pop;
+    if (mp == NULL)
+        return 0;
+    return sizeof *mp + 2 * mp->q * mp->n * sizeof *mp->arrive +
+           (DFLE_FLOW_ARRAYS + 2) * mp->n * sizeof *mp->block +
+           mp->n * sizeof *mp->reached.node;
+}
+
 void dfle_model_pop_free(dfle_model *m)
 {
     model_population *mp = m->pop;

@@ -271,6 +271,30 @@ int dfle_model_evaluate(dfle_model *m, dfle_error *err)
     return DFLE_OK;
 }
 
+int dfle_model_route(dfle_model *m, const double **S, const double **reach, dfle_error *err)
+{
+    int st;
+    if (m->rt == NULL || m->pop != NULL || !dfle_router_is_local(m->rt)) {
+        /* The node solves read the cached flow factor (a router routed
+         * rarely) or every member's flow: all of it is needed. */
+        if (!m->evaluated && (st = dfle_model_evaluate(m, err)) != DFLE_OK)
+            return st;
+    } else {
+        dfle_model_sync_domain(m);
+        m->nonpositive = slopes_of(m, m->S);
+        if ((st = dfle_router_route(m->rt, m->net, m->S, &m->flow, err)) != DFLE_OK)
+            return st;
+        m->routings++;
+        /* The law's flow factor was not taken: the next evaluation routes
+         * again rather than trust F. */
+        m->flow_valid = 0;
+        m->evaluated = 0;
+    }
+    *S = m->S;
+    *reach = m->flow.reach;
+    return DFLE_OK;
+}
+
 int dfle_model_is_evaluated(const dfle_model *m) { return m->evaluated; }
 size_t dfle_model_nonpositive_slopes(const dfle_model *m) { return m->nonpositive; }
 size_t dfle_model_routings(const dfle_model *m) { return m->routings; }
@@ -299,8 +323,11 @@ double dfle_model_rate_ratio(const dfle_model *m)
 int dfle_model_celerity(dfle_model *m, const double **c_out, dfle_error *err)
 {
     const size_t n = m->n;
+    int st;
 
     assert(m->evaluated);
+    if ((st = dfle_model_pert_alloc(m, err)) != DFLE_OK)
+        return st;
     if (m->fl != NULL) {
         const double n_s = dfle_fluvial_n(m->fl);
         for (size_t i = 0; i < n; i++)
@@ -311,7 +338,6 @@ int dfle_model_celerity(dfle_model *m, const double **c_out, dfle_error *err)
     }
     if (m->rt != NULL && m->reached.n > 0) {
         int local = dfle_router_is_local(m->rt);
-        int st;
 
         for (size_t i = 0; i < n; i++)
             m->S_pert[i] = m->S[i] > 0 ? m->S[i] * (1.0 + CELERITY_EPS) : m->S[i];

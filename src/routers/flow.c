@@ -54,4 +54,5 @@ void dfle_flow_clear(dfle_flow *flow)
         memset(flow->M, 0, DFLE_FLOW_ARRAYS * flow->n * sizeof *flow->M);
     flow->runout_end = 0;
     flow->time_resolved = 0;
+    flow->clean_for = 0;
 }

@@ -75,7 +75,12 @@ int dfle_router_route(dfle_router *rt, const dfle_network *net,
     if (rt->routing)
         return refuse_nested(rt, err);
     rt->routing = 1;
+    if (flow->clean_by != (const void *)rt->ops)
+        flow->clean_for = 0; /* another router wrote it: nothing is known */
+    flow->clean_by = rt->ops;
     st = rt->ops->route(rt->state, net, S, flow, err);
+    if (st != DFLE_OK)
+        flow->clean_for = 0;
     rt->routing = 0;
     return st;
 }

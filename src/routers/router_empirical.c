@@ -20,12 +20,27 @@
 
 typedef struct empirical {
     dfle_empirical_opts opts;
-    /* Cache of the area-only terms, valid for `cached_for`. */
-    unsigned long long cached_for; /* network version, 0 = none */
+    /* Cache of the area-only terms, valid for network `cached_id` at
+     * shape `cached_for` (0 = none). */
+    unsigned long long cached_for, cached_id;
     size_t n;
     double *M, *Q, *t_p;
     double *h3_coef; /* 3 mu Q / (rho_b g w): h^3 = h3_coef / S  [m^3] */
     double *ln_h3_3; /* ln(h3_coef) / 3: h = exp(ln_h3_3 - ln S / 3)      */
+    /* The A and w each node's terms were made from (NaN: none): a new
+     * shape of the same network recomputes only the nodes whose area or
+     * width moved (on a landscape, the paths below changed receivers). */
+    double *A_was, *w_was;
+    /* The nodes a flow can reach (at or below a source), donors before
+     * receivers: on a landscape the channel cells, so a routing walks
+     * those and not the hillslopes. */
+    size_t *order, n_order;
+    unsigned char *mark;
+    /* Nodes that could be reached in shape `dark_since` and cannot now,
+     * so a flow clean for that shape needs only these zeroed; n_dark >
+     * dark_cap: too many were listed, zero them all. */
+    size_t *dark, n_dark, dark_cap;
+    unsigned long long dark_since;
 } empirical;
 
 void dfle_empirical_opts_default(dfle_empirical_opts *o)
@@ -42,79 +57,130 @@ void dfle_empirical_opts_default(dfle_empirical_opts *o)
 
 static void empirical_drop_cache(empirical *e)
 {
-    free(e->M); /* one block: M, Q, t_p, h3_coef, ln_h3_3 */
-    e->M = e->Q = e->t_p = e->h3_coef = e->ln_h3_3 = NULL;
-    e->cached_for = 0;
+    free(e->M); /* one block: M, Q, t_p, h3_coef, ln_h3_3, A_was, w_was */
+    free(e->order); /* one block: order, dark */
+    free(e->mark);
+    e->M = e->Q = e->t_p = e->h3_coef = e->ln_h3_3 = e->A_was = e->w_was = NULL;
+    e->order = e->dark = NULL;
+    e->mark = NULL;
+    e->n_order = e->n_dark = e->dark_cap = 0;
+    e->cached_for = e->cached_id = e->dark_since = 0;
     e->n = 0;
 }
 
-static int empirical_fill_cache(empirical *e, const dfle_network *net,
-                                dfle_error *err)
+static int empirical_alloc_cache(empirical *e, size_t n, dfle_error *err)
 {
-    size_t n = dfle_network_size(net);
-    const double *A = dfle_network_A(net), *w = dfle_network_w(net);
-    const dfle_empirical_opts *o = &e->opts;
-    double *block;
-
+    double *block = malloc(7 * n * sizeof *block);
+    const size_t cap = n / 16 + 1;
     empirical_drop_cache(e);
-    block = malloc(5 * n * sizeof *block);
-    if (block == NULL)
+    e->order = malloc((n + cap) * sizeof *e->order);
+    e->mark = malloc(n);
+    if (block == NULL || e->order == NULL || e->mark == NULL) {
+        free(block);
+        empirical_drop_cache(e);
         return dfle_error_set(err, DFLE_ENOMEM, "router.empirical: out of memory");
+    }
     e->M = block;
     e->Q = block + n;
     e->t_p = block + 2 * n;
     e->h3_coef = block + 3 * n;
     e->ln_h3_3 = block + 4 * n;
+    e->A_was = block + 5 * n;
+    e->w_was = block + 6 * n;
+    e->dark = e->order + n;
+    e->dark_cap = cap;
+    for (size_t i = 0; i < n; i++)
+        e->M[i] = e->Q[i] = e->t_p[i] = e->h3_coef[i] = e->ln_h3_3[i] = e->A_was[i] =
+            e->w_was[i] = NAN;
+    e->n = n;
+    return DFLE_OK;
+}
+
+/* The area-only terms at node i from A and w; DFLE_OK, or the error
+ * naming the term that has no finite value. */
+static int empirical_node_terms(empirical *e, size_t i, double A, double w, dfle_error *err)
+{
+    const dfle_empirical_opts *o = &e->opts;
+    e->M[i] = o->M0 * pow(1e-6 * A, o->gamma);
+    e->Q[i] = o->c1 * pow(e->M[i], o->c2);
+    e->t_p[i] = e->M[i] / e->Q[i];
+    e->h3_coef[i] = 3.0 * o->mu * e->Q[i] / (o->rho_b * o->g * w);
+    e->ln_h3_3[i] = log(e->h3_coef[i]) / 3.0;
+    e->A_was[i] = A;
+    e->w_was[i] = w;
+    /* Every parameter may be valid on its own and the flow still not
+     * exist (c2 = 2.5e6 makes M^c2 overflow): say which term and why,
+     * rather than route infinities the model reports as "E_df". */
+    if (!(isfinite(e->M[i]) && e->M[i] > 0 && isfinite(e->Q[i]) && e->Q[i] > 0 &&
+          isfinite(e->t_p[i]) && e->t_p[i] > 0 && isfinite(e->h3_coef[i]) && e->h3_coef[i] > 0)) {
+        const char *what = !(isfinite(e->M[i]) && e->M[i] > 0)       ? "volume M = M0 (1e-6 A)^gamma"
+                           : !(isfinite(e->Q[i]) && e->Q[i] > 0)     ? "peak discharge Q = c1 M^c2"
+                           : !(isfinite(e->t_p[i]) && e->t_p[i] > 0) ? "passage time t_p = M/Q"
+                                                                     : "depth term 3 mu Q / (rho_b g w)";
+        return dfle_error_set(
+            err, DFLE_EINVAL,
+            "router.empirical: the %s is %g at node %zu (A = %g m^2, w = %g m): with M0 = %g, "
+            "gamma = %g, c1 = %g, c2 = %g, mu = %g, rho_b = %g, g = %g the flow has no finite "
+            "properties",
+            what, !(isfinite(e->M[i]) && e->M[i] > 0)       ? e->M[i]
+                  : !(isfinite(e->Q[i]) && e->Q[i] > 0)     ? e->Q[i]
+                  : !(isfinite(e->t_p[i]) && e->t_p[i] > 0) ? e->t_p[i]
+                                                            : e->h3_coef[i],
+            i + 1, A, w, o->M0, o->gamma, o->c1, o->c2, o->mu, o->rho_b, o->g);
+    }
+    return DFLE_OK;
+}
+
+static int empirical_fill_cache(empirical *e, const dfle_network *net, dfle_error *err)
+{
+    const size_t n = dfle_network_size(net);
+    const double *A = dfle_network_A(net), *w = dfle_network_w(net);
+    const unsigned char *source = dfle_network_sources(net);
+    const size_t *stack = dfle_network_stack(net), *recv = dfle_network_receivers(net);
+    unsigned long long before = e->cached_for;
+    int st;
+
+    if (e->n != n || e->cached_id != dfle_network_id(net)) {
+        if ((st = empirical_alloc_cache(e, n, err)) != DFLE_OK)
+            return st;
+        before = 0;
+    }
+    e->cached_for = 0; /* until every term below is made */
     /* Only nodes at or below a source ever carry a flow: on a landscape
-     * the channel cells, a tenth of the grid, so the other nine tenths
-     * cost no pow() at each re-routing.  Marked in M (0: none), walking
-     * the stack from its end, every donor before its receiver. */
-    {
-        const unsigned char *source = dfle_network_sources(net);
-        const size_t *stack = dfle_network_stack(net), *recv = dfle_network_receivers(net);
-        for (size_t i = 0; i < n; i++)
-            e->M[i] = source[i];
-        for (size_t k = n; k-- > 0;) {
-            const size_t i = stack[k];
-            if (e->M[i] != 0 && recv[i] != i)
-                e->M[recv[i]] = 1.0;
+     * the channel cells, a tenth of the grid.  Walking the stack from its
+     * end lists every donor before its receiver. */
+    memcpy(e->mark, source, n);
+    e->n_order = 0;
+    for (size_t k = n; k-- > 0;) {
+        const size_t i = stack[k];
+        if (e->mark[i]) {
+            e->order[e->n_order++] = i;
+            if (recv[i] != i)
+                e->mark[recv[i]] = 1;
         }
     }
+    e->n_dark = 0;
     for (size_t i = 0; i < n; i++) {
-        if (e->M[i] == 0) { /* never reached: nothing to cache */
-            e->M[i] = e->Q[i] = e->t_p[i] = e->h3_coef[i] = e->ln_h3_3[i] = NAN;
+        if (!e->mark[i]) { /* never reached: nothing to cache */
+            if (!isnan(e->M[i])) {
+                if (e->n_dark < e->dark_cap)
+                    e->dark[e->n_dark] = i;
+                e->n_dark++;
+                e->M[i] = e->Q[i] = e->t_p[i] = e->h3_coef[i] = e->ln_h3_3[i] = NAN;
+                e->A_was[i] = e->w_was[i] = NAN;
+            }
             continue;
         }
-        e->M[i] = o->M0 * pow(1e-6 * A[i], o->gamma);
-        e->Q[i] = o->c1 * pow(e->M[i], o->c2);
-        e->t_p[i] = e->M[i] / e->Q[i];
-        e->h3_coef[i] = 3.0 * o->mu * e->Q[i] / (o->rho_b * o->g * w[i]);
-        e->ln_h3_3[i] = log(e->h3_coef[i]) / 3.0;
-        /* Every parameter may be valid on its own and the flow still not
-         * exist (c2 = 2.5e6 makes M^c2 overflow): say which term and why,
-         * rather than route infinities the model reports as "E_df". */
-        if (!(isfinite(e->M[i]) && e->M[i] > 0 && isfinite(e->Q[i]) && e->Q[i] > 0 &&
-              isfinite(e->t_p[i]) && e->t_p[i] > 0 && isfinite(e->h3_coef[i]) &&
-              e->h3_coef[i] > 0)) {
-            const char *what = !(isfinite(e->M[i]) && e->M[i] > 0)   ? "volume M = M0 (1e-6 A)^gamma"
-                               : !(isfinite(e->Q[i]) && e->Q[i] > 0) ? "peak discharge Q = c1 M^c2"
-                               : !(isfinite(e->t_p[i]) && e->t_p[i] > 0) ? "passage time t_p = M/Q"
-                                                                  : "depth term 3 mu Q / (rho_b g w)";
-            int st = dfle_error_set(
-                err, DFLE_EINVAL,
-                "router.empirical: the %s is %g at node %zu (A = %g m^2, w = %g m): with M0 = %g, "
-                "gamma = %g, c1 = %g, c2 = %g, mu = %g, rho_b = %g, g = %g the flow has no finite "
-                "properties",
-                what, !(isfinite(e->M[i]) && e->M[i] > 0) ? e->M[i]
-                      : !(isfinite(e->Q[i]) && e->Q[i] > 0) ? e->Q[i]
-                      : !(isfinite(e->t_p[i]) && e->t_p[i] > 0) ? e->t_p[i] : e->h3_coef[i],
-                i + 1, A[i], w[i], o->M0, o->gamma, o->c1, o->c2, o->mu, o->rho_b, o->g);
+        if (A[i] == e->A_was[i] && w[i] == e->w_was[i])
+            continue; /* the same terms as in the last shape */
+        if ((st = empirical_node_terms(e, i, A[i], w[i], err)) != DFLE_OK) {
             empirical_drop_cache(e);
             return st;
         }
     }
+    e->dark_since = before;
+    e->cached_id = dfle_network_id(net);
     e->cached_for = dfle_network_version(net);
-    e->n = n;
     return DFLE_OK;
 }
 
@@ -181,7 +247,7 @@ static int empirical_route(void *state, const dfle_network *net,
 {
     empirical *e = state;
     const double *w = dfle_network_w(net);
-    const size_t *stack = dfle_network_stack(net), *recv = dfle_network_receivers(net);
+    const size_t *recv = dfle_network_receivers(net);
     const unsigned char *source = dfle_network_sources(net);
     size_t n = dfle_network_size(net), reached = 0, first_gap = n;
     double chk = 0.0;
@@ -210,10 +276,24 @@ static int empirical_route(void *state, const dfle_network *net,
             zero_node(flow, i);
         return isfinite(sum) ? DFLE_OK : check_finite(flow, S, err);
     }
-    for (size_t i = 0; i < n; i++)
-        flow->reach[i] = source[i];
-    for (size_t k = n; k-- > 0;) {
-        const size_t i = stack[k];
+    /* Nodes no flow can reach are zeroed once per network shape and
+     * flow; after that only the reachable ones are walked. */
+    if (flow->clean_for != e->cached_for) {
+        if (flow->clean_for != 0 && flow->clean_for == e->dark_since &&
+            e->n_dark <= e->dark_cap) {
+            for (size_t k = 0; k < e->n_dark; k++)
+                zero_node(flow, e->dark[k]);
+        } else {
+            for (size_t i = 0; i < n; i++)
+                if (isnan(e->M[i]))
+                    zero_node(flow, i);
+        }
+        flow->clean_for = e->cached_for;
+    }
+    for (size_t k = 0; k < e->n_order; k++)
+        flow->reach[e->order[k]] = source[e->order[k]];
+    for (size_t k = 0; k < e->n_order; k++) {
+        const size_t i = e->order[k];
         const double arriving = flow->reach[i];
         /* No flow on a flat or reverse slope, nor where tau < tau_y. */
         if (!(arriving > 0) || !(S[i] > 0) ||

@@ -349,10 +349,10 @@ int dfle_solve_node(dfle_model *m, size_t i, double U_eff, double c, double flow
 int dfle_solver_node_slope(dfle_model *m, size_t i, double U_eff, double c, double flows,
                            double guess, double *S, int *goes_on, dfle_error *err)
 {
-    /* The landscape's sweeps keep the difference path, and so their
-     * results to the bit: a landscape still re-routing its network
-     * (examples/landscape_synthetic.lua in its quick mode) carries
-     * changes of 1e-10 in one slope into which cell drains where.  Moving
-     * them to Newton is the landscape's own change to make and measure. */
-    return solve_node(m, i, U_eff, c, flows, guess, 0, S, goes_on, err);
+    /* A landscape's sweeps take the solvers' path: Newton needs a third
+     * of the evaluations, the cost of a debris-flow step's reached
+     * cells.  Slopes move by up to the values path's 1e-10 relative; a
+     * landscape still re-routing may carry that into which cell drains
+     * where, within the steady-state rules' tolerance. */
+    return dfle_solve_node(m, i, U_eff, c, flows, guess, S, goes_on, err);
 }

@@ -79,6 +79,25 @@ static void alert(lua_State *L, const inv_run *R)
         dfle_lua_warn(L, "invert", r->warnings[k]);
 }
 
+/* A Lua prior density, for the driver's prior-bound rule (the prior's
+ * own mass near a bound): called protected, NaN if it raises (the rule
+ * then counts the prior as flat). */
+static double custom_logpdf(void *ud, size_t j, double x)
+{
+    inv_run *R = ud;
+    lua_State *L = R->L;
+    double v = NAN;
+    if (!lua_checkstack(L, 4))
+        return v;
+    lua_getfield(L, R->ctx, "density");
+    lua_getfield(L, -1, R->names[j]);
+    lua_pushnumber(L, x);
+    if (lua_pcall(L, 1, 1, 0) == LUA_OK && lua_type(L, -1) == LUA_TNUMBER)
+        v = lua_tonumber(L, -1);
+    lua_pop(L, 2);
+    return v;
+}
+
 static int l_invert(lua_State *L)
 {
     const dfle_lua_host *host = dfle_lua_host_of(L);
@@ -94,6 +113,10 @@ static int l_invert(lua_State *L)
     inv_read_spec(L, 1, &R);
     ctx = lua_gettop(L);
     R->nested = role == DFLE_LUA_PAR_NESTED;
+    R->L = L;
+    R->ctx = ctx;
+    R->o.custom_logpdf = custom_logpdf;
+    R->o.custom_ud = R;
     lua_getfield(L, ctx, "out");
     out = lua_tostring(L, -1); /* held by ctx */
     lua_pop(L, 1);

@@ -64,6 +64,8 @@ typedef struct inv_run {
     size_t walkers, steps, burn, have;
     const double *X, *LP, *LL;
     const unsigned char *ST;
+    lua_State *L;            /* the calling state and its context table, */
+    int ctx;                 /* for the Lua densities at summary time   */
     double lsq_seconds;      /* forward-model CPU time of the estimate  */
     size_t lsq_evaluations;
 } inv_run;

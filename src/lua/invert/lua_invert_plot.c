@@ -42,7 +42,7 @@ static int l_corner(lua_State *L)
     int ctx, names, sel, *logs;
     inv_run *R;
     size_t d, m, np;
-    double *x, *truth;
+    double *x, *truth, *blo, *bhi;
     dfle_corner_opts o;
     dfle_plot_opts po;
     dfle_error err;
@@ -97,8 +97,10 @@ static int l_corner(lua_State *L)
         return luaL_error(L, "dfle.plot.corner: 'params' is empty");
     d = np;
     m = (R->steps - R->burn) * R->walkers;
-    x = lua_newuserdatauv(L, (m * d + d) * sizeof *x, 0);
+    x = lua_newuserdatauv(L, (m * d + 3 * d) * sizeof *x, 0);
     truth = x + m * d;
+    blo = truth + d;
+    bhi = blo + d;
     logs = lua_newuserdatauv(L, d * sizeof *logs, 0);
     labels = lua_newuserdatauv(L, d * sizeof *labels, 0);
     for (size_t c = 0; c < d; c++) {
@@ -146,11 +148,28 @@ static int l_corner(lua_State *L)
         for (size_t i = 0; i < m; i++)
             x[i * d + c] = scale * R->X[((R->burn + 1) * R->walkers + i) * R->d + j];
         truth[c] *= scale;
+        /* the bounds that hold it: res.summary[name].bounded */
+        blo[c] = bhi[c] = NAN;
+        {
+            int top = lua_gettop(L);
+            if (lua_getfield(L, 1, "summary") == LUA_TTABLE &&
+                (lua_geti(L, names, (lua_Integer)j + 1), lua_gettable(L, -2)) == LUA_TTABLE &&
+                lua_getfield(L, -1, "bounded") == LUA_TSTRING) {
+                const char *b = lua_tostring(L, -1);
+                if (strcmp(b, "lower") == 0 || strcmp(b, "both") == 0)
+                    blo[c] = scale * R->prior[j].lo;
+                if (strcmp(b, "upper") == 0 || strcmp(b, "both") == 0)
+                    bhi[c] = scale * R->prior[j].hi;
+            }
+            lua_settop(L, top);
+        }
     }
     memset(&o, 0, sizeof o);
     o.labels = labels;
     o.logaxis = logs;
     o.truth = truth;
+    o.bound_lo = blo;
+    o.bound_hi = bhi;
     o.nbins = (size_t)dfle_lua_check_whole(L, nbins, "plot.corner", "nbins", 0, 1000);
     if (dfle_plot_corner(path, &po, &o, d, m, x, &err) != DFLE_OK)
         return dfle_lua_raise(L, &err);

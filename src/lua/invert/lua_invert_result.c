@@ -72,7 +72,7 @@ static void add_warning(lua_State *L, int warn, const char *fmt, ...)
 
 /* res.stranded (the walkers stranded after burn-in) and res.moved (those
  * moved back in burn-in), arrays of tables. */
-static void push_health(lua_State *L, const dfle_invert_result *r, int names)
+static void push_health(lua_State *L, const dfle_invert_result *r, int res, int names)
 {
     lua_createtable(L, (int)r->nstranded, 0);
     for (size_t i = 0; i < r->nstranded; i++) {
@@ -91,7 +91,7 @@ static void push_health(lua_State *L, const dfle_invert_result *r, int names)
         lua_setfield(L, -2, "median");
         lua_rawseti(L, -2, (lua_Integer)i + 1);
     }
-    lua_setfield(L, -2 - 1, "stranded");
+    lua_setfield(L, res, "stranded");
     lua_createtable(L, (int)r->nmoved, 0);
     for (size_t i = 0; i < r->nmoved; i++) {
         const dfle_invert_move *mv = &r->moved[i];
@@ -102,9 +102,9 @@ static void push_health(lua_State *L, const dfle_invert_result *r, int names)
         set_num(L, "lp_gain", mv->lp_gain);
         lua_rawseti(L, -2, (lua_Integer)i + 1);
     }
-    lua_setfield(L, -2 - 1, "moved");
+    lua_setfield(L, res, "moved");
     lua_pushnumber(L, r->threshold_lp);
-    lua_setfield(L, -2 - 1, "strand_drop");
+    lua_setfield(L, res, "strand_drop");
 }
 
 void inv_push_result(lua_State *L, int ctx, inv_run *R, int lsq_idx, double elapsed)
@@ -189,7 +189,7 @@ void inv_push_result(lua_State *L, int ctx, inv_run *R, int lsq_idx, double elap
             lua_settable(L, -3);
         }
         lua_setfield(L, res, "summary");
-        push_health(L, r, names);
+        push_health(L, r, res, names);
         lua_createtable(L, 0, (int)d);
         for (size_t j = 0; j < d; j++) {
             lua_geti(L, names, (lua_Integer)j + 1);
