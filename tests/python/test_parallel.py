@@ -79,17 +79,4 @@ def test_an_inversion_on_workers_as_the_command(tmp_path, lua):
 
 
 
-def test_warnings_name_the_callers_line(tmp_path):
-    import warnings
-    with warnings.catch_warnings(record=True) as ws:
-        warnings.simplefilter("always")
-        truth = dfle.model(U=4e-4, channel=dfle.channel(dx=50))
-        truth.run_to_steady()
-        # Through dfle.invert's wrapper: this short chain strands walkers.
-        dfle.invert(data={"A": truth.get("A"), "S": truth.get("S")},
-                    build=dfle.lua(INVERT_BUILD), params={"U": dfle.bounds(1e-4, 1e-3, log=True)},
-                    walkers=8, steps=30, burn=10, seed=1, workers=2,
-                    out=str(tmp_path / "chain.csv"))
-    ours = [w for w in ws if issubclass(w.category, dfle.Warning)]
-    assert any("dfle.invert" in str(w.message) for w in ours), [str(w.message) for w in ws]
-    assert {w.filename for w in ours} == {__file__}   # not the package's wrappers
+
