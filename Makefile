@@ -196,7 +196,7 @@ $(BUILD)/bench/%: $(BUILD)/obj/bench/%.o $(LIB_CORE)
 HAVE_MPICC := $(if $(SANITIZE),,$(shell command -v $(MPICC) 2>/dev/null))
 
 # The benchmark drivers are built (not run) so they cannot rot.
-test: all $(TEST_BIN) $(GATE_TEST) $(MISSING_TEST) $(BENCH_BIN) $(if $(and $(HAVE_PYTHON),$(if $(SANITIZE),,yes)),python)
+test: all $(TEST_BIN) $(GATE_TEST) $(MISSING_TEST) $(BENCH_BIN) $(if $(HAVE_PYTHON),python)
 	@BUILD=$(BUILD) SANITIZE='$(SANITIZE)' sh tests/run-tests.sh
 ifneq ($(HAVE_MPICC),)
 	@$(MAKE) --no-print-directory test-mpi

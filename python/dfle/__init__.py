@@ -13,9 +13,11 @@ named parameters, with the same names, units and defaults::
 Errors raise dfle.Error with the Lua API's message; warnings are
 dfle.Warning.  See doc/python.md.
 """
+import gc as _gc
 import threading as _threading
 
 from . import _dfle
+from . import _parallel
 
 __all__ = ["Error", "Warning", "Table", "LuaRef", "lua", "version"]
 
@@ -48,6 +50,9 @@ class Table(dict):
 
 _classes = {}
 _dfle._setup(Error, Warning, Table, _classes, _threading.main_thread().ident)
+# Cycles through Lua (a callable that refers to the object using it)
+# become visible to the collector's full runs.
+_gc.callbacks.append(_dfle._gc)
 
 
 def lua(source, name="=lua"):
@@ -58,7 +63,7 @@ def lua(source, name="=lua"):
     It runs in dfle's Lua state (the module is the global `dfle` there),
     so a law made of such functions runs compiled, as in the Lua API.
     """
-    return _dfle.lua(source, name)
+    return _parallel.remember(_dfle.lua(source, name), source, name)
 
 
 _module = _dfle.module()
@@ -75,7 +80,7 @@ for _name in _module.keys():
         _export(_name)
 
 from . import _objects  # noqa: E402  (classes of the object types, custom laws)
-from ._objects import Model, Landscape, Dem, to_pandas  # noqa: E402,F401
+from ._objects import Model, Landscape, Dem, Ensemble, to_pandas  # noqa: E402,F401
 
 _objects._install(__import__(__name__), _classes)
 

@@ -8,7 +8,16 @@ _classes = None
 
 
 class Model(_dfle.LuaRef):
-    """dfle.model: fields are numpy float64 arrays along the channel (copies)."""
+    """dfle.model: fields are numpy float64 arrays along the channel.
+
+    get("x"), get("A"), get("w") and get("z") are read-only views of the
+    model's memory (they follow runs and set_z, and keep the model
+    alive); every other field is a copy, evaluated when asked.
+    """
+
+    def get(self, name):
+        v = self._field(name)
+        return v if v is not None else self._index("get")(name)
 
     def to_xarray(self):
         """The fields as an xarray.Dataset on the coordinate x [m] (needs xarray)."""
@@ -25,10 +34,18 @@ class Model(_dfle.LuaRef):
 
 
 class Landscape(_dfle.LuaRef):
-    """dfle.landscape: get() returns an (ny, nx) array, row 0 at the north."""
+    """dfle.landscape: get() returns an (ny, nx) array, row 0 at the north.
+
+    get("z") is a read-only view of the elevations (it follows runs and
+    set_z, and keeps the landscape alive); every other field is a copy,
+    evaluated when asked.
+    """
 
     def get(self, name):
-        return _np.asarray(self._index("get")(name), dtype=float).reshape(self.ny, self.nx)
+        v = self._field(name)
+        if v is None:
+            v = _np.asarray(self._index("get")(name), dtype=float).reshape(self.ny, self.nx)
+        return v
 
     def to_xarray(self, fields=None):
         """The fields as an xarray.Dataset on (y, x) cell centres [m] (needs xarray)."""
@@ -45,6 +62,58 @@ class Landscape(_dfle.LuaRef):
 
 class Dem(_dfle.LuaRef):
     """dfle.dem: a raster read through GDAL."""
+
+
+class Ensemble(_dfle.LuaRef):
+    """The result of dfle.ensemble or dfle.gather: result.data holds one
+    column per input, output, status and reason (numpy arrays and lists)."""
+
+    def to_pandas(self):
+        """The rows as a pandas.DataFrame indexed by sample (needs pandas)."""
+        return to_pandas(self)
+
+    def to_xarray(self):
+        """The rows as an xarray.Dataset on the dimension sample, laid out
+        as the file result.write_netcdf(path) writes: index, the inputs and
+        the outputs (float64, with their units where dfle knows them, in
+        UDUNITS's syntax, or as dfle_units where it has none),
+        status and reason (str), the design and the rows file as
+        attributes (needs xarray)."""
+        import xarray as xr
+        data = self["data"]
+        inputs, outputs = list(self["inputs"]), list(self["outputs"])
+        variables = {"index": ("sample", _np.asarray(data["index"], dtype=float),
+                               {"units": "1",
+                                "long_name": "sample index (row of the design, from 1)"})}
+        for names, long_name in ((inputs, "input parameter"), (outputs, "output")):
+            for name in names:
+                attrs = {"long_name": long_name}
+                unit = _dfle.known_unit(name)
+                if unit is not None:     # as the file says it: UDUNITS's syntax
+                    cf = _dfle.udunits(unit)
+                    attrs["units" if cf is not None else "dfle_units"] = cf or unit
+                variables[name] = ("sample", _np.asarray(data[name], dtype=float), attrs)
+        variables["status"] = ("sample", _np.array(list(data["status"]), dtype=str),
+                               {"long_name": "ok or failed"})
+        variables["reason"] = ("sample", _np.array(list(data["reason"]), dtype=str),
+                               {"long_name": "why a sample failed"})
+        attrs = {"title": "dfle ensemble: one steady-state model per sample",
+                 "source": "dfle " + _dfle.version, "dfle_version": _dfle.version}
+        rows = self["file"] if "file" in self.keys() else None
+        if isinstance(rows, str):
+            try:
+                with open(rows, encoding="utf-8", errors="replace") as f:
+                    first = f.readline().rstrip("\r\n")
+                if first.startswith("# "):
+                    attrs["dfle_design"] = first[2:]
+            except OSError:
+                pass
+            attrs["dfle_rows_file"] = rows
+        for key in ("n", "count", "ok", "failed", "complete"):
+            if key in self.keys():
+                v = self[key]
+                attrs["dfle_" + key] = int(v) if isinstance(v, bool) else v
+        return xr.Dataset(variables, attrs=attrs)
 
 
 _SOURCES = ("rate", "factor", "integrand", "frequency", "route")
@@ -65,8 +134,12 @@ def _install(pkg, classes):
     classes["dfle.model"] = Model
     classes["dfle.landscape"] = Landscape
     classes["dfle.dem"] = Dem
+    classes["dfle.ensemble"] = Ensemble
     pkg.law["define"] = _with_sources(pkg.law["define"], "law")
     pkg.router["define"] = _with_sources(pkg.router["define"], "router")
+    from . import _parallel
+    pkg.ensemble = _parallel.wrap(pkg.ensemble, "ensemble")
+    pkg.invert = _parallel.wrap(pkg.invert, "invert")
 
 
 def to_pandas(result):

@@ -16,6 +16,9 @@
  */
 #include "py_dfle.h"
 
+#include <stdint.h>
+#include <string.h>
+
 #define NPY_NO_DEPRECATED_API NPY_1_7_API_VERSION
 #define NO_IMPORT_ARRAY
 #define PY_ARRAY_UNIQUE_SYMBOL dfpy_ARRAY_API
@@ -31,6 +34,7 @@ void dfpy_keep_callback_error(void);
 static void release_callable(void *ud)
 {
     PyGILState_STATE g = PyGILState_Ensure();
+    dfpy_live_callbacks--;
     Py_DECREF((PyObject *)ud);
     PyGILState_Release(g);
 }
@@ -249,6 +253,7 @@ int dfpy_push(dfle_bridge *b, PyObject *v, int depth)
         return push_sequence(b, v, depth);
     } else if (PyCallable_Check(v)) {
         Py_INCREF(v);
+        dfpy_live_callbacks++;
         dfle_bridge_push_callback(b, call_callable, v, release_callable);
     } else if (PyMapping_Check(v) && PyObject_HasAttrString(v, "keys")) {
         PyObject *d = PyDict_New();
@@ -295,6 +300,37 @@ static PyObject *number_array(dfle_bridge *b, int idx, size_t n)
     return (PyObject *)a;
 }
 
+/* Result tables repeat the same keys call after call (a step's status
+ * has some thirty): their Python strings are kept, looked up by content,
+ * so a key costs a compare, and its str hash is computed once.  Lua keeps
+ * one copy of each short string, so its address finds the slot; the
+ * compare makes a slot whose string went and whose address came back
+ * harmless.  Used with the GIL held. */
+#define KEY_CACHE 512
+#define KEY_MAX 32
+static struct {
+    size_t len;
+    char s[KEY_MAX];
+    PyObject *str;
+} key_cache[KEY_CACHE];
+
+static PyObject *key_string(const char *s, size_t len)
+{
+    size_t h = (size_t)(((uintptr_t)s >> 3) * 2654435761u) % KEY_CACHE;
+    PyObject *str;
+    if (len >= KEY_MAX)
+        return PyUnicode_DecodeUTF8(s, (Py_ssize_t)len, "surrogateescape");
+    if (key_cache[h].str != NULL && key_cache[h].len == len && memcmp(key_cache[h].s, s, len) == 0)
+        return Py_NewRef(key_cache[h].str);
+    str = PyUnicode_DecodeUTF8(s, (Py_ssize_t)len, "surrogateescape");
+    if (str == NULL)
+        return NULL;
+    Py_XSETREF(key_cache[h].str, Py_NewRef(str));
+    key_cache[h].len = len;
+    memcpy(key_cache[h].s, s, len);
+    return str;
+}
+
 static PyObject *table_to_python(dfle_bridge *b, int idx, int depth)
 {
     size_t n = dfle_bridge_len(b, idx);
@@ -307,7 +343,8 @@ static PyObject *table_to_python(dfle_bridge *b, int idx, int depth)
             return arr;
         Py_DECREF(arr);
     }
-    d = PyDict_New();
+    /* Filled in place (a dfle.Table is a dict): no second dict to copy. */
+    d = dfpy_table_type != NULL ? PyObject_CallNoArgs(dfpy_table_type) : PyDict_New();
     if (d == NULL)
         return NULL;
     dfle_bridge_push_nil(b);
@@ -317,7 +354,7 @@ static PyObject *table_to_python(dfle_bridge *b, int idx, int depth)
         if (dfle_bridge_type(b, top - 1) == DFLE_BRIDGE_STRING) {
             size_t len;
             const char *s = dfle_bridge_to_string(b, top - 1, &len);
-            k = PyUnicode_DecodeUTF8(s, (Py_ssize_t)len, "surrogateescape");
+            k = key_string(s, len);
         } else {
             k = dfpy_to_python(b, top - 1, depth + 1);
         }
@@ -356,11 +393,6 @@ static PyObject *table_to_python(dfle_bridge *b, int idx, int depth)
         }
         Py_DECREF(d);
         return list;
-    }
-    if (dfpy_table_type != NULL) {
-        PyObject *t = PyObject_CallOneArg(dfpy_table_type, d);
-        Py_DECREF(d);
-        return t;
     }
     return d;
 }

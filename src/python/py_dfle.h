@@ -9,6 +9,9 @@
  *    SIGINT caught, warnings and callback errors carried back);
  *  - py_convert.c: values between Python and Lua;
  *  - py_ref.c: the LuaRef type (objects, functions, tables with methods);
+ *  - py_field.c: fields as numpy arrays (views of the object's memory);
+ *  - py_parallel.c: ensembles and inversions on worker states;
+ *  - py_gc.c: cycles through Lua made visible to Python's collector;
  *  - py_module.c: the module.
  *
  * Locking: the Lua state is used by one thread at a time, under a
@@ -33,6 +36,7 @@ typedef struct {
     int kind;         /* DFLE_BRIDGE_OBJECT, _FUNCTION, _TABLE, ...      */
     PyObject *self;   /* a method's object (a LuaRef), or NULL           */
     PyObject *weak;   /* weak references                                 */
+    int held;         /* holds the object for views of its memory        */
 } dfpy_ref;
 
 extern PyTypeObject dfpy_ref_type;
@@ -43,9 +47,13 @@ dfle_bridge *dfpy_bridge(void);
 /* Take / give back the lock (the GIL held on entry and exit). */
 void dfpy_enter(void);
 void dfpy_leave(void);
+/* Take the lock only if it is free and no call into Lua is running on
+ * this thread (the collector's walk); 1 when taken. */
+int dfpy_try_enter_idle(void);
 /* Let go of a reference from anywhere the GIL is held (a deallocator):
- * at once if the lock is free, else by the next holder. */
-void dfpy_release_ref(int ref);
+ * at once if the lock is free, else by the next holder; held: the
+ * object was held for views (dfle_bridge_hold), unhold it first. */
+void dfpy_release_ref(int ref, int held);
 /* Call the function pushed at top - nargs with the nargs values above
  * it, the GIL released; the results replace them (count in *nres).
  * Returns 0, or -1 with a Python exception set (dfle.Error with the
@@ -78,5 +86,26 @@ PyObject *dfpy_results(dfle_bridge *b, int first, int n);
 PyObject *dfpy_ref_new(dfle_bridge *b, int idx, PyObject *self);
 /* Call a LuaRef function: positional args, then kwargs as one table. */
 PyObject *dfpy_ref_call(PyObject *fn, PyObject *args, PyObject *kwargs);
+/* Issue the warnings a call left, keeping an exception it raised. */
+PyObject *dfpy_finish(PyObject *res);
+
+/* --- py_gc.c --- */
+/* _dfle._gc(phase, info): gc.callbacks' hook; the references Lua holds
+ * to Python callables, visited by their owning LuaRef's tp_traverse. */
+PyObject *dfpy_gc_phase(PyObject *self, PyObject *args);
+int dfpy_gc_visit(int ref, visitproc visit, void *arg);
+/* A LuaRef's reference was let go of by tp_clear. */
+void dfpy_gc_cleared(void);
+/* Python callables pushed to Lua and not yet released. */
+extern Py_ssize_t dfpy_live_callbacks;
+
+/* --- py_parallel.c --- */
+/* _dfle.parallel(fn, script, spec): fn(spec) with worker states. */
+PyObject *dfpy_parallel(PyObject *self, PyObject *args);
+
+/* --- py_field.c --- */
+/* o._field(name): the field as a numpy array, or None when the object
+ * or the name is not one read this way (the caller asks get()). */
+PyObject *dfpy_ref_field(PyObject *o, PyObject *name);
 
 #endif

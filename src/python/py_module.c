@@ -4,6 +4,8 @@
  */
 #include "py_dfle.h"
 
+#include "dfle/record.h"
+
 #define NPY_NO_DEPRECATED_API NPY_1_7_API_VERSION
 #define PY_ARRAY_UNIQUE_SYMBOL dfpy_ARRAY_API
 #include <numpy/arrayobject.h>
@@ -54,6 +56,33 @@ static PyObject *mod_lua(PyObject *self, PyObject *args)
     return res;
 }
 
+/* _dfle.known_unit(name): the unit dfle's files give name, or None. */
+static PyObject *mod_known_unit(PyObject *self, PyObject *arg)
+{
+    const char *name = PyUnicode_AsUTF8(arg), *unit;
+    (void)self;
+    if (name == NULL)
+        return NULL;
+    unit = dfle_bridge_known_unit(name);
+    if (unit == NULL)
+        Py_RETURN_NONE;
+    return PyUnicode_FromString(unit);
+}
+
+/* _dfle.udunits(unit): the unit as UDUNITS reads it (what dfle's NetCDF
+ * files write as `units`), or None when UDUNITS has no syntax for it. */
+static PyObject *mod_udunits(PyObject *self, PyObject *arg)
+{
+    const char *unit = PyUnicode_AsUTF8(arg);
+    char buf[128];
+    (void)self;
+    if (unit == NULL)
+        return NULL;
+    if (!dfle_units_udunits(unit, buf, sizeof buf))
+        Py_RETURN_NONE;
+    return PyUnicode_FromString(buf);
+}
+
 /* _dfle._setup(Error, Warning, Table, classes, main_thread_ident) */
 static PyObject *mod_setup(PyObject *self, PyObject *args)
 {
@@ -73,6 +102,11 @@ static PyObject *mod_setup(PyObject *self, PyObject *args)
 static PyMethodDef mod_methods[] = {
     {"module", mod_module, METH_NOARGS, "The dfle Lua module table."},
     {"lua", mod_lua, METH_VARARGS, "lua(source, name='=lua'): a Lua function from its source."},
+    {"known_unit", mod_known_unit, METH_O, "known_unit(name): the unit dfle's files give name, or None."},
+    {"udunits", mod_udunits, METH_O, "udunits(unit): the unit as dfle's NetCDF files write it, or None."},
+    {"parallel", dfpy_parallel, METH_VARARGS,
+     "parallel(fn, script, spec): fn(spec) with worker states that run script."},
+    {"_gc", dfpy_gc_phase, METH_VARARGS, "gc.callbacks' hook: cycles through Lua."},
     {"_setup", mod_setup, METH_VARARGS, NULL},
     {NULL, NULL, 0, NULL}};
 

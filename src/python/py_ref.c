@@ -21,7 +21,9 @@ PyObject *dfpy_ref_new(dfle_bridge *b, int idx, PyObject *self)
 
     if (idx < 0)
         idx = dfle_bridge_top(b) + idx + 1;
-    if (kind == DFLE_BRIDGE_OBJECT && dfpy_classes != NULL) {
+    /* Objects, and results with methods (a table whose metatable has a
+     * __name, dfle.ensemble), get the class registered for their type. */
+    if ((kind == DFLE_BRIDGE_OBJECT || kind == DFLE_BRIDGE_TABLE) && dfpy_classes != NULL) {
         PyObject *c = PyDict_GetItemString(dfpy_classes, dfle_bridge_typename(b, idx));
         if (c != NULL && PyType_Check(c) && PyType_IsSubtype((PyTypeObject *)c, &dfpy_ref_type))
             cls = (PyTypeObject *)c;
@@ -47,27 +49,38 @@ static void ref_dealloc(PyObject *o)
     PyObject_GC_UnTrack(o);
     if (r->weak != NULL)
         PyObject_ClearWeakRefs(o);
-    dfpy_release_ref(r->ref);
+    dfpy_release_ref(r->ref, r->held);
     r->ref = -1;
     Py_CLEAR(r->self);
     Py_TYPE(o)->tp_free(o);
 }
 
+/* What the handle holds: its method's object, its type, and the Python
+ * callables that only its Lua value keeps alive (py_gc.c). */
 static int ref_traverse(PyObject *o, visitproc visit, void *arg)
 {
     Py_VISIT(((dfpy_ref *)o)->self);
     Py_VISIT(Py_TYPE(o));
-    return 0;
+    return dfpy_gc_visit(((dfpy_ref *)o)->ref, visit, arg);
 }
 
+/* The collector breaks a cycle here: the Lua value is let go of too
+ * (a cycle through Lua ends when Lua collects it). */
 static int ref_clear(PyObject *o)
 {
-    Py_CLEAR(((dfpy_ref *)o)->self);
+    dfpy_ref *r = (dfpy_ref *)o;
+    Py_CLEAR(r->self);
+    if (r->ref > 0) {
+        dfpy_release_ref(r->ref, r->held);
+        r->ref = -1;
+        r->held = 0;
+        dfpy_gc_cleared();
+    }
     return 0;
 }
 
 /* Issue the warnings the call left, keeping an exception it raised. */
-static PyObject *finish(PyObject *res)
+PyObject *dfpy_finish(PyObject *res)
 {
     if (res == NULL) {
         PyObject *t, *v, *tb;
@@ -119,7 +132,7 @@ PyObject *dfpy_ref_call(PyObject *fn, PyObject *args, PyObject *kwargs)
 done:
     dfle_bridge_settop(b, top);
     dfpy_leave();
-    return finish(res);
+    return dfpy_finish(res);
 }
 
 static PyObject *ref_call(PyObject *o, PyObject *args, PyObject *kwargs)
@@ -173,7 +186,7 @@ static PyObject *lua_index(PyObject *o, const char *key, PyObject *missing)
 done:
     dfle_bridge_settop(b, top);
     dfpy_leave();
-    return finish(res);
+    return dfpy_finish(res);
 }
 
 static PyObject *ref_getattro(PyObject *o, PyObject *name)
@@ -326,6 +339,7 @@ static PyObject *ref_lua_type(PyObject *o, void *closure)
 
 static PyMethodDef ref_methods[] = {
     {"_index", ref_index_method, METH_O, "The Lua value o[key] (methods bound to o)."},
+    {"_field", dfpy_ref_field, METH_O, "The field of a model or landscape as numpy (None: ask get)."},
     {"keys", ref_keys, METH_NOARGS, "The keys of a Lua table."},
     {"close", ref_close, METH_NOARGS, "Free the object now (Lua's __close)."},
     {"__enter__", ref_enter, METH_NOARGS, NULL},

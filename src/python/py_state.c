@@ -62,6 +62,38 @@ static void on_warning(void *ud, const char *msg)
     pthread_mutex_unlock(&warn_lock);
 }
 
+/* The stack level of the user's code: the innermost frames that are the
+ * package's own Python (a wrapper such as dfle.ensemble's) are skipped,
+ * so a warning names the line that called dfle. */
+static int user_level(void)
+{
+    PyFrameObject *f = PyEval_GetFrame();
+    int level = 1;
+    Py_XINCREF(f);
+    while (f != NULL) {
+        PyObject *g = PyFrame_GetGlobals(f), *name;
+        PyFrameObject *back;
+        int ours = 0;
+        name = g != NULL ? PyDict_GetItemString(g, "__name__") : NULL;
+        if (name != NULL && PyUnicode_Check(name)) {
+            const char *s = PyUnicode_AsUTF8(name);
+            if (s == NULL)
+                PyErr_Clear();
+            else
+                ours = strcmp(s, "dfle") == 0 || strncmp(s, "dfle.", 5) == 0;
+        }
+        Py_XDECREF(g);
+        if (!ours)
+            break;
+        level++;
+        back = PyFrame_GetBack(f);
+        Py_DECREF(f);
+        f = back;
+    }
+    Py_XDECREF(f);
+    return level;
+}
+
 int dfpy_flush_warnings(void)
 {
     int st = 0;
@@ -76,7 +108,8 @@ int dfpy_flush_warnings(void)
         pthread_mutex_unlock(&warn_lock);
         if (msg == NULL)
             return st;
-        if (st == 0 && PyErr_WarnEx(dfpy_warning ? dfpy_warning : PyExc_UserWarning, msg, 1) < 0)
+        if (st == 0 && PyErr_WarnEx(dfpy_warning ? dfpy_warning : PyExc_UserWarning, msg,
+                                    user_level()) < 0)
             st = -1; /* an error filter: the rest are dropped */
         free(msg);
     }
@@ -98,11 +131,25 @@ dfle_bridge *dfpy_bridge(void)
     return bridge;
 }
 
+/* Let go of ref (the lock held); unhold what a view held first. */
+static void release_now(int ref, int held)
+{
+    if (held) {
+        int top = dfle_bridge_top(bridge);
+        if (dfle_bridge_check(bridge, 4)) {
+            dfle_bridge_push_ref(bridge, ref);
+            dfle_bridge_unhold(bridge, top + 1);
+        }
+        dfle_bridge_settop(bridge, top);
+    }
+    dfle_bridge_unref(bridge, ref);
+}
+
 static void drain_pending(void)
 {
     pthread_mutex_lock(&pending_lock);
-    for (size_t i = 0; i < npending; i++)
-        dfle_bridge_unref(bridge, pending[i]);
+    for (size_t i = 0; i < npending; i++) /* negative: a held one */
+        release_now(pending[i] < 0 ? -pending[i] : pending[i], pending[i] < 0);
     npending = 0;
     pthread_mutex_unlock(&pending_lock);
 }
@@ -121,13 +168,26 @@ void dfpy_enter(void)
 
 void dfpy_leave(void) { pthread_mutex_unlock(&lock); }
 
-void dfpy_release_ref(int ref)
+int dfpy_try_enter_idle(void)
+{
+    pthread_once(&lock_once, init_lock);
+    if (bridge == NULL || pthread_mutex_trylock(&lock) != 0)
+        return 0;
+    if (calls > 0) { /* this thread, inside a call: Lua frames are running */
+        pthread_mutex_unlock(&lock);
+        return 0;
+    }
+    drain_pending();
+    return 1;
+}
+
+void dfpy_release_ref(int ref, int held)
 {
     if (bridge == NULL || ref <= 0) /* 0: a handle never given a value */
         return;
     pthread_once(&lock_once, init_lock);
     if (pthread_mutex_trylock(&lock) == 0) {
-        dfle_bridge_unref(bridge, ref);
+        release_now(ref, held);
         pthread_mutex_unlock(&lock);
         return;
     }
@@ -142,7 +202,7 @@ void dfpy_release_ref(int ref)
         pending = p;
         cap_pending = cap;
     }
-    pending[npending++] = ref;
+    pending[npending++] = held ? -ref : ref;
     pthread_mutex_unlock(&pending_lock);
 }
 

@@ -107,3 +107,23 @@ def test_invert_with_a_python_build_as_lua(tmp_path, lua):
     U = res.summary["U"]
     assert [U["median"], U["hi95"]] == [float(v) for v in lua(INVERT_LUA)]
     assert U["lo95"] <= U["median"] <= U["hi95"]
+
+
+def test_to_xarray_as_the_netcdf_file_opens(tmp_path):
+    xr = pytest.importorskip("xarray")
+    pytest.importorskip("netCDF4")
+    ens = run(tmp_path, build)
+    ds = ens.to_xarray()
+    assert isinstance(ens, dfle.Ensemble) and ds.sizes == {"sample": 6}
+    path = str(tmp_path / "ens.nc")
+    ens.write_netcdf(path)
+    with xr.open_dataset(path) as f:
+        assert list(ds.data_vars) == list(f.data_vars)
+        for name in ("index", "U", "k_df", "S_df", "A_df", "r2"):
+            assert np.array_equal(ds[name].values, f[name].values), name
+            assert ds[name].attrs.get("units") == f[name].attrs.get("units"), name
+        assert ds["U"].attrs["units"] == "m/yr" and ds["A_df"].attrs["units"] == "m2"
+        assert [s.decode() for s in f["status"].values] == list(ds["status"].values)
+        assert ds.attrs["dfle_design"] == f.attrs["dfle_design"]
+    assert np.array_equal(ds["S_df"].values, ens.data["S_df"])
+    assert ens.to_pandas()["S_df"].tolist() == list(ens.data["S_df"])

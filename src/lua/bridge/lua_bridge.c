@@ -15,23 +15,8 @@
 
 #include "dfle/lua.h"
 
-struct dfle_bridge {
-    lua_State *main;
-    lua_State *L; /* the frame being worked on: main, or a callback's */
-    void (*warn)(void *ud, const char *msg);
-    void *warn_ud;
-    char *wbuf; /* a warning's pieces until its last one */
-    size_t wlen, wcap;
-    int wcont;
-};
+#include "lua/bridge/lua_bridge_internal.h"
 
-/* A callback's payload, the upvalue of its closure. */
-typedef struct host_fn {
-    dfle_bridge *b;
-    dfle_bridge_fn fn;
-    void *ud;
-    void (*release)(void *ud);
-} host_fn;
 
 static void on_warning(void *ud, const char *msg, int tocont)
 {
@@ -60,10 +45,20 @@ static void on_warning(void *ud, const char *msg, int tocont)
     }
 }
 
+static int host_fn_gc(lua_State *L);
+
 static int open_p(lua_State *L)
 {
+    dfle_bridge *b = lua_touserdata(L, 1);
+    lua_newtable(L);
+    b->refs = luaL_ref(L, LUA_REGISTRYINDEX);
     luaL_openlibs(L);
     luaL_requiref(L, "dfle", luaopen_dfle, 1);
+    lua_pop(L, 1);
+    if (luaL_newmetatable(L, DFLE_BRIDGE_HOST_FN)) {
+        lua_pushcfunction(L, host_fn_gc);
+        lua_setfield(L, -2, "__gc");
+    }
     lua_pop(L, 1);
     return 0;
 }
@@ -79,7 +74,8 @@ dfle_bridge *dfle_bridge_new(const char **why)
         goto fail;
     lua_setwarnf(b->main, on_warning, b);
     lua_pushcfunction(b->main, open_p);
-    if (lua_pcall(b->main, 0, 0, 0) != LUA_OK) {
+    lua_pushlightuserdata(b->main, b);
+    if (lua_pcall(b->main, 1, 0, 0) != LUA_OK) {
         reason = "the dfle Lua module could not be opened";
         goto fail;
     }
@@ -97,6 +93,7 @@ void dfle_bridge_free(dfle_bridge *b)
         return;
     if (b->main != NULL)
         lua_close(b->main);
+    free(b->worker_script);
     free(b->wbuf);
     free(b);
 }
@@ -193,17 +190,35 @@ void dfle_bridge_push_callback(dfle_bridge *b, dfle_bridge_fn fn, void *ud,
     h->fn = fn;
     h->ud = ud;
     h->release = release;
-    if (luaL_newmetatable(L, "dfle.host_function")) {
-        lua_pushcfunction(L, host_fn_gc);
-        lua_setfield(L, -2, "__gc");
-    }
-    lua_setmetatable(L, -2);
+    luaL_setmetatable(L, DFLE_BRIDGE_HOST_FN);
     lua_pushcclosure(L, call_host, 1);
 }
 
-int dfle_bridge_ref(dfle_bridge *b) { return luaL_ref(b->L, LUA_REGISTRYINDEX); }
-void dfle_bridge_push_ref(dfle_bridge *b, int ref) { lua_rawgeti(b->L, LUA_REGISTRYINDEX, ref); }
-void dfle_bridge_unref(dfle_bridge *b, int ref) { luaL_unref(b->L, LUA_REGISTRYINDEX, ref); }
+/* The host's references live in a table of their own (b->refs in the
+ * registry), so that lua_bridge_gc.c can tell them from the binding's. */
+int dfle_bridge_ref(dfle_bridge *b)
+{
+    int ref;
+    lua_rawgeti(b->L, LUA_REGISTRYINDEX, b->refs);
+    lua_insert(b->L, -2);
+    ref = luaL_ref(b->L, -2);
+    lua_pop(b->L, 1);
+    return ref;
+}
+
+void dfle_bridge_push_ref(dfle_bridge *b, int ref)
+{
+    lua_rawgeti(b->L, LUA_REGISTRYINDEX, b->refs);
+    lua_rawgeti(b->L, -1, ref);
+    lua_remove(b->L, -2);
+}
+
+void dfle_bridge_unref(dfle_bridge *b, int ref)
+{
+    lua_rawgeti(b->L, LUA_REGISTRYINDEX, b->refs);
+    luaL_unref(b->L, -1, ref);
+    lua_pop(b->L, 1);
+}
 
 int dfle_bridge_type(dfle_bridge *b, int idx)
 {

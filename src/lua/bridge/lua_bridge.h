@@ -134,4 +134,65 @@ int dfle_bridge_tostring(dfle_bridge *b, int idx);
 /* Close the object at idx (its __close: what `local x <close>` does). */
 int dfle_bridge_close(dfle_bridge *b, int idx);
 
+/* --- parallel calls (lua_bridge_workers.c) --- */
+
+/* Worker states for the next dfle.ensemble or dfle.invert call, which
+ * the host makes between begin and end: each runs `script` (Lua source
+ * of a chunk that makes the same call, with a spec that must identify
+ * the same run: the workers check), in a state of its own on a thread
+ * of the driver's pool.  The call counts of the main state are carried
+ * over, so the script's call is taken for the main state's next one.
+ * Without begin, a call runs in the main state only (its build or
+ * measure may be host code, which no other state can call).
+ * begin: 0, or -1 if memory runs out. */
+int dfle_bridge_begin_parallel(dfle_bridge *b, const char *script, size_t len);
+void dfle_bridge_end_parallel(dfle_bridge *b);
+
+/* --- the host's collector (lua_bridge_gc.c) --- */
+
+/* fn(ud, owners, n, callback_ud) for each host callback (its ud as
+ * given to dfle_bridge_push_callback) that only host references keep
+ * alive: Lua's roots do not reach it, the n references `owners` do, so
+ * it goes once all of them are let go of and the state collected.
+ * Returns how many callbacks, or -1 when it cannot tell (inside a
+ * callback, a coroutine, no memory): then none is anyone's.  Call it
+ * with nothing running. */
+typedef void (*dfle_bridge_owned_fn)(void *ud, const int *owners, int n, void *callback_ud);
+int dfle_bridge_owned_callbacks(dfle_bridge *b, dfle_bridge_owned_fn fn, void *ud);
+/* Stop (pause 1) or restart Lua's collector: while the host's collector
+ * works from what dfle_bridge_owned_callbacks said, no callback may go. */
+void dfle_bridge_gc_pause(dfle_bridge *b, int pause);
+/* A full collection: the callbacks of values let go of are released. */
+void dfle_bridge_collect(dfle_bridge *b);
+
+/* --- fields read where they lie (lua_bridge_field.c) --- */
+
+/* A field of a dfle.model (n values along the channel) or a
+ * dfle.landscape (ny rows of nx, row 0 at the north). */
+typedef struct dfle_bridge_field {
+    const double *v;
+    size_t n, nx, ny;
+    int ndim; /* 1: a model's, 2: a landscape's                          */
+    /* 1: v is the object's own memory, always current (a model's x, A,
+     * w, z; a landscape's z): valid while the object lives, which the
+     * host that keeps it ensures by holding the object.  0: the field
+     * evaluated now, valid until the host changes the stack: copy it. */
+    int live;
+} dfle_bridge_field;
+
+/* The field `name` of the object at idx, as its get() would evaluate it
+ * (the same checks and messages).  Pushes one value in every case (what
+ * keeps a copy valid, or the message).  Returns 1 with f filled, 0 when
+ * the object or the name is not one this reads (the host calls the
+ * object's get, which says why), -1 on an error (message on top). */
+int dfle_bridge_get_field(dfle_bridge *b, int idx, const char *name, dfle_bridge_field *f);
+/* The unit dfle's files give a parameter or output of that name
+ * ("m/yr" for U), or NULL when it has none it knows. */
+const char *dfle_bridge_known_unit(const char *name);
+/* Hold the model or landscape at idx while a view of its memory lives:
+ * closing or collecting it only dooms it until the last unhold.
+ * Anything else is ignored.  0, or -1 if Lua ran out of memory. */
+int dfle_bridge_hold(dfle_bridge *b, int idx);
+void dfle_bridge_unhold(dfle_bridge *b, int idx);
+
 #endif

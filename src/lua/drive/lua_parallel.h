@@ -56,6 +56,11 @@ enum {
  * target of a replaying worker, the table is handed over and the script
  * stopped: this does not return. */
 int dfle_lua_par_enter(lua_State *L, int kind, int arg, lua_Integer *call);
+/* The calls of `kind` counted in L so far, and setting that count: for
+ * a host whose workers run a script of their own, which makes one call,
+ * the one the main state makes next (the Python package's bridge). */
+lua_Integer dfle_lua_par_calls(lua_State *L, int kind);
+void dfle_lua_par_set_calls(lua_State *L, int kind, lua_Integer n);
 /* Parallel calls in progress in this state (a sample being run, an
  * inversion evaluating): calls made meanwhile are nested. */
 void dfle_lua_par_depth(lua_State *L, int delta);

@@ -93,6 +93,21 @@ int dfle_lua_par_enter(lua_State *L, int kind, int arg, lua_Integer *call)
     return DFLE_LUA_PAR_EARLIER;
 }
 
+lua_Integer dfle_lua_par_calls(lua_State *L, int kind)
+{
+    lua_Integer n;
+    lua_rawgetp(L, LUA_REGISTRYINDEX, &calls_key[kind]);
+    n = lua_tointeger(L, -1);
+    lua_pop(L, 1);
+    return n;
+}
+
+void dfle_lua_par_set_calls(lua_State *L, int kind, lua_Integer n)
+{
+    lua_pushinteger(L, n);
+    lua_rawsetp(L, LUA_REGISTRYINDEX, &calls_key[kind]);
+}
+
 void dfle_lua_set_host(lua_State *L, const dfle_lua_host *h)
 {
     dfle_lua_set_pointer(L, &host_key, h);
