@@ -2,6 +2,7 @@
 as Lua source runs in worker states of their own, with the numbers the
 dfle command gives for the same script."""
 import numpy as np
+import pytest
 
 import dfle
 
@@ -80,3 +81,40 @@ def test_an_inversion_on_workers_as_the_command(tmp_path, lua):
 
 
 
+
+
+def test_sigint_stops_an_ensemble_on_workers_and_it_resumes(tmp_path):
+    # Ctrl-C mid-ensemble: KeyboardInterrupt, the finished rows kept; the
+    # same call again resumes and ends with the rows of a run never stopped.
+    import os
+    import signal
+    import threading
+
+    heavy = dfle.lua("""function(p)
+        return dfle.model{ channel = dfle.channel{ dx = 5, A_max = 1e7 }, U = p.U,
+                           law = dfle.law.power{ k_df = p.k_df } }
+      end""")
+
+    def call(name):
+        return dfle.ensemble(params={"k_df": dfle.bounds(5e-5, 1e-3, log=True),
+                                     "U": [1e-4, 1e-3]},
+                             n=3000, seed=2, out=str(tmp_path / name), outputs=["S_df"],
+                             build=heavy, workers=2)
+
+    timer = threading.Timer(0.15, os.kill, (os.getpid(), signal.SIGINT))
+    timer.start()
+    try:
+        with pytest.raises(KeyboardInterrupt):
+            call("stopped.csv")
+    finally:
+        timer.join()
+    path = tmp_path / "stopped.csv"
+    kept = 0
+    if path.exists():
+        kept = sum(1 for line in open(path) if line[:1] not in ("#", "")) - 1
+    assert kept < 3000                           # stopped before the end
+    resumed = call("stopped.csv")
+    assert resumed.complete and resumed.ok == 3000
+    fresh = call("fresh.csv")
+    assert np.array_equal(resumed.data["S_df"], fresh.data["S_df"])
+    assert signal.getsignal(signal.SIGINT) is signal.default_int_handler
