@@ -8,12 +8,13 @@
 #   DEMs:   GDAL (GeoTIFF, ESRI ASCII and every raster format GDAL reads)
 #   series: the netCDF C library (landscape time series, CF conventions)
 #   Python: Debian's python3 headers, numpy and pytest (make python; doc/python.md),
-#   xarray and netCDF4 (the tests open dfle's NetCDF files as a user would)
+#   xarray and netCDF4 (the tests open dfle's NetCDF files as a user would),
+#   pandas and matplotlib (doc/python.md's tutorial, which the tests run)
 #   MPI:    OpenMPI, for `make mpi` / `make test-mpi` only (the plain build needs none)
 set -eu
 
 packages="build-essential pkg-config liblua5.4-dev lua5.4 libgsl-dev libcmocka-dev gnuplot-nox valgrind libgdal-dev libnetcdf-dev"
-packages="$packages python3-dev python3-numpy python3-pytest python3-xarray python3-netcdf4"
+packages="$packages python3-dev python3-numpy python3-pytest python3-xarray python3-netcdf4 python3-pandas python3-matplotlib"
 packages="$packages openmpi-bin libopenmpi-dev"
 
 if [ "$(id -u)" -ne 0 ]; then

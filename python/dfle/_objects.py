@@ -20,17 +20,17 @@ class Model(_dfle.LuaRef):
         return v if v is not None else self._index("get")(name)
 
     def to_xarray(self):
-        """The fields as an xarray.Dataset on the coordinate x [m] (needs xarray)."""
+        """The fields as an xarray.Dataset on the coordinate x [m] (needs
+        xarray): each with its unit, the model's record (its components'
+        parameters, U, time) as attributes under the names its NetCDF
+        files give them (router_M0, model_U, ...)."""
         import xarray as xr
-        units = {"x": "m", "A": "m^2", "w": "m", "z": "m", "S": "1", "E_f": "m/yr",
-                 "E_df": "m/yr", "dzdt": "m/yr", "M": "m^3", "Q": "m^3/s", "h": "m",
-                 "v": "m/s", "t_p": "s", "tau": "Pa", "Theta": "1"}
         x = self.get("x")
-        data = {f: ("x", self.get(f), {"units": units.get(f, "")})
-                for f in self.fields() if f != "x"}
-        return xr.Dataset(data, coords={"x": ("x", x, {"units": "m"})},
-                          attrs={"time_yr": self.time, "U_m_per_yr": self.U,
-                                 "model": repr(self)})
+        data = {f: ("x", self.get(f), _labels(False, f)) for f in self.fields() if f != "x"}
+        data["z"][2]["long_name"] = "elevation above the outlet"
+        return xr.Dataset(data, coords={"x": ("x", x, {"units": "m", "axis": "X",
+                                                       "long_name": "distance from the channel head"})},
+                          attrs=_attrs(self)[0])
 
 
 class Landscape(_dfle.LuaRef):
@@ -48,16 +48,31 @@ class Landscape(_dfle.LuaRef):
         return v
 
     def to_xarray(self, fields=None):
-        """The fields as an xarray.Dataset on (y, x) cell centres [m] (needs xarray)."""
+        """The fields (default all) as an xarray.Dataset on (y, x) cell
+        centres [m], labelled as the landscape's NetCDF files label them
+        (needs xarray): units, long and CF standard names, the CRS as a
+        grid mapping variable `crs` (crs_wkt, spatial_ref) where the
+        landscape has one, and its record as attributes under the files'
+        names (landscape_dx, router_M0, ...)."""
         import xarray as xr
         nx, ny, dx, dy = self.nx, self.ny, self.dx, self.dy
         x = self.x0 + dx * (_np.arange(nx) + 0.5)
         y = self.y0 - dy * (_np.arange(ny) + 0.5)
+        attrs, crs = _attrs(self)
         names = fields if fields is not None else list(self.fields())
-        ds = xr.Dataset({f: (("y", "x"), self.get(f)) for f in names},
-                        coords={"x": ("x", x, {"units": "m"}), "y": ("y", y, {"units": "m"})},
-                        attrs={"time_yr": self.time, "landscape": repr(self)})
-        return ds
+        data = {}
+        for f in names:
+            labels = _labels(True, f)
+            if crs is not None:
+                labels["grid_mapping"] = "crs"
+            data[f] = (("y", "x"), self.get(f), labels)
+        if crs is not None:
+            data["crs"] = ((), _np.int32(0), {"crs_wkt": crs, "spatial_ref": crs})
+        coords = {"x": ("x", x, {"units": "m", "standard_name": "projection_x_coordinate",
+                                 "long_name": "easting of the cell centre", "axis": "X"}),
+                  "y": ("y", y, {"units": "m", "standard_name": "projection_y_coordinate",
+                                 "long_name": "northing of the cell centre", "axis": "Y"})}
+        return xr.Dataset(data, coords=coords, attrs=attrs)
 
 
 class Dem(_dfle.LuaRef):
@@ -116,7 +131,33 @@ class Ensemble(_dfle.LuaRef):
         return xr.Dataset(variables, attrs=attrs)
 
 
-_SOURCES = ("rate", "factor", "integrand", "frequency", "route")
+def _labels(landscape, name):
+    """A field's attributes as dfle's NetCDF files write them."""
+    label = _dfle.field_label(landscape, name)
+    if label is None:
+        return {}
+    unit, dfle_unit, long_name, standard_name = label
+    out = {}
+    if unit is not None:
+        out["units"] = unit
+    if dfle_unit is not None:
+        out["dfle_units"] = dfle_unit
+    if long_name is not None:
+        out["long_name"] = long_name
+    if standard_name is not None:
+        out["standard_name"] = standard_name
+    return out
+
+
+def _attrs(obj):
+    """(attributes, crs): the object's record as its NetCDF files carry it."""
+    attrs, crs = _dfle.attrs(obj)
+    return {str(k): v for k, v in attrs.items()}, crs
+
+
+# The functions law.define (rate, factor, integrand, frequency) and
+# router.define (flow) take.
+_SOURCES = ("rate", "factor", "integrand", "frequency", "flow")
 
 
 def _with_sources(define, what):

@@ -107,5 +107,7 @@ PyObject *dfpy_parallel(PyObject *self, PyObject *args);
 /* o._field(name): the field as a numpy array, or None when the object
  * or the name is not one read this way (the caller asks get()). */
 PyObject *dfpy_ref_field(PyObject *o, PyObject *name);
+/* _dfle.attrs(obj): (attributes, crs) as the object's NetCDF files say, or None. */
+PyObject *dfpy_attrs(PyObject *self, PyObject *o);
 
 #endif

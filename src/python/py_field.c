@@ -101,3 +101,46 @@ done:
     /* An evaluation may warn (an implausible value it met). */
     return dfpy_finish(res);
 }
+
+/* _dfle.attrs(obj): (attributes, crs) as the object's NetCDF files give
+ * them (lua_bridge.h: dfle_bridge_push_attrs), or None for an object
+ * that has no such files. */
+PyObject *dfpy_attrs(PyObject *self, PyObject *o)
+{
+    dfle_bridge *b;
+    PyObject *res = NULL, *attrs, *crs;
+    int top, st;
+    (void)self;
+    if (!PyObject_TypeCheck(o, &dfpy_ref_type)) {
+        PyErr_SetString(PyExc_TypeError, "dfle: attrs() takes a dfle object");
+        return NULL;
+    }
+    if ((b = dfpy_bridge()) == NULL)
+        return NULL;
+    if (((dfpy_ref *)o)->kind != DFLE_BRIDGE_OBJECT)
+        Py_RETURN_NONE;
+    dfpy_enter();
+    top = dfle_bridge_top(b);
+    if (!dfle_bridge_check(b, 8)) {
+        PyErr_NoMemory();
+        goto done;
+    }
+    dfle_bridge_push_ref(b, ((dfpy_ref *)o)->ref);
+    st = dfle_bridge_push_attrs(b, top + 1);
+    if (st < 0) {
+        dfpy_raise_top(b);
+    } else if (st == 0) {
+        res = Py_NewRef(Py_None);
+    } else {
+        attrs = dfpy_to_python(b, top + 2, 0);
+        crs = attrs != NULL ? dfpy_to_python(b, top + 3, 0) : NULL;
+        if (crs != NULL)
+            res = PyTuple_Pack(2, attrs, crs);
+        Py_XDECREF(attrs);
+        Py_XDECREF(crs);
+    }
+done:
+    dfle_bridge_settop(b, top);
+    dfpy_leave();
+    return dfpy_finish(res);
+}

@@ -83,6 +83,25 @@ static PyObject *mod_udunits(PyObject *self, PyObject *arg)
     return PyUnicode_FromString(buf);
 }
 
+/* _dfle.field_label(landscape, name): (units, dfle_units, long_name,
+ * standard_name) as dfle's NetCDF files label the field: the unit in
+ * UDUNITS's syntax as units, or, where UDUNITS has none, as dfle writes
+ * it as dfle_units (the other None); None for a name that is no field. */
+static PyObject *mod_field_label(PyObject *self, PyObject *args)
+{
+    const char *name, *unit, *long_name, *standard_name;
+    int landscape;
+    char buf[128];
+    (void)self;
+    if (!PyArg_ParseTuple(args, "ps", &landscape, &name))
+        return NULL;
+    if (!dfle_bridge_field_label(landscape, name, &unit, &long_name, &standard_name))
+        Py_RETURN_NONE;
+    if (unit != NULL && dfle_units_udunits(unit, buf, sizeof buf))
+        return Py_BuildValue("(szzz)", buf, NULL, long_name, standard_name);
+    return Py_BuildValue("(zzzz)", NULL, unit, long_name, standard_name);
+}
+
 /* _dfle._setup(Error, Warning, Table, classes, main_thread_ident) */
 static PyObject *mod_setup(PyObject *self, PyObject *args)
 {
@@ -104,6 +123,10 @@ static PyMethodDef mod_methods[] = {
     {"lua", mod_lua, METH_VARARGS, "lua(source, name='=lua'): a Lua function from its source."},
     {"known_unit", mod_known_unit, METH_O, "known_unit(name): the unit dfle's files give name, or None."},
     {"udunits", mod_udunits, METH_O, "udunits(unit): the unit as dfle's NetCDF files write it, or None."},
+    {"attrs", dfpy_attrs, METH_O,
+     "attrs(obj): (attributes, crs) as a model's or landscape's NetCDF files give them, or None."},
+    {"field_label", mod_field_label, METH_VARARGS,
+     "field_label(landscape, name): (units, dfle_units, long_name, standard_name) as dfle's files give them."},
     {"parallel", dfpy_parallel, METH_VARARGS,
      "parallel(fn, script, spec): fn(spec) with worker states that run script."},
     {"_gc", dfpy_gc_phase, METH_VARARGS, "gc.callbacks' hook: cycles through Lua."},

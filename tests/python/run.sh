@@ -21,7 +21,7 @@ if [ -n "${SANITIZE:-}" ]; then
 fi
 ls "$BUILD"/python/dfle/_dfle*.so >/dev/null 2>&1 || { echo "python-tests: no $BUILD/python/dfle (make python)"; exit 1; }
 out=$(mktemp) || exit 2
-BUILD="$BUILD" PYTHONPATH="$PWD/$BUILD/python" "$PYTHON" -m pytest -q -p no:cacheprovider tests/python > "$out" 2>&1
+BUILD="$BUILD" PYTHONPATH="$PWD/$BUILD/python" "$PYTHON" -m pytest -q -rs -p no:cacheprovider tests/python > "$out" 2>&1
 st=$?
 cat "$out"
 # The summary as every suite here ends: "N passed, N failed".

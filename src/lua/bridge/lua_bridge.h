@@ -195,4 +195,19 @@ const char *dfle_bridge_known_unit(const char *name);
 int dfle_bridge_hold(dfle_bridge *b, int idx);
 void dfle_bridge_unhold(dfle_bridge *b, int idx);
 
+/* --- what an object's files say (lua_bridge_record.c) --- */
+
+/* The record a dfle.model's or dfle.landscape's NetCDF files carry as
+ * global attributes, as a table of the same names and values (booleans
+ * as 0 and 1, units per section in "<section>_units"), then its CRS as
+ * WKT (a landscape's; nil when it has none).  Returns 1 with the two
+ * values pushed, 0 with nothing pushed for any other value, -1 on an
+ * error (a closed object; message on top). */
+int dfle_bridge_push_attrs(dfle_bridge *b, int idx);
+/* The labels the files give a model's (landscape 0) or a landscape's
+ * field `name`: its unit as dfle writes it, long name and CF standard
+ * name (each may be NULL).  0 for a name that is no field. */
+int dfle_bridge_field_label(int landscape, const char *name, const char **unit,
+                            const char **long_name, const char **standard_name);
+
 #endif
