@@ -34,7 +34,7 @@ lua_rank() {
 }
 header_layer() {
     case $1 in
-    error.h | param.h | file.h | plausible.h | record.h) echo base ;; channel.h | network.h) echo domain ;;
+    error.h | param.h | file.h | plausible.h | record.h | par.h) echo base ;; channel.h | network.h) echo domain ;;
     flow.h | flow1d.h | router*.h) echo routers ;; drainage.h) echo drainage ;;
     lua.h) echo lua ;; fluvial.h | law*.h) echo laws ;; model.h) echo model ;;
     model_events.h) echo model ;;

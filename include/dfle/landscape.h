@@ -44,7 +44,10 @@
  * does not say converged.
  *
  * One object is used by one thread at a time; the library starts no
- * threads, so a run gives the same numbers wherever it runs.  Rates in
+ * threads of its own.  Given threads (dfle_landscape_set_par), a step
+ * sweeps basins that drain to different base levels on them; elevations,
+ * receivers and areas are the same bytes for any number of threads, and
+ * so a run gives the same numbers wherever it runs.  Rates in
  * m/yr, lengths in m, areas in m^2, time in yr.
  */
 #ifndef DFLE_LANDSCAPE_H
@@ -59,6 +62,7 @@
 #include "dfle/fluvial.h"
 #include "dfle/law.h"
 #include "dfle/model.h"
+#include "dfle/par.h"
 #include "dfle/router.h"
 #include "dfle/record.h"
 #include "dfle/solver.h"
@@ -148,6 +152,13 @@ int dfle_landscape_set_z(dfle_landscape *ls, const double *z, dfle_error *err);
 const dfle_drainage *dfle_landscape_drainage(const dfle_landscape *ls);
 /* The model on the network of the data cells (a router only), else NULL. */
 dfle_model *dfle_landscape_model(const dfle_landscape *ls);
+/* Threads for its steps (par.h; borrowed, must outlive its use; NULL:
+ * none).  With threads, the implicit sweep of a landscape without debris
+ * flows runs basin by basin on them; it holds 5 bytes a cell more.  The
+ * volumes a step reports are then summed basin chunk by basin chunk:
+ * the same for any number of threads, and within the last bits of those
+ * without threads. */
+int dfle_landscape_set_par(dfle_landscape *ls, const dfle_par *par, dfle_error *err);
 /* Bytes held now (grid, routing, model and network, scratch: the
  * elevations before a step once it has stepped, fields in space). */
 size_t dfle_landscape_memory(const dfle_landscape *ls);

@@ -24,6 +24,7 @@
 
 #include "dfle/error.h"
 #include "dfle/evaluator.h"
+#include "dfle/par.h"
 
 #ifdef __cplusplus
 extern "C" {
@@ -135,6 +136,17 @@ int dfle_pool_ready(dfle_pool *p);
  * failed to open after the last run: it broke the evaluator's promise
  * all the same.  Accepts NULL. */
 int dfle_pool_free(dfle_pool *p, dfle_error *err);
+
+/* ---- Parallel loops on a pool ------------------------------------- */
+
+/* A pool of `workers` threads (the caller's included: workers - 1 are
+ * started) that runs the loops of par.h, for the layers below the
+ * drivers (dfle_landscape_set_par).  Its loops run one at a time, from
+ * the thread that made it.  DFLE_EINVAL for workers < 1, DFLE_ENOMEM. */
+typedef struct dfle_pool_par dfle_pool_par;
+int dfle_pool_par_new(int workers, dfle_pool_par **out, dfle_error *err);
+const dfle_par *dfle_pool_par_get(const dfle_pool_par *pp);
+void dfle_pool_par_free(dfle_pool_par *pp); /* accepts NULL */
 
 #ifdef __cplusplus
 }

@@ -176,6 +176,8 @@ void dfle_landscape_free(dfle_landscape *ls)
     free(ls->s_Ks);
     free(ls->s_dfs);
     free(ls->w_table);
+    free(ls->par_stack);
+    free(ls->par_chunk);
     free(ls);
 }
 
@@ -388,7 +390,7 @@ size_t dfle_landscape_memory(const dfle_landscape *ls)
     if (ls->model != NULL) /* what the model made so far, not all it may make */
         b += dfle_model_memory(ls->model) + (size_t)ls_network_bytes(ls->n, ls->n_data) +
              ((ls->s_Ks != NULL) + (ls->s_dfs != NULL)) * ls->n_data * sizeof(double);
-    return b;
+    return b + ls_par_bytes(ls);
 }
 
 /* ---------------------------------------------------------------- */

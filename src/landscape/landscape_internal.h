@@ -33,6 +33,7 @@
 
 #include "dfle/landscape.h"
 #include "dfle/network.h"
+#include "dfle/par.h"
 
 #define LS_NONE UINT32_MAX
 
@@ -113,6 +114,12 @@ typedef struct ls_judge {
     double hillslope_quantile; /* ... and of hillslope cells        */
 } ls_judge;
 
+/* The basins are shared among this many chunks for sweeps on threads
+ * (landscape_par.c): a number of the grid's, not of the threads, so
+ * that the volumes, summed chunk by chunk in order, are the same for
+ * any number of threads. */
+#define LS_PAR_CHUNKS 64
+
 /* Routings whose receivers are remembered (by a hash) to tell a
  * network that cycles from one that still settles. */
 #define LS_RCV_HISTORY 8
@@ -168,6 +175,14 @@ struct dfle_landscape {
                                 * receivers in rcv_prev: a routing that
                                 * changes none need not re-shape it     */
     size_t channel_cells, heads;
+
+    /* Threads (dfle_landscape_set_par; NULL: none): the stack by chunk
+     * of basins, par_off[j] .. par_off[j + 1] the cells of chunk j in
+     * stack order, and each cell's chunk (made on the first step). */
+    const dfle_par *par;
+    uint32_t *par_stack;       /* n_data                                */
+    unsigned char *par_chunk;  /* n                                     */
+    size_t par_off[LS_PAR_CHUNKS + 1];
 };
 
 /* landscape.c */
@@ -243,6 +258,13 @@ void ls_saved_free(ls_saved *sv);
  * as it was (z, routing, rates). */
 int ls_verify(dfle_landscape *ls, const ls_judge *j, size_t steps, double dt, ls_saved *sv,
               int *passed, size_t *taken, dfle_landscape_status *worst, dfle_error *err);
+
+/* landscape_par.c */
+/* The stack of the current routing by chunk of basins (ls->par_stack,
+ * ls->par_off): every cell in the chunk of its root, in stack order. */
+int ls_par_partition(dfle_landscape *ls, dfle_error *err);
+/* Bytes of that for n cells (0 without threads). */
+size_t ls_par_bytes(const dfle_landscape *ls);
 
 /* landscape_memory.c */
 /* Bytes of the debris-flow model (every array its implicit and direct

@@ -300,6 +300,108 @@ static size_t count_reached(const dfle_landscape *ls)
     return k;
 }
 
+/* The sweep over stack[0 .. n_stack): every cell after its receiver.
+ * Volumes go to w, those of debris flows to *Vdf. */
+static int sweep_cells(ls_sweep *w, const uint32_t *stack, size_t n_stack, const double *Sm,
+                       const double *reach, double *Vdf, size_t *reached, dfle_error *err)
+{
+    dfle_landscape *ls = w->ls;
+    const uint32_t *rcv = w->rcv;
+    const unsigned char *dir = w->dir;
+    const double *A = w->A;
+    const double K = w->K, dt = w->dt;
+    double *z = ls->z;
+    /* Without debris flows every cell is plain stream power or hillslope */
+    const int pairs = ls->model == NULL && !w->n_one;
+    int st_ = DFLE_OK;
+
+    for (size_t k = 0; k < n_stack;) {
+        const size_t c = stack[k], r = rcv[c];
+        ls_cell x;
+        SWEEP_FETCH(k);
+        if (r == c) {
+            ls->dzdt[c] = 0.0f;
+            k++;
+            continue;
+        }
+        /* Two cells in a row, the second not draining to the first: no
+         * debris flows, so their equations are solved together. */
+        if (pairs && k + 1 < n_stack) {
+            const size_t c2 = stack[k + 1], r2 = rcv[c2];
+            if (r2 != c2 && r2 != c) {
+                ls_cell y;
+                SWEEP_FETCH(k + 1);
+                cell_begin(w, z, c, r, &x);
+                cell_begin(w, z, c2, r2, &y);
+                if (x.channel && K > 0)
+                    cell_stream_power(w, z, &x);
+                if (y.channel && K > 0)
+                    cell_stream_power(w, z, &y);
+                if (x.solve && y.solve) {
+                    const double d0[2] = {x.d0, y.d0}, F[2] = {x.F, y.F};
+                    double d[2];
+                    fluvial_delta2(d0, F, &w->ls->pow_n, &w->ls->pow_inv_n, d);
+                    cell_eroded(w, z, &x, d[0]);
+                    cell_eroded(w, z, &y, d[1]);
+                } else if (x.solve) {
+                    cell_eroded(w, z, &x, fluvial_delta(x.d0, x.F, &w->ls->pow_n, &w->ls->pow_inv_n));
+                } else if (y.solve) {
+                    cell_eroded(w, z, &y, fluvial_delta(y.d0, y.F, &w->ls->pow_n, &w->ls->pow_inv_n));
+                }
+                cell_end(w, z, &x);
+                cell_end(w, z, &y);
+                k += 2;
+                continue;
+            }
+        }
+        cell_begin(w, z, c, r, &x);
+        if (x.channel) {
+            const double flows = reach != NULL ? reach[ls->node_of[c]] : 0.0;
+            if (flows > 0) {
+                const size_t node = ls->node_of[c];
+                const double uz = x.zn;
+                double S, Ef;
+                st_ = dfle_solver_node_slope(ls->model, node, x.U + (x.z0 - z[r]) / dt, x.L / dt,
+                                             flows, Sm[node], &S, NULL, err);
+                if (st_ != DFLE_OK)
+                    return st_;
+                x.zn = z[r] + S * x.L;
+                Ef = ls_fluvial_rate(ls, c, A[c], S) * dt;
+                w->Vf += Ef;
+                *Vdf += uz - x.zn - Ef;
+                (*reached)++;
+            } else if (K > 0) {
+                cell_stream_power(w, z, &x);
+                if (x.solve)
+                    cell_eroded(w, z, &x, fluvial_delta(x.d0, x.F, &w->ls->pow_n, &w->ls->pow_inv_n));
+            }
+        }
+        cell_end(w, z, &x);
+        k++;
+    }
+    return st_;
+}
+
+/* One chunk of the basins (landscape_par.c) on a thread of its own, its
+ * volumes kept apart to be added in chunk order. */
+typedef struct sweep_chunks {
+    const ls_sweep *w;
+    ls_sweep part[LS_PAR_CHUNKS];
+} sweep_chunks;
+
+static void sweep_chunk(void *arg, size_t j)
+{
+    sweep_chunks *sc = arg;
+    const dfle_landscape *ls = sc->w->ls;
+    ls_sweep w = *sc->w; /* a copy of its own: no cache line shared */
+    double Vdf = 0;
+    size_t reached = 0;
+    w.VU = w.Vf = w.Vh = w.dV = 0.0;
+    (void)sweep_cells(&w, ls->par_stack + ls->par_off[j], ls->par_off[j + 1] - ls->par_off[j],
+                      NULL, NULL, &Vdf, &reached, NULL);
+    sc->part[j] = w;
+}
+
 int ls_implicit_step(dfle_landscape *ls, double dt, const ls_judge *j,
                      dfle_landscape_status *st, dfle_error *err)
 {
@@ -309,8 +411,6 @@ int ls_implicit_step(dfle_landscape *ls, double dt, const ls_judge *j,
     const double A0 = ls->o.A0, K = ls->K, mexp = ls->m_exp, nexp = ls->n_exp;
     const double Sc = ls->o.S_c, ca = ls->cell_area;
     const int hill = ls->o.hillslope, n_one = nexp == 1.0;
-    /* Without debris flows every cell is plain stream power or hillslope */
-    const int pairs = ls->model == NULL && !n_one;
     double *z = ls->z;
     double VU = 0, Vf = 0, Vdf = 0, Vh = 0, dV = 0;
     size_t n_stack, reached = 0;
@@ -349,69 +449,25 @@ int ls_implicit_step(dfle_landscape *ls, double dt, const ls_judge *j,
     w.n_one = n_one;
     w.cap_ch = hill == DFLE_HILLSLOPE_THRESHOLD && ls->o.cap_channels;
     w.VU = w.Vf = w.Vh = w.dV = 0.0;
-    for (size_t k = 0; k < n_stack;) {
-        const size_t c = stack[k], r = rcv[c];
-        ls_cell x;
-        SWEEP_FETCH(k);
-        if (r == c) {
-            ls->dzdt[c] = 0.0f;
-            k++;
-            continue;
+    if (ls->model == NULL && ls->par != NULL) {
+        /* Basins in parallel: no debris flows (the model is one object),
+         * so no cell can fail. */
+        sweep_chunks sc;
+        if ((st_ = ls_par_partition(ls, err)) != DFLE_OK)
+            return step_undone(ls, z_before, st_);
+        sc.w = &w;
+        st_ = dfle_par_run(ls->par, LS_PAR_CHUNKS, sweep_chunk, &sc, err);
+        for (size_t k = 0; st_ == DFLE_OK && k < LS_PAR_CHUNKS; k++) {
+            w.VU += sc.part[k].VU;
+            w.Vf += sc.part[k].Vf;
+            w.Vh += sc.part[k].Vh;
+            w.dV += sc.part[k].dV;
         }
-        /* Two cells in a row, the second not draining to the first: no
-         * debris flows, so their equations are solved together. */
-        if (pairs && k + 1 < n_stack) {
-            const size_t c2 = stack[k + 1], r2 = rcv[c2];
-            if (r2 != c2 && r2 != c) {
-                ls_cell y;
-                SWEEP_FETCH(k + 1);
-                cell_begin(&w, z, c, r, &x);
-                cell_begin(&w, z, c2, r2, &y);
-                if (x.channel && K > 0)
-                    cell_stream_power(&w, z, &x);
-                if (y.channel && K > 0)
-                    cell_stream_power(&w, z, &y);
-                if (x.solve && y.solve) {
-                    const double d0[2] = {x.d0, y.d0}, F[2] = {x.F, y.F};
-                    double d[2];
-                    fluvial_delta2(d0, F, &ls->pow_n, &ls->pow_inv_n, d);
-                    cell_eroded(&w, z, &x, d[0]);
-                    cell_eroded(&w, z, &y, d[1]);
-                } else if (x.solve) {
-                    cell_eroded(&w, z, &x, fluvial_delta(x.d0, x.F, &ls->pow_n, &ls->pow_inv_n));
-                } else if (y.solve) {
-                    cell_eroded(&w, z, &y, fluvial_delta(y.d0, y.F, &ls->pow_n, &ls->pow_inv_n));
-                }
-                cell_end(&w, z, &x);
-                cell_end(&w, z, &y);
-                k += 2;
-                continue;
-            }
-        }
-        cell_begin(&w, z, c, r, &x);
-        if (x.channel) {
-            const double flows = reach != NULL ? reach[ls->node_of[c]] : 0.0;
-            if (flows > 0) {
-                const size_t node = ls->node_of[c];
-                const double uz = x.zn;
-                double S, Ef;
-                st_ = dfle_solver_node_slope(ls->model, node, x.U + (x.z0 - z[r]) / dt, x.L / dt,
-                                             flows, Sm[node], &S, NULL, err);
-                if (st_ != DFLE_OK)
-                    return step_undone(ls, z_before, st_);
-                x.zn = z[r] + S * x.L;
-                Ef = ls_fluvial_rate(ls, c, A[c], S) * dt;
-                w.Vf += Ef;
-                Vdf += uz - x.zn - Ef;
-                reached++;
-            } else if (K > 0) {
-                cell_stream_power(&w, z, &x);
-                if (x.solve)
-                    cell_eroded(&w, z, &x, fluvial_delta(x.d0, x.F, &ls->pow_n, &ls->pow_inv_n));
-            }
-        }
-        cell_end(&w, z, &x);
-        k++;
+        if (st_ != DFLE_OK)
+            return step_undone(ls, z_before, st_);
+    } else if ((st_ = sweep_cells(&w, stack, n_stack, Sm, reach, &Vdf, &reached, err))
+               != DFLE_OK) {
+        return step_undone(ls, z_before, st_);
     }
     VU = w.VU;
     Vf = w.Vf;

@@ -224,6 +224,47 @@ tests["landscape: Theta = 1, joined flows counted: lambda E[f^kappa] times each 
     T.ok(eroded >= 4, "the heads and the join eroded: " .. eroded)
 end
 
+tests["landscape: runout, reach and E_df of each cell are the flows' sums, routed one by one"] = function()
+    -- A stepped landscape where stiff flows stop part-way down: each
+    -- member of a table population, built as a characteristic flow of
+    -- volume f M0 on the same surface, gives the cells it reaches; the
+    -- population's reach and E_df are lambda sum_j w_j of the members'.
+    local o = { M0 = 3000, tau_y = 1000 }
+    local shape = { nx = 30, ny = 24, dx = 20, U = 1e-3, A0 = 3 * 400, combine = "count" }
+    local function grid(rt, z)
+        local t = { router = rt, z = z }
+        for k, v in pairs(shape) do t[k] = v end
+        if z == nil then t.noise = { seed = 2, amplitude = 5 } end
+        return dfle.landscape(t)
+    end
+    local start = grid(dfle.router.empirical(o))
+    for _ = 1, 10 do start:step(500) end
+    local z = start:get("z")
+    local f, wt, lambda = { 0.05, 1, 100 }, { 5, 3, 2 }, 3
+    local pop = dfle.router.population{ router = dfle.router.empirical(o), frequency = lambda,
+                                        volume = { kind = "table", values = f, weights = wt } }
+    local ls = grid(pop, z)
+    local R, E = ls:get("reach"), ls:get("E_df")
+    local Rs, Es, reached = {}, {}, {}
+    for c = 1, ls.n do Rs[c], Es[c] = 0, 0 end
+    for j = 1, 3 do
+        local one = grid(dfle.router.empirical{ M0 = o.M0 * f[j], tau_y = o.tau_y }, z)
+        local Rj, Ej = one:get("reach"), one:get("E_df")
+        reached[j] = 0
+        for c = 1, ls.n do
+            Rs[c] = Rs[c] + lambda * wt[j] / 10 * Rj[c]
+            Es[c] = Es[c] + lambda * wt[j] / 10 * Ej[c]
+            if Rj[c] > 0 then reached[j] = reached[j] + 1 end
+        end
+    end
+    T.ok(reached[1] > 0 and reached[1] < reached[2] and reached[2] < reached[3],
+         ("larger flows reach more cells: %d, %d, %d"):format(reached[1], reached[2], reached[3]))
+    for c = 1, ls.n do
+        T.close(R[c], Rs[c], 1e-12, 0, "reach, cell " .. c)
+        T.close(E[c], Es[c], 1e-12, 1e-300, "E_df, cell " .. c)
+    end
+end
+
 tests["events: the long-run mean erosion is the expected rate, within its reported error"] = function()
     local rt = dfle.router.empirical{}
     local volume = { kind = "lognormal", sigma = 1 }
